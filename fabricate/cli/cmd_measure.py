@@ -1,0 +1,43 @@
+"""``fabricate measure MESH``: every measure of a mesh as JSON or a table."""
+from __future__ import annotations
+
+import json
+
+
+def register(sub) -> None:
+    p = sub.add_parser("measure", help="print planarity, conical and circular defects and statistics",
+                       description="Print every measure of a mesh (OBJ, OFF, PLY) as JSON, "
+                                   "or as a readable table with --table.")
+    p.add_argument("mesh", help="mesh file (.obj, .off, .ply)")
+    p.add_argument("--table", action="store_true", help="a readable table instead of JSON")
+    p.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    from optimize.io import read_mesh
+    from optimize.measures import summary
+
+    mesh = read_mesh(args.mesh)
+    s = summary(mesh)
+    for note in mesh.notes:
+        s.setdefault("notes", []).append(note)
+    if not args.table:
+        print(json.dumps(s, indent=2))
+        return 0
+    from rich.console import Console
+    from rich.table import Table
+
+    m = s["mesh"]
+    table = Table(title=f"{m['name']}: {m['vertices']} vertices, {m['faces']} faces {m['face_sizes']}")
+    for col in ("measure", "max", "mean", "tolerance", "ok", "worst"):
+        table.add_column(col)
+    for key in ("planarity", "conical", "circular", "fairness"):
+        r = s[key]
+        table.add_row(key, f"{r['max']:.3g}", f"{r['mean']:.3g}", str(r.get("tolerance", "")),
+                      {True: "yes", False: "NO"}.get(r.get("ok"), ""), str(r["worst"]))
+    Console().print(table)
+    print(f"vertex types: {s['vertex_types']}; edge length {s['edge_length']}; "
+          f"angles (deg) {s['angle_deg']}")
+    for note in s.get("notes", []):
+        print(f"note: {note}")
+    return 0

@@ -1,0 +1,205 @@
+"""Scale-free measures of a polygon mesh, all vectorized.
+
+Definitions shared by the whole package (code, reports, tests):
+
+- planarity of a quad: distance between its two diagonal lines divided by
+  the mean diagonal length; of an n-gon (n > 4): max distance of a vertex from
+  the least-squares plane divided by the mean edge length; triangles: 0;
+- conical defect at an interior valence-4 vertex: ``|w1 + w3 - w2 - w4|``
+  (radians), corner angles in cyclic order;
+- circular defect of a quad: ``max(|phi1 + phi3 - pi|, |phi2 + phi4 - pi|)``;
+- vertex type at interior valence-4 vertices (paper section 4): the sign of
+  the signed area of the Gauss image (the spherical polygon of the face
+  normals around the vertex) relative to the star orientation: elliptic (+),
+  hyperbolic (-), parabolic (below tolerance);
+- fairness: second differences ``a - 2 v + b`` along mesh polylines, divided
+  by the mean edge length.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .mesh import Mesh
+from .tolerances import DEFAULT, Tolerances
+
+
+def corner_angles(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(c,) float: interior angle at every corner (radians), topology corner order."""
+    t = mesh.topology
+    V = mesh.V if V is None else V
+    p = V[t.corner_vertex]
+    u = V[t.corner_next_vertex] - p
+    w = V[t.corner_prev_vertex] - p
+    cross = np.linalg.norm(np.cross(u, w), axis=1)
+    return np.arctan2(cross, np.einsum("ij,ij->i", u, w))
+
+
+def quad_planarity(Q: np.ndarray) -> np.ndarray:
+    """Planarity of quads ``Q (q, 4, 3)``: diagonal-line distance / mean diagonal length."""
+    d1 = Q[:, 2] - Q[:, 0]
+    d2 = Q[:, 3] - Q[:, 1]
+    n = np.cross(d1, d2)
+    nn = np.linalg.norm(n, axis=1)
+    l1, l2 = np.linalg.norm(d1, axis=1), np.linalg.norm(d2, axis=1)
+    gap = Q[:, 1] - Q[:, 0]
+    # parallel diagonals (a degenerate quad): fall back to point-line distance
+    safe = nn > 1e-12 * l1 * l2
+    dist = np.where(safe, np.abs(np.einsum("ij,ij->i", gap, n)) / np.where(safe, nn, 1.0),
+                    np.linalg.norm(np.cross(gap, d1), axis=1) / np.maximum(l1, 1e-300))
+    return dist / (0.5 * (l1 + l2))
+
+
+def ngon_planarity(P: np.ndarray) -> np.ndarray:
+    """Planarity of k-gons ``P (q, k, 3)``: max distance to the least-squares plane / mean edge length."""
+    c = P - P.mean(axis=1, keepdims=True)
+    _, _, vt = np.linalg.svd(c, full_matrices=False)
+    normal = vt[:, -1, :]
+    dist = np.abs(np.einsum("qkj,qj->qk", c, normal)).max(axis=1)
+    edge = np.linalg.norm(np.roll(P, -1, axis=1) - P, axis=2).mean(axis=1)
+    return dist / edge
+
+
+def planarity(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(m,) float: planarity of every face (quads by diagonals, n-gons by plane fit)."""
+    V = mesh.V if V is None else V
+    sizes = mesh.face_sizes
+    out = np.zeros(mesh.n_faces)
+    q = sizes == 4
+    if q.any():
+        out[q] = quad_planarity(V[mesh.F[q, :4]])
+    for k in np.unique(sizes[sizes > 4]):
+        sel = sizes == k
+        out[sel] = ngon_planarity(V[mesh.F[sel, :k]])
+    return out
+
+
+def conical_defect(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(p,) float: ``|w1 + w3 - w2 - w4|`` at ``topology.interior_valence4`` vertices."""
+    t = mesh.topology
+    ang = corner_angles(mesh, V)
+    w = ang[t.star_corners[t.interior_valence4, :4]]
+    return np.abs(w[:, 0] - w[:, 1] + w[:, 2] - w[:, 3])
+
+
+def circular_defect(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(q,) float: ``max(|phi1 + phi3 - pi|, |phi2 + phi4 - pi|)`` for each quad face.
+
+    Faces are those with ``face_sizes == 4`` in face order (``quad_faces``).
+    """
+    t = mesh.topology
+    ang = corner_angles(mesh, V)
+    quads = np.nonzero(mesh.face_sizes == 4)[0]
+    phi = ang[t.offsets[quads][:, None] + np.arange(4)[None, :]]
+    return np.maximum(np.abs(phi[:, 0] + phi[:, 2] - np.pi), np.abs(phi[:, 1] + phi[:, 3] - np.pi))
+
+
+def face_normals(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(m, 3) float: unit face normals (Newell's method, orientation of the face order)."""
+    V = mesh.V if V is None else V
+    t = mesh.topology
+    a, b = V[t.corner_vertex], V[t.corner_next_vertex]
+    cr = np.cross(a, b)
+    n = np.zeros((mesh.n_faces, 3))
+    np.add.at(n, t.corner_face, cr)
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+
+def face_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(m,) float: vector area of each face (exact for planar faces)."""
+    V = mesh.V if V is None else V
+    t = mesh.topology
+    cr = np.cross(V[t.corner_vertex], V[t.corner_next_vertex])
+    n = np.zeros((mesh.n_faces, 3))
+    np.add.at(n, t.corner_face, cr)
+    return 0.5 * np.linalg.norm(n, axis=1)
+
+
+def gauss_image_area(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(p,) float: signed spherical area of the face normals around interior valence-4 vertices.
+
+    Positive when the normals turn the same way as the star (elliptic), negative
+    for hyperbolic vertices.  Computed as a fan of spherical triangles from the
+    mean normal (Van Oosterom-Strackee formula).
+    """
+    t = mesh.topology
+    N = face_normals(mesh, V)[t.star_faces[t.interior_valence4, :4]]  # (p, 4, 3)
+    c = N.sum(axis=1)
+    c /= np.maximum(np.linalg.norm(c, axis=1, keepdims=True), 1e-300)
+    a, b = N, np.roll(N, -1, axis=1)
+    cc = np.broadcast_to(c[:, None, :], a.shape)
+    num = np.einsum("pij,pij->pi", cc, np.cross(a, b))
+    den = 1 + np.einsum("pij,pij->pi", a, b) + np.einsum("pij,pij->pi", b, cc) + np.einsum("pij,pij->pi", cc, a)
+    return (2 * np.arctan2(num, den)).sum(axis=1)
+
+
+def vertex_types(mesh: Mesh, V: np.ndarray | None = None, tol: float = 1e-9) -> np.ndarray:
+    """(p,) str: 'elliptic', 'hyperbolic' or 'parabolic' at interior valence-4 vertices."""
+    area = gauss_image_area(mesh, V)
+    scale = np.maximum(np.abs(area).max(initial=0.0), 1e-300)
+    kinds = np.where(area > tol * scale, "elliptic", np.where(area < -tol * scale, "hyperbolic", "parabolic"))
+    return kinds
+
+
+def edge_lengths(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(e,) float: length of every edge."""
+    V = mesh.V if V is None else V
+    e = mesh.topology.edges
+    return np.linalg.norm(V[e[:, 1]] - V[e[:, 0]], axis=1)
+
+
+def fairness(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(t,) float: ``|a - 2 v + b|`` / mean edge length along mesh polylines."""
+    V = mesh.V if V is None else V
+    T = mesh.topology.fair_triples
+    d = V[T[:, 0]] - 2 * V[T[:, 1]] + V[T[:, 2]]
+    return np.linalg.norm(d, axis=1) / edge_lengths(mesh, V).mean()
+
+
+def _stats(x: np.ndarray, tol: float | None = None) -> dict:
+    out = {"count": int(x.size)}
+    if x.size:
+        out.update(max=float(x.max()), mean=float(x.mean()), worst=int(np.argmax(x)))
+    else:
+        out.update(max=0.0, mean=0.0, worst=None)
+    if tol is not None:
+        out.update(tolerance=tol, ok=bool(out["max"] <= tol))
+    return out
+
+
+def summary(mesh: Mesh, tol: Tolerances = DEFAULT) -> dict:
+    """Every measure of ``mesh`` as a JSON-ready dict (the output of ``fabricate measure``)."""
+    t = mesh.topology
+    plan = planarity(mesh)
+    con = conical_defect(mesh)
+    cir = circular_defect(mesh)
+    ang = corner_angles(mesh)
+    el = edge_lengths(mesh)
+    area = face_areas(mesh)
+    kinds = vertex_types(mesh)
+    fair = fairness(mesh)
+    con_s = _stats(con, tol.conical)
+    if con.size:
+        con_s["worst"] = int(t.interior_valence4[con_s["worst"]])
+    cir_s = _stats(cir, tol.circular)
+    if cir.size:
+        cir_s["worst"] = int(np.nonzero(mesh.face_sizes == 4)[0][cir_s["worst"]])
+    sizes = np.bincount(mesh.face_sizes)
+    return {
+        "mesh": {
+            "name": mesh.name, "vertices": mesh.n_vertices, "faces": mesh.n_faces,
+            "face_sizes": {str(k): int(c) for k, c in enumerate(sizes) if c},
+            "edges": int(len(t.edges)), "boundary_loops": len(t.boundary_loops),
+            "components": t.n_components, "orientable": t.orientable,
+            "irregular_vertices": int(np.sum(~t.is_boundary_vertex & (t.valence != 4))),
+            "bbox_diagonal": mesh.bbox_diagonal(),
+        },
+        "planarity": _stats(plan, tol.planarity),
+        "conical": con_s,
+        "circular": cir_s,
+        "vertex_types": {k: int(np.sum(kinds == k)) for k in ("elliptic", "hyperbolic", "parabolic")},
+        "fairness": _stats(fair),
+        "edge_length": {"min": float(el.min()), "max": float(el.max()), "mean": float(el.mean())},
+        "angle_deg": {"min": float(np.degrees(ang.min())), "max": float(np.degrees(ang.max())),
+                      "mean": float(np.degrees(ang.mean()))},
+        "face_area": {"min": float(area.min()), "max": float(area.max()), "mean": float(area.mean())},
+    }

@@ -1,0 +1,205 @@
+"""The polygon mesh: vertex positions apart from connectivity.
+
+A mesh is ``V : (n, 3) float64`` plus faces as a padded ``F : (m, k) int64``
+array, ``-1`` in unused slots (quads are ``k = 4``; a mesh with one 20-gon cap
+has ``k = 20``).  Faces are stored counter-clockwise seen from the side the
+normals point to.  Connectivity (:class:`optimize.topology.Topology`) is derived
+once from ``F`` and cached; positions never change it, so
+:meth:`Mesh.with_vertices` shares the topology of the original.
+
+Construction validates everything a later stage relies on and raises
+:class:`MeshError` with the facts: NaN/inf coordinates, face indices out of
+range, repeated vertices in a face, zero-length edges, non-manifold edges and
+vertices, an empty mesh.  A fixable orientation inconsistency is fixed and
+recorded in :attr:`Mesh.notes`.
+"""
+from __future__ import annotations
+
+import logging
+from functools import cached_property
+from typing import Sequence
+
+import numpy as np
+
+from .errors import MeshError
+
+log = logging.getLogger(__name__)
+
+
+def pad_faces(faces: Sequence[Sequence[int]]) -> np.ndarray:
+    """Pack a list of index lists into a padded ``(m, k)`` int64 array (``-1`` fill)."""
+    if len(faces) == 0:
+        return np.zeros((0, 3), dtype=np.int64)
+    k = max(len(f) for f in faces)
+    F = np.full((len(faces), k), -1, dtype=np.int64)
+    for i, f in enumerate(faces):
+        F[i, : len(f)] = f
+    return F
+
+
+class Mesh:
+    """A polygon mesh with cached topology.
+
+    Parameters
+    ----------
+    V : (n, 3) float
+        Vertex positions.
+    F : (m, k) int, or a sequence of index sequences
+        Faces, padded with ``-1``; a ragged list is padded for you.
+    name : str
+        Used in messages (a file name, a shape name).
+    check : bool
+        Validate (default).  Only internal code that derives a mesh from an
+        already validated one passes ``False``.
+    """
+
+    def __init__(self, V, F, name: str = "mesh", *, check: bool = True, _topology=None):
+        V = np.asarray(V, dtype=np.float64)
+        if not isinstance(F, np.ndarray) or F.dtype == object:
+            F = pad_faces(F) if len(F) and not np.isscalar(F[0]) else np.asarray(F)
+        F = np.asarray(F, dtype=np.int64)
+        self.name = name
+        self.notes: list[str] = []
+        if check:
+            V, F = _validated(V, F, name)
+        self.V = V
+        self.F = F
+        self.V.setflags(write=False)
+        self.F.setflags(write=False)
+        self._topology = _topology
+        if check and _topology is None:
+            self._topology = self._build_topology()
+
+    # -- derived data -----------------------------------------------------
+    def _build_topology(self):
+        from .topology import Topology
+
+        topo = Topology(self.F, len(self.V), name=self.name)
+        if topo.flipped_faces.size:
+            F = self.F.copy()
+            F.setflags(write=True)
+            for f in topo.flipped_faces:  # a repair done once, not a kernel
+                s = topo.face_sizes[f]
+                F[f, :s] = F[f, :s][::-1]
+            msg = (f"{self.name}: {topo.flipped_faces.size} face(s) had inconsistent "
+                   f"orientation and were flipped (first: {topo.flipped_faces[:5].tolist()})")
+            log.warning(msg)
+            self.notes.append(msg)
+            F.setflags(write=False)
+            self.F = F
+            topo = Topology(self.F, len(self.V), name=self.name)
+        if not topo.orientable:
+            msg = f"{self.name}: the surface is not orientable (e.g. a Moebius band)"
+            log.info(msg)
+            self.notes.append(msg)
+        return topo
+
+    @property
+    def topology(self):
+        """:class:`optimize.topology.Topology` of the faces (computed once)."""
+        if self._topology is None:
+            self._topology = self._build_topology()
+        return self._topology
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.V.shape[0])
+
+    @property
+    def n_faces(self) -> int:
+        return int(self.F.shape[0])
+
+    @cached_property
+    def face_sizes(self) -> np.ndarray:
+        """(m,) int: number of vertices of each face."""
+        return (self.F >= 0).sum(axis=1)
+
+    @property
+    def is_quad(self) -> bool:
+        """True when every face is a quad."""
+        return bool(self.F.shape[1] == 4 and np.all(self.face_sizes == 4))
+
+    def faces_list(self) -> list[list[int]]:
+        """Faces as Python lists (for writers and small utilities)."""
+        return [row[row >= 0].tolist() for row in self.F]
+
+    def bbox_diagonal(self) -> float:
+        """Length of the bounding-box diagonal (the scale used by relative measures)."""
+        return float(np.linalg.norm(self.V.max(axis=0) - self.V.min(axis=0)))
+
+    def with_vertices(self, V: np.ndarray, name: str | None = None) -> "Mesh":
+        """A mesh with the same faces and topology and new positions ``V (n, 3)``.
+
+        Raises :class:`MeshError` for a shape mismatch or non-finite values.
+        """
+        V = np.array(V, dtype=np.float64)
+        if V.shape != self.V.shape:
+            raise MeshError(f"{self.name}: new vertex array has shape {V.shape}, "
+                            f"expected {self.V.shape}")
+        if not np.all(np.isfinite(V)):
+            bad = int(np.argwhere(~np.isfinite(V))[0, 0])
+            raise MeshError(f"{self.name}: vertex {bad} is not finite: {V[bad].tolist()}")
+        out = Mesh(V, self.F, name or self.name, check=False, _topology=self.topology)
+        out.notes = list(self.notes)
+        return out
+
+    def triangulate(self) -> np.ndarray:
+        """(t, 3) int: fan triangulation of every face (for closest-point queries)."""
+        sizes = self.face_sizes
+        tris = []
+        for j in range(1, self.F.shape[1] - 1):
+            sel = sizes > j + 1
+            tris.append(np.stack([self.F[sel, 0], self.F[sel, j], self.F[sel, j + 1]], axis=1))
+        return np.concatenate(tris, axis=0) if tris else np.zeros((0, 3), dtype=np.int64)
+
+    def __repr__(self) -> str:
+        sizes = np.bincount(self.face_sizes) if self.n_faces else []
+        desc = ", ".join(f"{c} {k}-gons" for k, c in enumerate(sizes) if c)
+        return f"Mesh({self.name!r}: {self.n_vertices} vertices, {desc})"
+
+
+def _validated(V: np.ndarray, F: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Check arrays; return contiguous copies.  Raises MeshError with the facts."""
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise MeshError(f"{name}: vertices have shape {V.shape}, expected (n, 3)")
+    if F.ndim != 2:
+        raise MeshError(f"{name}: faces have shape {F.shape}, expected (m, k)")
+    if V.shape[0] == 0 or F.shape[0] == 0:
+        raise MeshError(f"{name}: empty mesh ({V.shape[0]} vertices, {F.shape[0]} faces), "
+                        "expected at least one face")
+    bad = ~np.isfinite(V)
+    if bad.any():
+        i = int(np.argwhere(bad)[0, 0])
+        raise MeshError(f"{name}: vertex {i} has a non-finite coordinate {V[i].tolist()}, "
+                        "expected finite numbers")
+    valid = F >= 0
+    # padding must be trailing
+    if np.any(~valid[:, :-1] & valid[:, 1:]):
+        f = int(np.argwhere(~valid[:, :-1] & valid[:, 1:])[0, 0])
+        raise MeshError(f"{name}: face {f} has -1 before a vertex index, expected padding at the end")
+    sizes = valid.sum(axis=1)
+    if np.any(sizes < 3):
+        f = int(np.argmax(sizes < 3))
+        raise MeshError(f"{name}: face {f} has {sizes[f]} vertices, expected at least 3")
+    if np.any(F >= V.shape[0]) or np.any(F < -1):
+        f, j = (int(x) for x in np.argwhere((F >= V.shape[0]) | (F < -1))[0])
+        raise MeshError(f"{name}: face {f} refers to vertex {F[f, j]}, expected 0..{V.shape[0] - 1}")
+    # repeated vertex in a face
+    S = np.sort(np.where(valid, F, -np.arange(1, F.shape[1] + 1)[None, :] - 1), axis=1)
+    rep = np.any(S[:, 1:] == S[:, :-1], axis=1)
+    if rep.any():
+        f = int(np.argmax(rep))
+        raise MeshError(f"{name}: face {f} repeats a vertex: {F[f][F[f] >= 0].tolist()}, "
+                        "expected distinct vertices")
+    # zero-length edges
+    nxt = np.where(np.roll(valid, -1, axis=1), np.roll(F, -1, axis=1), F[:, :1])
+    a, b = F[valid], nxt[valid]
+    length = np.linalg.norm(V[a] - V[b], axis=1)
+    scale = max(float(np.ptp(V, axis=0).max()), 1e-300)
+    zero = length <= 1e-14 * scale
+    if zero.any():
+        i = int(np.argmax(zero))
+        f = int(np.nonzero(valid)[0][i])
+        raise MeshError(f"{name}: face {f} has a zero-length edge {int(a[i])}-{int(b[i])}, "
+                        "expected distinct vertex positions")
+    return np.ascontiguousarray(V), np.ascontiguousarray(F)

@@ -1,0 +1,43 @@
+"""The one tolerance object of the package.
+
+All geometric checks (planarity, conical and circular defects, offsets, CAD
+tolerances) read their thresholds from a :class:`Tolerances` instance, so that
+a report can quote exactly what was tested.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    """Thresholds for every check.
+
+    planarity : relative (diagonal distance / mean diagonal length for quads,
+        max plane distance / mean edge length for n-gons).
+    conical : radians, ``|w1 + w3 - w2 - w4|`` at interior valence-4 vertices.
+    circular : radians, ``max(|phi1 + phi3 - pi|, |phi2 + phi4 - pi|)`` per quad.
+    offset : relative to the offset distance, face-to-face distance error.
+    beam_planarity : relative, planarity of the beam quads.
+    cad_linear_mm : absolute, OpenCASCADE's modelling tolerance in mm.
+    closeness : relative to the bounding-box diagonal, max distance to the
+        reference surface (reported, not enforced by the optimizer).
+    """
+
+    planarity: float = 1e-6
+    conical: float = 1e-6
+    circular: float = 1e-6
+    offset: float = 1e-9
+    beam_planarity: float = 1e-6
+    cad_linear_mm: float = 1e-3
+    closeness: float = 5e-3
+
+    def replace(self, **changes: float) -> "Tolerances":
+        """Return a copy with some thresholds changed."""
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+
+DEFAULT = Tolerances()
