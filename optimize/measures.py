@@ -95,23 +95,25 @@ def circular_defect(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
 
 def face_normals(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(m, 3) float: unit face normals (Newell's method, orientation of the face order)."""
+    n = _vector_areas(mesh, V)
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+
+def _vector_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(m, 3) float: twice the vector area of each face (Newell), taken about the face's
+    first vertex so that far-from-origin coordinates lose no precision."""
     V = mesh.V if V is None else V
     t = mesh.topology
-    a, b = V[t.corner_vertex], V[t.corner_next_vertex]
-    cr = np.cross(a, b)
+    o = V[mesh.F[t.corner_face, 0]]
+    cr = np.cross(V[t.corner_vertex] - o, V[t.corner_next_vertex] - o)
     n = np.zeros((mesh.n_faces, 3))
     np.add.at(n, t.corner_face, cr)
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    return n
 
 
 def face_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(m,) float: vector area of each face (exact for planar faces)."""
-    V = mesh.V if V is None else V
-    t = mesh.topology
-    cr = np.cross(V[t.corner_vertex], V[t.corner_next_vertex])
-    n = np.zeros((mesh.n_faces, 3))
-    np.add.at(n, t.corner_face, cr)
-    return 0.5 * np.linalg.norm(n, axis=1)
+    return 0.5 * np.linalg.norm(_vector_areas(mesh, V), axis=1)
 
 
 def gauss_image_area(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
@@ -133,10 +135,14 @@ def gauss_image_area(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
 
 
 def vertex_types(mesh: Mesh, V: np.ndarray | None = None, tol: float = 1e-9) -> np.ndarray:
-    """(p,) str: 'elliptic', 'hyperbolic' or 'parabolic' at interior valence-4 vertices."""
+    """(p,) str: 'elliptic', 'hyperbolic' or 'parabolic' at interior valence-4 vertices.
+
+    tol : steradians; a Gauss image area with ``|area| <= tol`` is parabolic.  The
+        area is already scale-free, so the threshold is absolute (a threshold
+        relative to the largest area would classify round-off on a cylinder).
+    """
     area = gauss_image_area(mesh, V)
-    scale = np.maximum(np.abs(area).max(initial=0.0), 1e-300)
-    kinds = np.where(area > tol * scale, "elliptic", np.where(area < -tol * scale, "hyperbolic", "parabolic"))
+    kinds = np.where(area > tol, "elliptic", np.where(area < -tol, "hyperbolic", "parabolic"))
     return kinds
 
 

@@ -54,10 +54,10 @@ class Mesh:
     """
 
     def __init__(self, V, F, name: str = "mesh", *, check: bool = True, _topology=None):
-        V = np.asarray(V, dtype=np.float64)
+        V = np.array(V, dtype=np.float64, copy=check or None)  # never alias the caller
         if not isinstance(F, np.ndarray) or F.dtype == object:
             F = pad_faces(F) if len(F) and not np.isscalar(F[0]) else np.asarray(F)
-        F = np.asarray(F, dtype=np.int64)
+        F = np.array(F, dtype=np.int64, copy=check or None)
         self.name = name
         self.notes: list[str] = []
         if check:
@@ -194,9 +194,9 @@ def _validated(V: np.ndarray, F: np.ndarray, name: str) -> tuple[np.ndarray, np.
     # zero-length edges
     nxt = np.where(np.roll(valid, -1, axis=1), np.roll(F, -1, axis=1), F[:, :1])
     a, b = F[valid], nxt[valid]
-    length = np.linalg.norm(V[a] - V[b], axis=1)
     scale = max(float(np.ptp(V, axis=0).max()), 1e-300)
-    zero = length <= 1e-14 * scale
+    length = np.linalg.norm((V[a] - V[b]) / scale, axis=1)  # scaled first: no underflow
+    zero = length <= 1e-14
     if zero.any():
         i = int(np.argmax(zero))
         f = int(np.nonzero(valid)[0][i])

@@ -117,6 +117,11 @@ class Topology:
         consistent_after = same == (flip[f0] ^ flip[f1])
         self.orientable = bool(consistent_after.all())
         if self.orientable:  # only a flip that repairs the mesh is proposed
+            # flip the minority of each piece: one reversed face is fixed by flipping it
+            label = connected_components(G, directed=False)[1]
+            flipped = np.bincount(label, weights=flip)
+            total = np.bincount(label)
+            flip ^= (2 * flipped > total)[label]
             self.flipped_faces = np.nonzero(flip)[0]
 
     # -- vertex stars ------------------------------------------------------
