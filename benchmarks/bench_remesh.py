@@ -1,0 +1,142 @@
+"""Principal-direction mesh versus isoparametric grid as the start of a conical optimization.
+
+For each roof (a triangle mesh of a height field whose principal directions
+are turned away from the coordinate axes) two quad meshes of the same target
+edge length are built with the same extraction and boundary handling:
+``remesh`` (lines along principal directions) and ``isoparametric_remesh``
+(lines ``x = i h``, ``y = j h``).  Both are optimized to a conical mesh with
+the triangle surface as reference.  Printed per start mesh: faces, the initial
+conical defect at interior vertices (all, and "deep": four quads, no boundary
+neighbour, where boundary clipping does not count), the optimizer's status, how far the
+vertices moved (max and mean, relative to the bounding-box diagonal), the
+final distance to the surface and the fairness (mean second difference /
+mean edge length).  The paper's claim: the principal mesh needs far less
+deformation.  Also printed: the cost of the volume-PCA estimate relative to a
+quadric fit on the same mesh, in the same run.
+
+Run: ``python benchmarks/bench_remesh.py [--target conical|circular] [--h 0.3]
+[--free-boundary]``.  Timings are noisy on a shared machine.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from optimize import surfaces
+from optimize.api import optimize_mesh
+from optimize.measures import conical_defect, fairness
+from optimize.principal import principal_frames
+from optimize.principal_quadric import quadric_frames
+from optimize.remesh import isoparametric_remesh, remesh
+
+
+def turned_quadric(a: float, b: float, deg: float):
+    """``z = [x y] A [x y]^T`` with eigenvalues ``a, b`` turned by ``deg``: (f, grad, hess)."""
+    c, s = np.cos(np.radians(deg)), np.sin(np.radians(deg))
+    Rm = np.array([[c, -s], [s, c]])
+    A = Rm @ np.diag([a, b]) @ Rm.T
+    return (lambda x, y: A[0, 0] * x * x + 2 * A[0, 1] * x * y + A[1, 1] * y * y,
+            lambda x, y: np.stack([2 * A[0, 0] * x + 2 * A[0, 1] * y, 2 * A[0, 1] * x + 2 * A[1, 1] * y], 1),
+            lambda x, y: np.broadcast_to(2 * A, (len(x), 2, 2)).copy())
+
+
+def wave():
+    """A free-form roof ``0.3 sin(0.8 x + 0.3 y) cos(0.6 y - 0.2 x)`` (directions vary)."""
+    def f(x, y):
+        return 0.3 * np.sin(0.8 * x + 0.3 * y) * np.cos(0.6 * y - 0.2 * x)
+
+    def g(x, y):
+        s, c = np.sin(0.8 * x + 0.3 * y), np.cos(0.6 * y - 0.2 * x)
+        ds, dc = np.cos(0.8 * x + 0.3 * y), -np.sin(0.6 * y - 0.2 * x)
+        return 0.3 * np.stack([0.8 * ds * c + s * dc * -0.2, 0.3 * ds * c + s * dc * 0.6], 1)
+
+    def h(x, y, e=1e-5):  # central differences of the gradient (exact directions for checks)
+        hx = (g(x + e, y) - g(x - e, y)) / (2 * e)
+        hy = (g(x, y + e) - g(x, y - e)) / (2 * e)
+        H = np.stack([hx, hy], axis=1)
+        return 0.5 * (H + np.swapaxes(H, 1, 2))
+
+    return f, g, h
+
+
+ROOFS = {
+    "dome (turned 30 deg)": lambda: surfaces.height_field(turned_quadric(-0.10, -0.04, 30), n=(49, 37)),
+    "saddle (turned 30 deg)": lambda: surfaces.height_field(turned_quadric(0.08, -0.06, 30), n=(49, 37)),
+    "wave roof": lambda: surfaces.height_field(wave(), n=(49, 37)),
+}
+
+
+def _deep(quads) -> np.ndarray:
+    """(p,) bool over interior valence-4 vertices: all four faces quads, no neighbour on the boundary."""
+    t = quads.topology
+    iv = t.interior_valence4
+    faces = t.star_faces[iv, :4]
+    nb = t.star_neighbors[iv, :4]
+    return (quads.face_sizes[faces] == 4).all(1) & ~t.is_boundary_vertex[nb].any(1)
+
+
+def run_one(label, quads, corners, surface, target, glide, weights):
+    c0 = conical_defect(quads)
+    deep = _deep(quads)
+    sizes = np.bincount(quads.face_sizes)
+    print(f"  {label}: {quads.n_faces} faces ({sizes[4] if len(sizes) > 4 else 0} quads), initial conical "
+          f"defect max {c0.max():.3f} mean {c0.mean():.4f}, deep max {c0[deep].max():.3f} "
+          f"mean {c0[deep].mean():.4f}, fairness {fairness(quads).mean():.3f}")
+    moves = []
+    for w in weights:
+        t0 = time.perf_counter()
+        res = optimize_mesh(quads, target, reference=surface, glide_boundary=glide,
+                            fixed=corners if glide else None, fairness=w)
+        dt = time.perf_counter() - t0
+        move = np.linalg.norm(res.mesh.V - quads.V, axis=1) / quads.bbox_diagonal()
+        moves.append(move)
+        print(f"    fairness weight {w:g}: {res.status:<9} {res.nit:3d} it {dt:5.1f}s  move max "
+              f"{move.max():.4f} mean {move.mean():.4f}  dist {res.max_distance:.4f}  "
+              f"fairness {fairness(res.mesh).mean():.3f}")
+    return moves
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--target", default="conical", choices=("conical", "circular"))
+    ap.add_argument("--h", type=float, default=0.3, help="target edge length (roofs are 4 x 3)")
+    ap.add_argument("--free-boundary", action="store_true",
+                    help="boundary vertices move freely (default: they glide, corners fixed)")
+    ap.add_argument("--weights", default="1e-3,1e-5",
+                    help="fairness weights to run (the default 1e-3 slides vertices along the surface "
+                         "to even them out; 1e-5 leaves the constraints to decide)")
+    args = ap.parse_args()
+    glide = not args.free_boundary
+    weights = [float(w) for w in args.weights.split(",")]
+    print(f"target {args.target}, edge length {args.h}, boundary {'glides' if glide else 'free'}; "
+          "moves and distances relative to the bbox diagonal; fairness = mean |a - 2v + b| / mean edge")
+    for name, make in ROOFS.items():
+        surf = make()
+        print(f"{name}: {surf.mesh.n_vertices} vertices, {surf.mesh.n_faces} triangles")
+        quads, rep = remesh(surf.mesh, args.h, side=surf.side, with_report=True)
+        if rep.singular_triangles:
+            print(f"  (principal field: {rep.singular_triangles} singular triangles even after smoothing)")
+        elif rep.smoothing > 1:
+            print(f"  (principal field smoothed over {rep.smoothing:g} h to remove its singularities)")
+        m_p = run_one("principal", quads, rep.corners, surf.mesh, args.target, glide, weights)
+        grid, corners = isoparametric_remesh(surf.mesh, args.h, with_corners=True)
+        m_g = run_one("iso-grid ", grid, corners, surf.mesh, args.target, glide, weights)
+        for w, a, b in zip(weights, m_p, m_g):
+            print(f"  iso-grid / principal at fairness {w:g}: mean move x{b.mean() / a.mean():.2f}, "
+                  f"max move x{b.max() / a.max():.2f}")
+    surf = ROOFS["wave roof"]()
+    r = 0.3
+    t0 = time.perf_counter()
+    principal_frames(surf.mesh, None, r)
+    t_pca = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    quadric_frames(surf.mesh, None, r)
+    t_q = time.perf_counter() - t0
+    print(f"principal directions on {surf.mesh.n_vertices} vertices, r = {r}: volume PCA {t_pca:.2f}s, "
+          f"quadric fit {t_q:.2f}s (PCA / quadric = {t_pca / t_q:.1f})")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,302 @@
+"""Quad-dominant mesh from two scalar functions: the arrangement of their integer iso-lines.
+
+Given ``UV (n, 2)`` on the vertices of a disk-like triangle mesh (the map is
+assumed locally injective: :func:`optimize.remesh.integrate` reports folds),
+the lines ``u = i`` and ``v = j`` (integers, after a shift chosen to keep
+lattice nodes away from the boundary) cut the parameter image of the surface
+into cells.  Everything happens in the parameter plane, where it is a planar
+arrangement; only the nodes are mapped back to 3D (barycentric interpolation
+in the triangle that contains them).
+
+- nodes: lattice points inside the boundary polygon, crossings of the lines
+  with the boundary, and boundary corners of the input (turning angle above
+  ``corner_angle``);
+- edges: consecutive nodes along each line whose midpoint is inside, and
+  consecutive boundary nodes along the boundary;
+- faces: the bounded faces of the planar graph (a half-edge walk: the next
+  half-edge is the clockwise neighbour of the twin), counter-clockwise;
+- boundary: cells are clipped by the boundary, so boundary faces are
+  triangles, quads or pentagons (rarely more where the boundary bends inside
+  one cell); the boundary is straightened between consecutive boundary nodes.
+  Boundary nodes closer than ``merge`` along the boundary are merged; cells
+  smaller than ``min_area`` (lattice cell = 1) are merged into the neighbour
+  across their longest inner edge, and a boundary node left with only two
+  boundary edges is dropped.  A merge leaves a node of degree 3 on the side
+  of the merged face: the paper's T-junction turned into a pentagon.
+
+No T-junctions arise otherwise: every crossing of two lines is a node of both.
+"""
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.path import Path
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from .errors import ConfigError, MeshError
+from .mesh import Mesh
+
+
+def locate(UV: np.ndarray, T: np.ndarray, Q: np.ndarray, k: int = 16) -> tuple[np.ndarray, np.ndarray]:
+    """Triangle ``(q,)`` and barycentric coordinates ``(q, 3)`` of points ``Q (q, 2)`` in the plane mesh ``UV, T``.
+
+    Candidates are the ``k`` triangles with the nearest centroids; a point in
+    none of them gets the candidate it is least outside of (clamped).
+    """
+    k = min(k, len(T))
+    X = UV[T]  # (t, 3, 2)
+    _, cand = cKDTree(X.mean(1)).query(Q, k=k)
+    cand = cand.reshape(len(Q), k)
+    A, B, C = X[cand, 0], X[cand, 1], X[cand, 2]  # (q, k, 2)
+    d = (B[..., 0] - A[..., 0]) * (C[..., 1] - A[..., 1]) - (B[..., 1] - A[..., 1]) * (C[..., 0] - A[..., 0])
+    d = np.where(np.abs(d) < 1e-300, 1e-300, d)
+    Qk = Q[:, None, :]
+    l1 = ((Qk[..., 0] - A[..., 0]) * (C[..., 1] - A[..., 1]) - (Qk[..., 1] - A[..., 1]) * (C[..., 0] - A[..., 0])) / d
+    l2 = ((B[..., 0] - A[..., 0]) * (Qk[..., 1] - A[..., 1]) - (B[..., 1] - A[..., 1]) * (Qk[..., 0] - A[..., 0])) / d
+    bary = np.stack([1 - l1 - l2, l1, l2], axis=-1)  # (q, k, 3)
+    best = np.argmax(bary.min(-1), axis=1)
+    rows = np.arange(len(Q))
+    b = np.clip(bary[rows, best], 0, None)
+    return cand[rows, best], b / b.sum(1, keepdims=True)
+
+
+def planar_faces(P: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Bounded faces of a planar straight-line graph.
+
+    P : (N, 2) node positions, E : (e, 2) edges (no duplicates, no dangling edges).
+    Returns ``(F (f, k) int padded with -1, counter-clockwise; area (f,))``.
+    """
+    ne = len(E)
+    src, dst = np.concatenate([E[:, 0], E[:, 1]]), np.concatenate([E[:, 1], E[:, 0]])
+    twin = (np.arange(2 * ne) + ne) % (2 * ne)
+    d = P[dst] - P[src]
+    order = np.lexsort((np.arctan2(d[:, 1], d[:, 0]), src))
+    pos = np.empty_like(order)
+    pos[order] = np.arange(len(order))
+    s_sorted = src[order]
+    first = np.searchsorted(s_sorted, src, side="left")
+    last = np.searchsorted(s_sorted, src, side="right") - 1
+    p = pos[twin]  # position of the twin among the half-edges leaving dst
+    base = first[twin]
+    prev = np.where(p - 1 >= base, p - 1, last[twin])
+    nxt = order[prev]
+    H = len(src)
+    _, label = connected_components(coo_matrix((np.ones(H), (np.arange(H), nxt)), shape=(H, H)),
+                                    directed=True, connection="weak")
+    area = 0.5 * np.bincount(label, P[src, 0] * P[dst, 1] - P[dst, 0] * P[src, 1])
+    size = np.bincount(label)
+    start = np.full(len(size), H, dtype=np.int64)
+    np.minimum.at(start, label, np.arange(H))
+    keep = np.nonzero(area > 0)[0]
+    k = int(size[keep].max()) if len(keep) else 3
+    F = np.full((len(keep), k), -1, dtype=np.int64)
+    cur = start[keep]
+    for step in range(k):  # walk all faces at once, one step per vertex slot
+        live = step < size[keep]
+        F[live, step] = src[cur[live]]
+        cur = nxt[cur]
+    return F, area[keep]
+
+
+def _boundary_loop(surface: Mesh, UV: np.ndarray) -> np.ndarray:
+    loops = surface.topology.boundary_loops
+    if len(loops) != 1 or surface.topology.n_components != 1:
+        raise MeshError(f"{surface.name}: {len(loops)} boundary loop(s), {surface.topology.n_components} "
+                        "component(s); remeshing supports disk-like surfaces (one component, one boundary "
+                        "loop) only")
+    loop = loops[0]
+    B = UV[loop]
+    if 0.5 * np.sum(B[:, 0] * np.roll(B[:, 1], -1) - np.roll(B[:, 0], -1) * B[:, 1]) < 0:
+        loop = loop[::-1]
+    return loop
+
+
+def _corners(X: np.ndarray, angle_deg: float) -> np.ndarray:
+    """(b,) bool: boundary polygon ``X (b, 3)`` vertices where it turns by more than ``angle_deg``."""
+    a = X - np.roll(X, 1, axis=0)
+    b = np.roll(X, -1, axis=0) - X
+    c = np.einsum("ij,ij->i", a, b) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), 1e-300)
+    return c < np.cos(np.radians(angle_deg))
+
+
+def _best_shift(B: np.ndarray, trials: int = 5, near: float = 0.25) -> np.ndarray:
+    """(2,) lattice shift that leaves the fewest lattice nodes within ``near`` of the boundary polygon ``B``."""
+    seg = np.roll(B, -1, axis=0) - B
+    L = np.linalg.norm(seg, axis=1)
+    m = np.maximum(np.ceil(L / 0.05).astype(np.int64), 1)
+    k = np.repeat(np.arange(len(B)), m)
+    t = (np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m)) / m[k]
+    tree = cKDTree(B[k] + t[:, None] * seg[k])
+    lo, hi = np.floor(B.min(0)) - 1, np.ceil(B.max(0)) + 1
+    I, J = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1), indexing="ij")
+    G = np.stack([I.ravel(), J.ravel()], 1)
+    offs = np.arange(trials) / trials
+    best, score = np.zeros(2), np.inf
+    for a in offs:  # a handful of trial shifts
+        for b in offs:
+            s = np.sum(tree.query(G + [a, b], distance_upper_bound=near)[0] < near)
+            if s < score:
+                best, score = np.array([a, b]), s
+    return best
+
+
+def extract(surface: Mesh, UV: np.ndarray, *, corner_angle: float = 35.0, merge: float = 0.2,
+            min_area: float = 0.25, name: str = "remeshed") -> tuple[Mesh, np.ndarray]:
+    """Quad-dominant mesh of the integer iso-lines of ``UV (n, 2)`` on the triangle mesh ``surface``.
+
+    Returns ``(mesh, corners)``: a Mesh whose vertices lie on ``surface`` (see
+    the module docstring) and the ``(c,)`` indices of its vertices at corners
+    of the input boundary.
+    Raises ConfigError when no lattice node falls inside (edge length too large).
+    """
+    loop = _boundary_loop(surface, UV)
+    UV = UV - _best_shift(UV[loop])
+    B, X = UV[loop], surface.V[loop]
+    inside = Path(np.vstack([B, B[:1]]), closed=True)
+    lo, hi = np.floor(B.min(0)), np.ceil(B.max(0))
+    I, J = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1), indexing="ij")
+    G = np.stack([I.ravel(), J.ravel()], 1)
+    G = G[inside.contains_points(G)]
+    if len(G) < 4:
+        raise ConfigError(f"{surface.name}: only {len(G)} grid node(s) inside the surface; expected a "
+                          "smaller edge length")
+    # boundary nodes: crossings with the lines u = i, v = j, and corners
+    B1, X1 = np.roll(B, -1, axis=0), np.roll(X, -1, axis=0)
+    seg_k, seg_s, seg_axis = [], [], []
+    for ax in (0, 1):
+        a, b = B[:, ax], B1[:, ax]
+        cnt = (np.floor(np.maximum(a, b)) - np.floor(np.minimum(a, b))).astype(np.int64)
+        k = np.repeat(np.arange(len(B)), cnt)
+        c = np.floor(np.minimum(a, b))[k] + 1 + (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+        seg_k.append(k)
+        seg_s.append((c - a[k]) / (b[k] - a[k]))
+        seg_axis.append(np.full(len(k), ax))
+    corner = np.nonzero(_corners(X, corner_angle))[0]
+    seg_k.append(corner)
+    seg_s.append(np.zeros(len(corner)))
+    seg_axis.append(np.full(len(corner), 2))
+    bk, bs, bax = (np.concatenate(x) for x in (seg_k, seg_s, seg_axis))
+    order = np.lexsort((bs, bk))
+    bk, bs, bax = bk[order], bs[order], bax[order]
+    bP = B[bk] + bs[:, None] * (B1[bk] - B[bk])
+    bX = X[bk] + bs[:, None] * (X1[bk] - X[bk])
+    snap = bax < 2
+    bP[snap, bax[snap]] = np.round(bP[snap, bax[snap]])  # exactly on its line
+    # merge boundary nodes closer than `merge` (parameter units) along the boundary; corners win
+    gap = np.linalg.norm(np.roll(bP, -1, axis=0) - bP, axis=1)
+    rep = np.arange(len(bP))
+    for i in np.nonzero(gap[:-1] < merge)[0].tolist():  # the few close pairs along the boundary
+        a, b = int(rep[i]), i + 1
+        keep, drop = (b, a) if bax[b] == 2 and bax[a] != 2 else (a, b)
+        rep[rep == drop] = keep
+    nG = len(G)
+    P = np.vstack([G, bP])
+    bnode = nG + np.arange(len(bP))
+    # line edges: consecutive nodes along u = i (axis 0) and v = j (axis 1)
+    edges = []
+    for ax in (0, 1):
+        on = np.concatenate([np.arange(nG), bnode[bax == ax]])
+        line, along = np.round(P[on, ax]), P[on, 1 - ax]
+        o = np.lexsort((along, line))
+        on, line = on[o], line[o]
+        same = line[1:] == line[:-1]
+        a, b = on[:-1][same], on[1:][same]
+        mid = 0.5 * (P[a] + P[b])
+        ok = inside.contains_points(mid)
+        edges.append(np.stack([a[ok], b[ok]], 1))
+    nodemap = np.arange(len(P))
+    nodemap[bnode] = bnode[rep]
+    uniq_b = np.unique(bnode[rep])
+    ring = uniq_b[np.argsort(uniq_b)]  # boundary order is index order
+    edges.append(np.stack([ring, np.roll(ring, -1)], 1))
+    E = nodemap[np.concatenate(edges)]
+    E = E[E[:, 0] != E[:, 1]]
+    E = np.unique(np.sort(E, axis=1), axis=0)
+    is_corner = np.zeros(len(P), dtype=bool)
+    is_corner[bnode[bax == 2]] = True
+    F, _ = _cleanup(P, E, ring, is_corner, min_area, merge)
+    # 3D positions: lattice nodes by point location, boundary nodes on the boundary polyline
+    tri, bary = locate(UV, surface.F, P[:nG])
+    X3 = np.vstack([np.einsum("qk,qkj->qj", bary, surface.V[surface.F[tri]]), bX])
+    used = np.unique(F[F >= 0])
+    remap = np.full(len(P), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    out = Mesh(X3[used], np.where(F >= 0, remap[np.maximum(F, 0)], -1), name=name)
+    out.notes.append(f"{name}: {int(np.sum(out.face_sizes == 4))} quads, "
+                     f"{int(np.sum(out.face_sizes != 4))} other faces (boundary cells and merges)")
+    corners = remap[np.nonzero(is_corner)[0]]
+    return out, np.sort(corners[corners >= 0])
+
+
+def _collapse_short(P, E, ring, is_corner, merge):
+    """Collapse edges shorter than ``merge``: each cluster becomes one node (a corner, else a boundary node)."""
+    N = len(P)
+    short = np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1) < merge
+    if not short.any():
+        return E, ring
+    S = E[short]
+    _, lab = connected_components(coo_matrix((np.ones(len(S)), (S[:, 0], S[:, 1])), shape=(N, N)),
+                                  directed=False)
+    on_ring = np.zeros(N, dtype=bool)
+    on_ring[ring] = True
+    prio = np.where(is_corner, 0, np.where(on_ring, 1, 2))
+    order = np.lexsort((np.arange(N), prio, lab))  # best node first in every cluster
+    head = np.zeros(N, dtype=np.int64)
+    first = np.insert(lab[order][1:] != lab[order][:-1], 0, True)
+    head[lab[order][first]] = order[first]
+    rep = head[lab]
+    E = rep[E]
+    E = np.unique(np.sort(E[E[:, 0] != E[:, 1]], axis=1), axis=0)
+    ring = rep[ring]
+    ring = ring[np.append(ring[1:] != ring[:-1], ring[-1] != ring[0])]
+    return E, ring
+
+
+def _ring_edges(ring: np.ndarray) -> np.ndarray:
+    return np.sort(np.stack([ring, np.roll(ring, -1)], 1), axis=1)
+
+
+def _cleanup(P, E, ring, is_corner, min_area, merge, rounds: int = 6):
+    """Prune, merge small cells, drop lone boundary nodes.  Returns ``(F (f, k), area (f,))``.
+
+    P : (N, 2) nodes, E : (e, 2) sorted edges, ring : (b,) boundary nodes in order.
+    """
+    N = len(P)
+    for _ in range(rounds):  # each round is vectorized; a few rounds settle everything
+        on_ring = np.zeros(N, dtype=bool)
+        on_ring[ring] = True
+        while True:  # dangling edges, then boundary nodes with nothing but two boundary edges
+            deg = np.bincount(E.ravel(), minlength=N)
+            dangling = (deg == 1)
+            lone = on_ring & (deg == 2) & ~is_corner
+            if not (dangling.any() or lone.any()):
+                break
+            E = E[~(dangling[E[:, 0]] | dangling[E[:, 1]] | lone[E[:, 0]] | lone[E[:, 1]])]
+            if lone.any():
+                ring = ring[~lone[ring]]
+                on_ring[:] = False
+                on_ring[ring] = True
+                E = np.unique(np.vstack([E, _ring_edges(ring)]), axis=0)
+        E, ring = _collapse_short(P, E, ring, is_corner, merge)
+        F, area = planar_faces(P, E)
+        small = np.nonzero(area < min_area)[0]
+        if not len(small):
+            break
+        # drop the longest non-boundary edge of every small cell
+        a, b = F[small], np.roll(F[small], -1, axis=1)
+        last = (F[small] >= 0).sum(1) - 1
+        b[np.arange(len(small)), last] = F[small, 0]
+        ok = a >= 0
+        fa, ea, eb = np.nonzero(ok)[0], a[ok], b[ok]
+        key = np.minimum(ea, eb) * N + np.maximum(ea, eb)
+        rk = _ring_edges(ring)
+        inner = ~np.isin(key, rk[:, 0] * N + rk[:, 1])
+        fa, key = fa[inner], key[inner]
+        if not len(key):
+            break
+        length = np.linalg.norm(P[key // N] - P[key % N], axis=1)
+        o = np.lexsort((-length, fa))
+        first = np.insert(fa[o][1:] != fa[o][:-1], 0, True)
+        E = E[~np.isin(E[:, 0] * N + E[:, 1], key[o][first])]
+    return planar_faces(P, E)

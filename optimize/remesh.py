@@ -1,0 +1,249 @@
+"""From a triangulated surface to a quad-dominant mesh along principal curvature lines.
+
+The chain (paper section 5, with a practical integration step):
+
+1. principal directions at kernel radius ``r`` by volume PCA
+   (:mod:`optimize.principal`), with their reliability ``|k1 - k2|``;
+2. a smooth cross field: directions kept where ``|k1 - k2|`` is large, umbilic
+   and flat regions filled in (:func:`optimize.crossfield.smooth_cross_field`;
+   the smoothing length grows until no singularity is left, up to 8 ``h``),
+   then combed into two vector fields ``X1, X2`` per triangle;
+3. integration: two scalar functions ``u, v`` on the vertices whose gradients
+   follow ``X1 / h`` and ``X2 / h`` in the least-squares sense (one sparse
+   factorization of the cotangent Laplacian, two solves) -- a simplified,
+   integer-free global parametrization;
+4. extraction: the integer iso-lines of ``u`` and ``v`` cut the surface into
+   cells (:mod:`optimize.isolines`): quads inside, clipped polygons (mostly
+   triangles, quads, pentagons) along the boundary.
+
+Supported: disk-like surfaces (one component, one boundary loop: roofs,
+facades, canopies) whose principal field has no singularity inside, or
+singularities that the smoothing removes.  Not supported: closed surfaces,
+holes, and true umbilics inside the patch: integration does not place
+irregular vertices there; the least-squares ``u, v`` absorb the mismatch of
+the combed field, the cells around a singularity get distorted (triangles
+where ``u, v`` fold are counted in ``RemeshReport.folded``), and the result
+says so in ``mesh.notes``.  Edge length is ``h`` where the principal field is
+integrable and varies elsewhere (principal lines spread and converge): see
+``RemeshReport.edge_length``.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .crossfield import comb, face_crosses, face_frames, smooth_cross_field
+from .errors import ConfigError, MeshError
+from .isolines import extract
+from .mesh import Mesh
+from .principal import oriented_surface, principal_frames
+
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class RemeshReport:
+    """Facts about one remeshing run (JSON-ready via :meth:`as_dict`)."""
+
+    radius: float
+    edge_length_target: float
+    singular_triangles: int = 0
+    mismatched_edges: int = 0
+    folded: int = 0
+    corners: list = field(default_factory=list)
+    smoothing: float = 1.0
+    face_sizes: dict = field(default_factory=dict)
+    edge_length: dict = field(default_factory=dict)
+    timings: dict = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+def gradient_operator(mesh: Mesh) -> tuple[sp.csr_matrix, np.ndarray]:
+    """Per-triangle gradient ``G (3t, n)`` of piecewise linear functions, and triangle areas ``(t,)``.
+
+    Row ``3 f + c`` is coordinate ``c`` of the (constant) gradient in triangle ``f``.
+    """
+    V, F = mesh.V, mesh.F
+    nf, _, _, area = face_frames(mesh)
+    rows, cols, vals = [], [], []
+    t = np.arange(len(F))
+    for k in range(3):  # gradient of the hat function of corner k: n x (opposite edge) / 2A
+        opp = V[F[:, (k + 2) % 3]] - V[F[:, (k + 1) % 3]]
+        g = np.cross(nf, opp) / (2 * area)[:, None]
+        for c in range(3):
+            rows.append(3 * t + c)
+            cols.append(F[:, k])
+            vals.append(g[:, c])
+    G = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(3 * len(F), len(V)))
+    return G, area
+
+
+def integrate(mesh: Mesh, X1: np.ndarray, X2: np.ndarray, h: float) -> np.ndarray:
+    """(n, 2) ``u, v`` minimizing ``sum_t A_t (|grad u - X1/h|^2 + |grad v - X2/h|^2)``.
+
+    mesh : triangle Mesh; X1, X2 : (t, 3) combed unit fields.  Constants are
+    fixed by a tiny mass term (mean zero).
+    """
+    G, area = gradient_operator(mesh)
+    W = sp.diags(np.repeat(area, 3))
+    K = (G.T @ W @ G).tocsc()
+    eps = 1e-9 * K.diagonal().mean()
+    solve = spla.factorized((K + eps * sp.identity(K.shape[0], format="csc")).tocsc())
+    rhs = G.T @ W @ np.stack([X1.ravel(), X2.ravel()], 1) / h
+    UV = np.stack([solve(rhs[:, 0]), solve(rhs[:, 1])], 1)
+    return UV - UV.mean(0)
+
+
+def folded(mesh: Mesh, UV: np.ndarray) -> np.ndarray:
+    """(t,) bool: triangles whose parameter image is flipped or degenerate."""
+    A = UV[mesh.F]
+    d = (A[:, 1, 0] - A[:, 0, 0]) * (A[:, 2, 1] - A[:, 0, 1]) - (A[:, 1, 1] - A[:, 0, 1]) * (A[:, 2, 0] - A[:, 0, 0])
+    return d <= 0
+
+
+def confidence(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
+    """(n,) weight in [0, 1] of the principal directions: ``min(1, |k1 - k2| / a90)^2``.
+
+    ``a90`` is the 90th percentile of ``|k1 - k2|`` over the surface.  A
+    direction error ``d`` costs a conical defect of about ``|k1 - k2| d``, so
+    where the surface is nearly umbilic (or flat) the direction hardly matters
+    and the smoothing decides it.
+    """
+    d = np.abs(k1 - k2)
+    return np.minimum(1.0, d / max(float(np.percentile(d, 90)), 1e-300)) ** 2
+
+
+def default_radius(surface: Mesh, edge_length: float) -> float:
+    """Kernel radius: the target edge length, but at least three mean triangle edges."""
+    e = surface.topology.edges
+    mean_edge = float(np.linalg.norm(surface.V[e[:, 1]] - surface.V[e[:, 0]], axis=1).mean())
+    return max(float(edge_length), 3.0 * mean_edge)
+
+
+def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, side=None,
+           smoothing: float = 1.0, with_report: bool = False, name: str | None = None):
+    """Quad-dominant mesh of a disk-like triangle surface along its principal curvature lines.
+
+    surface : triangle Mesh (or anything :func:`optimize.principal.oriented_surface` accepts).
+    edge_length : target edge length ``h`` (model units).
+    radius : kernel radius of the principal directions (default :func:`default_radius`).
+    side : (3,) vector toward the inside (default below: ``(0, 0, -1)``).
+    smoothing : smoothing length of the cross field, in units of ``h``; doubled
+        (up to 8 times) while the smoothed field still has singularities.
+    Returns the Mesh (faces counter-clockwise about the outward normal; the
+    notes say what was approximated), or ``(Mesh, RemeshReport)`` with ``with_report``.
+    Raises MeshError (not a disk-like triangle mesh) and ConfigError (bad lengths).
+    """
+    if not np.isfinite(edge_length) or edge_length <= 0:
+        raise ConfigError(f"edge_length = {edge_length}, expected a positive length")
+    t0 = time.perf_counter()
+    mesh, N, closed = oriented_surface(surface, None, side)
+    if closed:
+        raise MeshError(f"{mesh.name}: closed surface; remeshing supports disk-like surfaces "
+                        "(one boundary loop) only")
+    if edge_length >= 0.5 * mesh.bbox_diagonal():
+        raise ConfigError(f"{mesh.name}: edge length {edge_length:g} is not below half the bounding-box "
+                          f"diagonal {mesh.bbox_diagonal():.4g}; expected a smaller edge length")
+    loops, comps = len(mesh.topology.boundary_loops), mesh.topology.n_components
+    if loops != 1 or comps != 1:
+        raise MeshError(f"{mesh.name}: {loops} boundary loop(s), {comps} component(s); remeshing "
+                        "supports disk-like surfaces (one component, one boundary loop) only")
+    r = default_radius(mesh, edge_length) if radius is None else float(radius)
+    rep = RemeshReport(radius=r, edge_length_target=float(edge_length))
+    fr = principal_frames(mesh, None, r, side=side)
+    rep.timings["principal"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    conf = confidence(fr.k1, fr.k2)
+    for grow in (1, 2, 4, 8):  # smooth harder until no singularity is left (or give up)
+        arms = smooth_cross_field(mesh, fr.normals, fr.k1dir, conf, grow * smoothing * edge_length)
+        X1, index = face_crosses(mesh, arms)
+        if not index.any():
+            break
+    rep.smoothing = grow * smoothing
+    X1, mismatch = comb(mesh, X1)
+    nf = face_frames(mesh)[0]
+    X2 = np.cross(nf, X1)
+    rep.singular_triangles = int(np.count_nonzero(index))
+    rep.mismatched_edges = int(mismatch.sum())
+    rep.timings["cross_field"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    UV = integrate(mesh, X1, X2, edge_length)
+    fold = folded(mesh, UV)
+    rep.folded = int(fold.sum())
+    rep.timings["integrate"] = time.perf_counter() - t2
+    t3 = time.perf_counter()
+    out, corners = extract(mesh, UV, name=name or f"{mesh.name}-quads")
+    rep.corners = corners.tolist()
+    rep.timings["extract"] = time.perf_counter() - t3
+    if rep.singular_triangles or rep.folded:
+        msg = (f"{out.name}: the principal field has {rep.singular_triangles} singular triangle(s) "
+               f"(umbilics); the parametrization folds in {rep.folded} triangle(s); cells there are "
+               "distorted (no irregular vertices are placed)")
+        log.warning(msg)
+        out.notes.append(msg)
+    el = np.linalg.norm(out.V[out.topology.edges[:, 1]] - out.V[out.topology.edges[:, 0]], axis=1)
+    rep.edge_length = {"min": float(el.min()), "mean": float(el.mean()), "max": float(el.max())}
+    rep.face_sizes = {str(k): int(c) for k, c in enumerate(np.bincount(out.face_sizes)) if c}
+    rep.timings["total"] = time.perf_counter() - t0
+    log.info("remesh %s: %s", out.name, rep.as_dict())
+    return (out, rep) if with_report else out
+
+
+def isoparametric_remesh(surface: Mesh, edge_length: float, *, axes: tuple = (0, 1),
+                         with_corners: bool = False, name: str | None = None):
+    """The baseline: the grid of the height-field projection (lines ``x = i h``, ``y = j h``).
+
+    Same extraction and boundary handling as :func:`remesh`, but the lines
+    follow the coordinate axes ``axes`` of the projection instead of the
+    principal directions.  surface : disk-like triangle Mesh whose projection
+    on those axes is one-to-one (a roof).  Returns the Mesh, or ``(Mesh,
+    corners (c,) int)`` with ``with_corners`` (vertices at input boundary corners).
+    """
+    if not np.isfinite(edge_length) or edge_length <= 0:
+        raise ConfigError(f"edge_length = {edge_length}, expected a positive length")
+    mesh = surface if isinstance(surface, Mesh) else Mesh(*surface)
+    UV = mesh.V[:, list(axes)] / edge_length
+    if folded(mesh, UV).all():
+        UV = UV[:, ::-1]
+    if folded(mesh, UV).any():
+        raise MeshError(f"{mesh.name}: the projection on axes {tuple(axes)} is not one-to-one, "
+                        "expected a height field")
+    out, corners = extract(mesh, UV, name=name or f"{mesh.name}-grid")
+    return (out, corners) if with_corners else out
+
+
+def surface_to_mesh(surface: Mesh, edge_length: float, *, target: str = "conical",
+                    radius: float | None = None, side=None, glide_boundary: bool = True,
+                    **optimize_kwargs):
+    """The whole chain: triangle surface -> principal quad mesh -> conical / circular mesh.
+
+    surface : disk-like triangle Mesh; edge_length, radius, side : as in :func:`remesh`.
+    target : ``"conical"`` | ``"circular"`` | ``"pq"`` | ``"none"`` (remesh only).
+    glide_boundary and ``optimize_kwargs`` go to ``optimize_mesh`` (the
+    original surface is the reference); when the boundary glides and no
+    ``fixed`` is given, the vertices at corners of the input boundary are fixed
+    (a corner cannot glide along the boundary curve).
+    Returns ``(mesh, result, report)``: the optimized Mesh (the remeshed one
+    for ``"none"``), the OptimizeResult (None for ``"none"``) and the RemeshReport.
+    """
+    quads, rep = remesh(surface, edge_length, radius=radius, side=side, with_report=True)
+    if target in (None, "none"):
+        return quads, None, rep
+    from .api import optimize_mesh
+
+    t0 = time.perf_counter()
+    if glide_boundary and optimize_kwargs.get("fixed") is None:
+        optimize_kwargs["fixed"] = np.asarray(rep.corners, dtype=np.int64)
+    res = optimize_mesh(quads, target, reference=surface, glide_boundary=glide_boundary, **optimize_kwargs)
+    rep.timings["optimize"] = time.perf_counter() - t0
+    out = res.mesh
+    out.notes.extend(n for n in quads.notes if n not in out.notes)
+    return out, res, rep
