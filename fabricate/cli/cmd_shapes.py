@@ -1,0 +1,68 @@
+"""``fabricate shapes [NAME -o OUT] [--param k=v ...]``: list the built-in designs or write one."""
+from __future__ import annotations
+
+import json
+
+
+def register(sub) -> None:
+    p = sub.add_parser("shapes", help="list the built-in designs, or write one's starting mesh",
+                       description="Without NAME: list the built-in designs with their parameters "
+                                   "and defaults (all sizes in mm). With NAME and -o: write the "
+                                   "design's starting mesh (its control mesh when it has "
+                                   "subdivision levels) to OUT (.obj, .off, .ply).")
+    p.add_argument("name", nargs="?", help="design name (see the list)")
+    p.add_argument("-o", "--output", help="mesh file to write (.obj, .off, .ply)")
+    p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                   help="set a design parameter (repeatable), e.g. --param nu=12 --param noise=0.05")
+    p.add_argument("--refined", action="store_true",
+                   help="write the mesh after the design's subdivision levels, not perturbed")
+    p.add_argument("--json", action="store_true", help="list as JSON")
+    p.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    from optimize.designs import DESIGNS, describe, parse_params
+    from optimize.errors import ConfigError
+
+    if args.name is None:
+        if args.output or args.param or args.refined:
+            raise ConfigError("fabricate shapes: -o, --param and --refined need a design NAME")
+        items = describe()
+        if args.json:
+            print(json.dumps(items, indent=2, default=str))
+        else:
+            _print_list(items)
+        return 0
+    params = parse_params(args.name, args.param)
+    design = DESIGNS[args.name](**params)
+    mesh = design.mesh
+    if args.refined and design.levels:
+        from optimize.subdivision import subdivide
+
+        mesh, _ = subdivide(mesh, design.scheme, design.levels)
+    if args.output is None:
+        print(f"{design.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces ({design.units}); "
+              f"levels {design.levels} {design.scheme}, target {design.target}. Give -o OUT to write it.")
+        return 0
+    from optimize.io import write_mesh
+
+    write_mesh(args.output, mesh)
+    if args.refined and design.levels:
+        what = f"subdivided ({design.levels} level(s) of {design.scheme}, not perturbed)"
+    elif design.levels:
+        what = f"control (run {design.levels} level(s) of {design.scheme} on it)"
+    else:
+        what = "starting"
+    print(f"wrote {args.output}: {design.name} {what} mesh, {mesh.n_vertices} vertices, "
+          f"{mesh.n_faces} faces, units {design.units}; target {design.target}")
+    return 0
+
+
+def _print_list(items: list[dict]) -> None:
+    for d in items:
+        print(f"{d['name']}: {d['summary']}")
+        print(f"    starts with {d['vertices']} vertices, {d['faces']} faces; levels {d['levels']} "
+              f"{d['scheme'] if d['levels'] else ''}, target {d['target']}; units {d['units']}")
+        for p in d["params"]:
+            print(f"    {p['name']:<12} = {p['default']!s:<10} {p['help']}")
+        print()
