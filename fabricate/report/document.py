@@ -1,0 +1,118 @@
+"""report.json: what was run, with which versions, how long each stage took, and every
+measure with its tolerance, pass/fail and worst elements (relative and mm)."""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import platform
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from optimize.atomic import atomic_open
+
+SCHEMA = "conical-fab/report/1"
+DISTRIBUTIONS = ("conical-fab", "numpy", "scipy", "pydantic", "PyYAML", "matplotlib", "rich",
+                 "build123d", "cadquery-ocp", "manifold3d", "ezdxf", "cholespy")
+
+
+def versions() -> dict[str, str | None]:
+    """Installed versions of the packages a result depends on (None: not installed)."""
+    out: dict[str, str | None] = {"python": platform.python_version(), "platform": platform.platform()}
+    for dist in DISTRIBUTIONS:
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = None
+    from fabricate import __version__
+
+    out["fabricate"] = __version__
+    return out
+
+
+def jsonable(value: Any) -> Any:
+    """A JSON-ready copy: numpy to Python, NaN and infinities to None, paths to strings."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, Path):
+        return str(value)
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    return str(value)
+
+
+def parts_summary(parts) -> dict[str, Any] | None:
+    """Counts, volumes (mm3) and masses (kg) per kind of part, plus the CAD stage's own report."""
+    if parts is None:
+        return None
+    out: dict[str, Any] = {}
+    for kind in ("panel", "beam", "node"):
+        groups = parts.of_kind(kind)
+        vol = float(sum(float(np.sum(g.volume_mm3)) for g in groups))
+        density = parts.spec.density(kind)
+        out[kind + "s"] = {"count": int(sum(len(g) for g in groups)), "volume_mm3": vol,
+                           "mass_kg": vol * 1e-9 * density, "density_kg_m3": density}
+    out["total"] = {"count": len(parts), "mass_kg": sum(v["mass_kg"] for v in out.values())}
+    out["edge_mode"] = parts.edge_mode
+    out["cad_report"] = parts.report
+    return out
+
+
+def build_report(ctx, pictures: dict[str, str]) -> dict[str, Any]:
+    """The report dict of a finished run (``ctx``: :class:`fabricate.pipeline.RunContext`)."""
+    cfg = ctx.config
+    result = ctx.get("result")
+    structure = ctx.get("structure")
+    mesh = ctx.get("mesh")
+    out = ctx["outcome"]
+    files = {}
+    for p in sorted(ctx.workdir.rglob("*")):
+        if p.is_file() and p.name not in ("report.json", "report.html"):
+            rel = p.relative_to(ctx.workdir).as_posix()
+            files[rel] = dict(ctx.files.get(rel, {}), bytes=p.stat().st_size)
+    report = {
+        "schema": SCHEMA,
+        "name": cfg.name,
+        "status": out["status"],
+        "exit_code": out["exit_code"],
+        "message": out["message"],
+        "failed": out["failed"],
+        "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "config_file": str(cfg.source) if cfg.source else None,
+        "config": cfg.as_dict(),
+        "input": ctx.get("plan"),
+        "result_mesh": None if mesh is None else {
+            "faces": mesh.n_faces, "vertices": mesh.n_vertices, "edges": int(len(mesh.topology.edges)),
+            "bbox_diagonal_mm": mesh.bbox_diagonal()},
+        "versions": versions(),
+        "timings_s": dict(ctx.timings),
+        "measures": ctx.get("measures", {}),
+        "optimization": result.report() if result is not None else None,
+        "levels": ctx.get("levels", []),
+        "offset": getattr(structure, "report", None),
+        "parts": parts_summary(ctx.get("parts")),
+        "check": ctx.get("check"),
+        "files": files,
+        "pictures": pictures,
+        "notes": list(ctx.notes),
+    }
+    return jsonable(report)
+
+
+def write_report_json(report: dict[str, Any], path: str | Path) -> Path:
+    """Write ``report`` as strict JSON (no NaN), atomically."""
+    text = json.dumps(report, indent=2, allow_nan=False)
+    with atomic_open(path) as fh:
+        fh.write(text + "\n")
+    return Path(path)

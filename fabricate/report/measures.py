@@ -1,0 +1,139 @@
+"""Every measure of a run with its tolerance, pass/fail and worst elements, relative and in mm.
+
+``collect_measures(ctx)`` returns ``{name: entry}``; an entry has ``unit``,
+``max``, ``mean``, ``tolerance``, ``pass``, ``enforced`` (a failing enforced
+measure makes the run "tolerance not reached", exit 3), ``worst`` (the five
+worst elements with their index and value) and, where it means something,
+the same figures in mm or degrees (``max_mm``, ``max_deg``).
+
+Enforced: planarity always (glass panels are flat); the conical defect and
+the planarity of the beams between interior nodes (torsion-free beams, the
+paper's Geometry Fact 2) for a conical target; the circular defect for a
+circular target.  Beams at boundary nodes are reported apart: there the faces
+do not determine the node axis.  Closeness, the offset-distance error and the node-axis
+defect are reported with their tolerance but do not change the exit code.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from optimize import measures as M
+from optimize.mesh import Mesh
+
+N_WORST = 5
+
+
+def planarity_scale(mesh: Mesh) -> np.ndarray:
+    """(m,) float: the length that makes planarity relative (mm): mean diagonal of a quad,
+    mean edge length of an n-gon (0 for triangles)."""
+    V, F, s = mesh.V, mesh.F, mesh.face_sizes
+    out = np.zeros(mesh.n_faces)
+    q = s == 4
+    if q.any():
+        Q = V[F[q, :4]]
+        out[q] = 0.5 * (np.linalg.norm(Q[:, 2] - Q[:, 0], axis=1) + np.linalg.norm(Q[:, 3] - Q[:, 1], axis=1))
+    for k in np.unique(s[s > 4]):
+        sel = s == k
+        P = V[F[sel, :k]]
+        out[sel] = np.linalg.norm(np.roll(P, -1, axis=1) - P, axis=2).mean(axis=1)
+    return out
+
+
+def entry(values: np.ndarray, tolerance: float | None, unit: str, element: str, *,
+          ids: np.ndarray | None = None, enforced: bool = False, extra: dict[str, np.ndarray] | None = None,
+          what: str = "") -> dict:
+    """Statistics of ``values (k,)`` with the ``N_WORST`` largest named by ``element`` index.
+
+    ids : (k,) int element indices (default ``arange(k)``).
+    extra : ``{"mm": (k,) values}`` reported as ``max_mm`` / ``mean_mm`` and per worst element.
+    """
+    values = np.asarray(values, dtype=float).ravel()
+    ids = np.arange(values.size) if ids is None else np.asarray(ids).ravel()
+    out = {"what": what, "unit": unit, "count": int(values.size), "tolerance": tolerance, "enforced": enforced}
+    if values.size == 0:
+        out.update(max=0.0, mean=0.0, worst=[], **{"pass": True})
+        return out
+    order = np.argsort(-values, kind="stable")[:N_WORST]
+    worst = [{element: int(ids[i]), "value": float(values[i])} for i in order]
+    for key, arr in (extra or {}).items():
+        arr = np.asarray(arr, dtype=float).ravel()
+        out[f"max_{key}"] = float(arr.max())
+        out[f"mean_{key}"] = float(arr.mean())
+        for w, i in zip(worst, order):
+            w[key] = float(arr[i])
+    out.update(max=float(values.max()), mean=float(values.mean()), worst=worst)
+    out["pass"] = None if tolerance is None else bool(out["max"] <= tolerance)
+    return out
+
+
+def collect_measures(ctx) -> dict[str, dict]:
+    """All measures of the run in ``ctx`` (a :class:`fabricate.pipeline.RunContext`)."""
+    cfg = ctx.config
+    tol = cfg.tolerances.to_tolerances()
+    mesh: Mesh = ctx["mesh"]
+    target = ctx["plan"]["target"]
+    topo = mesh.topology
+    out: dict[str, dict] = {}
+
+    plan = M.planarity(mesh)
+    out["planarity"] = entry(plan, tol.planarity, "relative", "face", enforced=True,
+                             extra={"mm": plan * planarity_scale(mesh)},
+                             what="panel flatness: diagonal distance / mean diagonal (n-gons: plane distance / edge)")
+    con = M.conical_defect(mesh)
+    out["conical"] = entry(con, tol.conical, "rad", "vertex", ids=topo.interior_valence4,
+                           enforced=target == "conical", extra={"deg": np.degrees(con)},
+                           what="|w1 + w3 - w2 - w4| at interior valence-4 vertices")
+    cir = M.circular_defect(mesh)
+    out["circular"] = entry(cir, tol.circular, "rad", "face", ids=np.nonzero(mesh.face_sizes == 4)[0],
+                            enforced=target == "circular", extra={"deg": np.degrees(cir)},
+                            what="max(|phi1 + phi3 - pi|, |phi2 + phi4 - pi|) per quad")
+    result = ctx.get("result")
+    if result is not None:
+        diag = _reference_diagonal(ctx)
+        out["closeness"] = {
+            "what": "max distance of a vertex to the reference surface / its bounding-box diagonal",
+            "unit": "relative", "count": mesh.n_vertices, "tolerance": tol.closeness, "enforced": False,
+            "max": float(result.max_distance), "mean": None, "max_mm": float(result.max_distance * diag),
+            "worst": [], "pass": bool(result.max_distance <= tol.closeness)}
+    out.update(_offset_measures(ctx, tol, enforce=target == "conical"))
+    return out
+
+
+def _reference_diagonal(ctx) -> float:
+    ref = ctx.get("input_mesh")
+    return (ref if ref is not None else ctx["mesh"]).bbox_diagonal()
+
+
+def _offset_measures(ctx, tol, enforce: bool) -> dict[str, dict]:
+    s = ctx.get("structure")
+    if s is None:
+        return {}
+    out = {}
+    d = np.abs(np.asarray(s.distances, dtype=float))
+    err = np.abs(np.asarray(s.face_distance_error, dtype=float))  # (m, L) mm
+    if err.size:
+        rel = np.where(d[None, :] > 0, err / np.where(d > 0, d, 1.0)[None, :], 0.0)
+        out["offset_distance"] = entry(rel.max(axis=1), tol.offset, "relative", "face",
+                                       extra={"mm": err.max(axis=1)},
+                                       what="distance error of the offset faces / their offset distance "
+                                            "(reported; exact only where the mesh is conical)")
+    twist = np.asarray(s.beam_twist_mm, dtype=float)
+    if twist.size:
+        rel = M.quad_planarity(np.asarray(s.beam_quads, dtype=float))
+        deg = np.asarray(s.beam_twist_deg, dtype=float)
+        edges = np.asarray(s.edges)
+        at_boundary = ctx["mesh"].topology.is_boundary_vertex[edges].any(axis=1)
+        for key, sel, enforced, what in (
+                ("beam_planarity", ~at_boundary, enforce,
+                 "flatness (torsion) of the beams between interior nodes: diagonal distance / mean diagonal"),
+                ("beam_planarity_boundary", at_boundary, False,
+                 "the same for beams at boundary nodes, where the faces leave the node axis free "
+                 "(reported: a least-squares choice of axes, not exact in general)")):
+            ids = np.nonzero(sel)[0]
+            out[key] = entry(rel[ids], tol.beam_planarity, "relative", "beam", ids=ids, enforced=enforced,
+                             extra={"twist_mm": twist[ids], "twist_deg": np.abs(deg[ids])}, what=what)
+    axis = np.asarray(s.axis_defect, dtype=float)
+    if axis.size:
+        out["axis_defect"] = entry(axis, None, "rad", "vertex", extra={"deg": np.degrees(axis)},
+                                   what="spread of the angle between the node axis and the face normals")
+    return out

@@ -1,0 +1,223 @@
+"""Pictures of a run, rendered headless (matplotlib's Agg canvas, no pyplot state).
+
+Each function draws one PNG from plain arrays and writes it atomically:
+
+- :func:`picture_defect`: the design with faces (or vertices) coloured by a
+  defect on a log scale, the tolerance marked on the colour bar;
+- :func:`picture_layers`: the offset layers as wireframes with the beams;
+- :func:`picture_history`: defects against iteration (log scale) with tolerances;
+- :func:`picture_outlines`: a sheet of the flat part outlines with their ids.
+
+The figure objects are created without ``pyplot`` so that threads (a Dask
+worker) can draw at the same time.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from optimize.atomic import atomic_path
+from optimize.mesh import Mesh
+
+DPI = 110
+FLOOR = 1e-17
+
+
+def _figure(size=(7.0, 5.5)):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=size, dpi=DPI)
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def _save(fig, path: str | Path) -> Path:
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=DPI, bbox_inches="tight")
+    return path
+
+
+def face_polygons(mesh: Mesh) -> list[np.ndarray]:
+    """Faces as ``(k, 3)`` arrays (one gather per face size)."""
+    sizes = mesh.face_sizes
+    polys: list[np.ndarray | None] = [None] * mesh.n_faces
+    for k in np.unique(sizes):
+        idx = np.nonzero(sizes == k)[0]
+        for i, P in zip(idx, mesh.V[mesh.F[idx, :k]]):
+            polys[i] = P
+    return polys  # type: ignore[return-value]
+
+
+def _axes3d(fig, V: np.ndarray, rect=111):
+    ax = fig.add_subplot(rect, projection="3d")
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    span = np.maximum(hi - lo, 1e-9 * max(float(np.ptp(V)), 1.0))
+    ax.set_xlim(lo[0], lo[0] + span[0])
+    ax.set_ylim(lo[1], lo[1] + span[1])
+    ax.set_zlim(lo[2], lo[2] + span[2])
+    ax.set_box_aspect(span / span.max())
+    ax.view_init(elev=28, azim=-58)
+    ax.set_axis_off()
+    return ax
+
+
+def _lognorm(values: np.ndarray, tolerance: float | None):
+    from matplotlib.colors import LogNorm
+
+    v = np.maximum(np.asarray(values, dtype=float), FLOOR)
+    hi = max(float(v.max()), (tolerance or FLOOR) * 10)
+    lo = min(float(v.min()), (tolerance or hi) / 100)
+    lo = min(max(lo, FLOOR), hi / 10)
+    return LogNorm(vmin=lo, vmax=hi), v
+
+
+def picture_defect(mesh: Mesh, values: np.ndarray, path: str | Path, *, title: str, label: str,
+                   tolerance: float | None = None, vertices: np.ndarray | None = None) -> Path:
+    """The design coloured by a defect on a log scale.
+
+    values : (m,) per face, or (p,) per vertex when ``vertices`` (p,) int are given
+        (then faces are drawn grey and the vertices as coloured dots).
+    """
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    fig = _figure()
+    ax = _axes3d(fig, mesh.V)
+    cmap = "viridis"
+    norm, v = _lognorm(values if len(values) else np.array([FLOOR]), tolerance)
+    polys = face_polygons(mesh)
+    if vertices is None:
+        from matplotlib import colormaps
+
+        colors = colormaps[cmap](norm(v))
+        ax.add_collection3d(Poly3DCollection(polys, facecolors=colors, edgecolors=(0.2, 0.2, 0.2, 0.6),
+                                             linewidths=0.3))
+    else:
+        ax.add_collection3d(Poly3DCollection(polys, facecolors=(0.85, 0.87, 0.9, 0.5),
+                                             edgecolors=(0.3, 0.3, 0.3, 0.5), linewidths=0.3))
+        if len(vertices):
+            P = mesh.V[np.asarray(vertices, dtype=np.int64)]
+            ax.scatter(P[:, 0], P[:, 1], P[:, 2], c=v, cmap=cmap, norm=norm, s=14, depthshade=False)
+    from matplotlib.cm import ScalarMappable
+
+    bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.7, pad=0.02)
+    bar.set_label(label + ("  (red line: tolerance)" if tolerance is not None else ""))
+    if tolerance is not None:
+        bar.ax.axhline(tolerance, color="red", linewidth=2)
+    worst = float(np.max(values)) if len(values) else 0.0
+    ok = "" if tolerance is None else ("  (within tolerance)" if worst <= tolerance else "  (NOT within tolerance)")
+    ax.set_title(f"{title}\nmax {worst:.3g}{ok}", fontsize=10)
+    return _save(fig, path)
+
+
+def picture_layers(layers: list[np.ndarray], edges: np.ndarray, beam_quads: np.ndarray, path: str | Path,
+                   *, title: str, distances: tuple[float, ...] = ()) -> Path:
+    """The offset layers (wireframes, one colour each) with the beams (grey quads).
+
+    layers : list of (n, 3) vertex arrays, same vertex order; edges : (e, 2) int;
+    beam_quads : (e, 4, 3).
+    """
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
+
+    fig = _figure()
+    ax = _axes3d(fig, np.concatenate([np.asarray(L) for L in layers], axis=0))
+    if len(beam_quads):
+        ax.add_collection3d(Poly3DCollection(list(np.asarray(beam_quads)), facecolors=(0.55, 0.57, 0.6, 0.55),
+                                             edgecolors=(0.35, 0.35, 0.38, 0.6), linewidths=0.2))
+    colors = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e"]
+    for i, L in enumerate(layers):
+        L = np.asarray(L)
+        seg = np.stack([L[edges[:, 0]], L[edges[:, 1]]], axis=1)
+        lab = f"layer {i}" + (f" ({distances[i]:g} mm)" if i < len(distances) else "")
+        ax.add_collection3d(Line3DCollection(seg, colors=colors[i % len(colors)], linewidths=0.7, label=lab))
+    ax.legend(loc="upper left", fontsize=8)
+    ax.set_title(title, fontsize=10)
+    return _save(fig, path)
+
+
+def picture_history(histories: list[tuple[str, list[dict]]], path: str | Path, *,
+                    tolerances: dict[str, float], title: str) -> Path:
+    """Max defects against iteration on a log scale, one segment per level, tolerances dashed.
+
+    histories : ``[(label, [ {"planarity": x, "conical": y, ...}, ...]), ...]``.
+    """
+    fig = _figure((7.0, 4.2))
+    ax = fig.add_subplot(111)
+    keys = ("planarity", "conical", "circular")
+    colors = {"planarity": "#1f77b4", "conical": "#d62728", "circular": "#2ca02c"}
+    start, drawn = 0, False
+    for n, (label, hist) in enumerate(histories):
+        it = np.arange(start, start + len(hist))
+        for key in keys:
+            y = np.array([h.get(key, np.nan) if isinstance(h.get(key), (int, float)) else np.nan
+                          for h in hist], dtype=float)
+            if np.any(y > 0):
+                ax.semilogy(it, np.maximum(y, FLOOR), "-o", ms=2.5, color=colors[key],
+                            label=key if n == 0 else None)
+                drawn = True
+        if len(histories) > 1 and hist:
+            ax.axvline(start - 0.5, color="0.7", lw=0.8)
+            ax.text(start, 1.0, f" {label}", transform=ax.get_xaxis_transform(), va="top", fontsize=8)
+        start += len(hist)
+    if drawn:
+        for key in keys:
+            if key in tolerances and any(key in h for _, hist in histories for h in hist):
+                ax.axhline(tolerances[key], color=colors[key], ls="--", lw=0.9, label=f"{key} tolerance")
+        ax.legend(fontsize=8)
+    else:
+        ax.text(0.5, 0.5, "no optimization history", ha="center", va="center", transform=ax.transAxes)
+    ax.set_xlabel("iteration")
+    ax.set_ylabel("max defect (log scale)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.set_title(title, fontsize=10)
+    return _save(fig, path)
+
+
+def shelf_layout(sizes: np.ndarray, width: float, gap: float) -> np.ndarray:
+    """(k, 2) lower-left corners packing boxes ``sizes (k, 2)`` in shelves of ``width``."""
+    order = np.argsort(-sizes[:, 1], kind="stable")
+    out = np.zeros_like(sizes)
+    x = y = shelf = 0.0
+    for i in order:  # a layout of a picture, not a kernel
+        w, h = sizes[i]
+        if x > 0 and x + w > width:
+            x, y = 0.0, y + shelf + gap
+            shelf = 0.0
+        out[i] = (x, y)
+        x += w + gap
+        shelf = max(shelf, h)
+    return out
+
+
+def picture_outlines(outlines: list[tuple[str, np.ndarray]], path: str | Path, *, title: str,
+                     max_labels: int = 400) -> Path:
+    """A sheet of flat outlines ``[(part id, (k, 2) polygon in mm), ...]`` packed in shelves."""
+    from matplotlib.collections import PolyCollection
+
+    fig = _figure((8.0, 8.0))
+    ax = fig.add_subplot(111)
+    if not outlines:
+        ax.text(0.5, 0.5, "no outlines", ha="center", va="center", transform=ax.transAxes)
+        return _save(fig, path)
+    polys = [np.asarray(p, dtype=float) for _, p in outlines]
+    lo = np.array([p.min(axis=0) for p in polys])
+    sizes = np.array([p.max(axis=0) for p in polys]) - lo
+    gap = 0.08 * float(np.median(sizes.max(axis=1)))
+    width = max(float(np.sqrt((sizes + gap).prod(axis=1).sum()) * 1.2), float(sizes[:, 0].max()))
+    corners = shelf_layout(sizes, width, gap)
+    placed = [p - l + c for p, l, c in zip(polys, lo, corners)]
+    ax.add_collection(PolyCollection(placed, facecolors=(0.8, 0.88, 0.95, 1.0), edgecolors="k", linewidths=0.4))
+    if len(outlines) <= max_labels:
+        fs = max(3.0, min(8.0, 400.0 / len(outlines)))
+        for (pid, _), p in zip(outlines, placed):
+            c = p.mean(axis=0)
+            ax.text(c[0], c[1], pid, ha="center", va="center", fontsize=fs)
+    allp = np.concatenate(placed)
+    ax.set_xlim(allp[:, 0].min() - gap, allp[:, 0].max() + gap)
+    ax.set_ylim(allp[:, 1].min() - gap, allp[:, 1].max() + gap)
+    ax.set_aspect("equal")
+    ax.set_xlabel("mm")
+    ax.set_title(title, fontsize=10)
+    return _save(fig, path)

@@ -1,0 +1,96 @@
+"""Write the report of a run: pictures, model.glb, a marker for a failed check,
+report.json and report.html, into the run's work folder."""
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from optimize import measures as M
+from optimize.atomic import atomic_open
+
+from .document import build_report, write_report_json
+from .glb import glb_bytes
+from .html import copy_viewer, write_html
+from .pictures import picture_defect, picture_history, picture_layers, picture_outlines
+from .scene import build_scene
+
+log = logging.getLogger(__name__)
+
+MARKERS = {"tolerance_not_reached": "TOLERANCE_NOT_REACHED.txt", "export_failed": "CHECK_FAILED.txt"}
+
+
+def histories(ctx) -> list[tuple[str, list[dict]]]:
+    """``[(label, history)]``: one per subdivision level, or the single optimization's."""
+    levels = ctx.get("level_results") or []
+    if levels:
+        return [(f"level {i + 1}", r.history) for i, r in enumerate(levels) if r is not None]
+    result = ctx.get("result")
+    return [("", result.history)] if result is not None else []
+
+
+def part_outlines(parts) -> list[tuple[str, np.ndarray]]:
+    """``[(part id, (k, 2) flat outline in mm)]`` of the panels and beams (``PartGroup.flat``)."""
+    if parts is None:
+        return []
+    return [(pid, np.asarray(flat, dtype=float)) for g in parts.groups if g.kind in ("panel", "beam")
+            for pid, flat in zip(g.ids, g.flat)]
+
+
+def write_pictures(ctx) -> dict[str, str]:
+    """The PNG pictures; returns ``{file name: caption}``."""
+    out, cfg, mesh = ctx.workdir, ctx.config, ctx["mesh"]
+    tol = cfg.tolerances.to_tolerances()
+    name = cfg.name
+    pics: dict[str, str] = {}
+    picture_defect(mesh, M.planarity(mesh), out / "planarity.png", title=f"{name}: planarity",
+                   label="planarity (relative)", tolerance=tol.planarity)
+    pics["planarity.png"] = "the design coloured by planarity (log scale)"
+    t = mesh.topology
+    picture_defect(mesh, M.conical_defect(mesh), out / "conical.png", title=f"{name}: conical defect",
+                   label="conical defect (rad)", tolerance=tol.conical, vertices=t.interior_valence4)
+    pics["conical.png"] = "conical defect at the interior valence-4 vertices (log scale)"
+    s = ctx.get("structure")
+    if s is not None:
+        picture_layers(list(s.layers), np.asarray(s.edges), np.asarray(s.beam_quads), out / "layers.png",
+                       title=f"{name}: offset layers and beams", distances=tuple(s.distances))
+        pics["layers.png"] = "the offset layers with the beams between the first and the last"
+    picture_history(histories(ctx), out / "history.png", title=f"{name}: optimization history",
+                    tolerances={"planarity": tol.planarity, "conical": tol.conical, "circular": tol.circular})
+    pics["history.png"] = "max defects against iteration (log scale), tolerances dashed"
+    outlines = part_outlines(ctx.get("parts"))
+    if outlines:
+        picture_outlines(outlines, out / "outlines.png", title=f"{name}: flat outlines ({len(outlines)} parts)")
+        pics["outlines.png"] = "a sheet of the flat outlines with their part ids"
+    return pics
+
+
+def write_report(ctx) -> list[str]:
+    """Every report file of the run in ``ctx`` (:class:`fabricate.pipeline.RunContext`); their names."""
+    out, cfg, mesh = ctx.workdir, ctx.config, ctx["mesh"]
+    written: list[str] = []
+    pictures = write_pictures(ctx) if cfg.outputs.pictures else {}
+    written += list(pictures)
+    if cfg.outputs.html:
+        scene = build_scene(mesh, M.planarity(mesh), tolerance=cfg.tolerances.planarity,
+                            structure=ctx.get("structure"), parts=ctx.get("parts"))
+        glb = glb_bytes(scene, generator=f"conical-fab report of {cfg.name}")
+        (out / "model.glb").write_bytes(glb)  # the folder itself is renamed into place atomically
+        ctx.files["model.glb"] = {"what": "the 3D view's model (glTF binary, metres, y up)", "meshes": len(scene)}
+        written += ["model.glb"] + copy_viewer(out, glb)
+    outcome = ctx["outcome"]
+    marker = MARKERS.get(outcome["status"])
+    if marker:
+        why = ("do not meet the tolerances (see report.json, measures)" if outcome["status"] == "tolerance_not_reached"
+               else "failed the output check (see report.json, check)")
+        with atomic_open(out / marker) as fh:
+            fh.write(f"{cfg.name}: {outcome['message']}\nThe results in this folder were written but {why}; "
+                     f"status {outcome['status']!r}, exit code {outcome['exit_code']}.\n")
+        written.append(marker)
+    report = build_report(ctx, pictures)
+    write_report_json(report, out / "report.json")
+    written.append("report.json")
+    if cfg.outputs.html:
+        write_html(report, pictures, out / "report.html", viewer=True)
+        written.append("report.html")
+    return written

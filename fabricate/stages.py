@@ -1,0 +1,220 @@
+"""The stages of a run, each a thin adapter around the public API of its owner.
+
+Every ``stage_<name>(ctx)`` reads what earlier stages left in
+``ctx.values``, calls one stage of the product (never reimplements it), stores
+its results and returns a one-line note for the progress bar.  ``ctx`` is a
+:class:`fabricate.pipeline.RunContext`; files go into ``ctx.workdir``.
+
+input    -> values["input_mesh"] (mm), ["plan"] (levels, scheme, target, source facts)
+optimize -> ["mesh"] (final), ["result"] (OptimizeResult or None), ["levels"] (hierarchy facts)
+offset   -> ["structure"] (OffsetStructure)
+cad      -> ["parts"] (Parts)
+exports  -> files in the work folder, ctx.files facts, ["check"]
+report   -> ["measures"], report.json, pictures, model.glb, report.html
+"""
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+
+from optimize.errors import ConfigError, ExportError, MeshError
+
+from .config import UNIT_TO_MM
+
+log = logging.getLogger(__name__)
+
+
+# -- input ---------------------------------------------------------------------
+def stage_input(ctx) -> str:
+    """Build or read the input mesh; convert it to mm; decide levels, scheme and target."""
+    cfg = ctx.config
+    inp = cfg.input
+    kind = inp.kind
+    plan: dict[str, Any] = {"kind": kind, "levels": 0, "scheme": "catmull_clark", "target": "conical"}
+    if kind == "shape":
+        from optimize.designs import DESIGNS
+
+        design = DESIGNS[inp.shape.name](**inp.shape.params)  # parameters checked with the config
+        mesh = design.mesh
+        plan.update(levels=int(design.levels), scheme=design.scheme, target=design.target,
+                    source=f"built-in design {inp.shape.name}", description=design.description,
+                    params=_plain(design.params), units=design.units)
+        factor = UNIT_TO_MM[design.units] * cfg.scale  # designs carry their units; `units` is for files
+    else:
+        from optimize.io import read_mesh
+
+        path = getattr(inp, kind)
+        mesh = read_mesh(path)
+        plan.update(source=str(path), units=cfg.units, levels=2 if kind == "control" else 0)
+        factor = cfg.mm_per_unit
+        if kind == "surface":
+            from optimize.remesh import remesh
+
+            mesh, rep = remesh(mesh, inp.edge_length, with_report=True)
+            plan["remesh"] = _plain(dict(rep.as_dict(), faces=mesh.n_faces, vertices=mesh.n_vertices))
+    for key, value in (("levels", cfg.subdivision.levels), ("scheme", cfg.subdivision.scheme),
+                       ("target", cfg.optimize.target)):
+        if value is not None:
+            plan[key] = value
+    plan.update(scale=cfg.scale, mm_per_unit=factor, faces=mesh.n_faces, vertices=mesh.n_vertices)
+    if factor != 1.0:
+        mesh = mesh.with_vertices(mesh.V * factor)
+    ctx.values["input_mesh"] = mesh
+    ctx.values["plan"] = plan
+    ctx.notes.extend(mesh.notes)
+    return f"{plan['source']}: {mesh.n_faces} faces"
+
+
+# -- optimize ------------------------------------------------------------------
+def stage_optimize(ctx) -> str:
+    """Subdivide and perturb to the target (``optimize.hierarchy.subdivide_and_perturb``;
+    ``levels = 0`` optimizes the input itself, target ``"none"`` only subdivides)."""
+    cfg, plan = ctx.config, ctx["plan"]
+    mesh = ctx["input_mesh"]
+    opt = cfg.optimize
+    target, levels = plan["target"], plan["levels"]
+    iteration = [0]
+
+    def callback(*args, **kwargs):
+        iteration[0] += 1
+        info = args[-1] if args and isinstance(args[-1], dict) else kwargs
+        p = info.get("planarity") if isinstance(info, dict) else None
+        ctx.progress.advance("optimize", 1, f"iteration {iteration[0]}"
+                             + (f", planarity {p:.2e}" if isinstance(p, float) else ""))
+
+    from optimize.hierarchy import subdivide_and_perturb
+
+    kwargs = dict(method=opt.method, fixed=_fixed(opt.fixed), glide_boundary=opt.glide_boundary,
+                  fairness=opt.fairness, closeness=opt.closeness, tol=cfg.tolerances.to_tolerances(),
+                  max_iter=opt.max_iter, callback=callback)
+    hier = subdivide_and_perturb(mesh, levels, scheme=plan["scheme"], target=target, **kwargs)
+    ctx.values["levels"] = [_plain({k: v for k, v in lv.as_dict().items() if k != "measures"})
+                            for lv in hier.levels]
+    ctx.values["level_results"] = [lv.result for lv in hier.levels]
+    result = hier.levels[-1].result
+    mesh = hier.mesh
+    ctx.values["mesh"] = mesh
+    ctx.values["result"] = result
+    if result is None:
+        return f"no optimization ({mesh.n_faces} faces)"
+    return f"{result.status} after {result.nit} iterations"
+
+
+def _fixed(fixed):
+    return np.asarray(fixed, dtype=np.int64) if isinstance(fixed, list) else fixed
+
+
+# -- offset ----------------------------------------------------------------------
+def stage_offset(ctx) -> str:
+    """Offset layers, node axes and beams (``fabricate.offset.offset_structure``).
+
+    The axes are fitted by the offset stage from the face normals (``axes=None``):
+    at a conical vertex the fit is the cone axis the optimizer found, and at
+    boundary and irregular vertices it is better than the optimizer's vertex-normal
+    estimate (the offset stage turns free axes so that their beams are planar).
+    """
+    from fabricate.offset import offset_structure
+
+    structure = offset_structure(ctx["mesh"], ctx.config.layer_distances(), axes=None,
+                                 flip=ctx.config.offset.flip, tol=ctx.config.tolerances.to_tolerances())
+    ctx.values["structure"] = structure
+    kind = "conical" if structure.is_conical else "not conical"
+    return f"{len(structure.layers)} layers, {len(structure.edges)} beams, {kind}"
+
+
+# -- CAD -----------------------------------------------------------------------------
+def stage_cad(ctx) -> str:
+    """Panels, beams and nodes as data (``fabricate.cad.build_parts``)."""
+    from fabricate.cad import PartSpec, build_parts
+
+    spec = PartSpec(**ctx.config.parts.model_dump())
+    parts = build_parts(ctx["structure"], spec)
+    ctx.values["spec"] = spec
+    ctx.values["parts"] = parts
+    counts = {k: sum(len(g) for g in parts.of_kind(k)) for k in ("panel", "beam", "node")}
+    return ", ".join(f"{n} {k}s" for k, n in counts.items())
+
+
+def count_parts(parts) -> int:
+    return len(parts)
+
+
+# -- exports -------------------------------------------------------------------------
+EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl"),
+           ("three_mf", "model.3mf", "write_3mf"), ("dxf", "outlines.dxf", "write_dxf"),
+           ("svg", "outlines.svg", "write_svg"), ("bom", "bom.csv", "write_bom"))
+
+
+def stage_exports(ctx) -> str:
+    """The config as run, meshes, layers and the CAD files; then ``check_outputs``."""
+    import yaml
+
+    from optimize.atomic import atomic_open
+    from optimize.io import write_mesh
+
+    cfg, out = ctx.config, ctx.workdir
+    with atomic_open(out / "config.yaml") as fh:
+        fh.write(f"# {cfg.name}: the configuration as run (defaults filled in, paths absolute)\n")
+        yaml.safe_dump(cfg.as_dict(), fh, sort_keys=False)
+    ctx.files["config.yaml"] = {"what": "the configuration as run"}
+    if cfg.outputs.mesh:
+        write_mesh(out / "mesh.obj", ctx["mesh"])
+        ctx.files["mesh.obj"] = {"what": "the optimized mesh (mm)"}
+    structure = ctx["structure"]
+    if cfg.outputs.layers:
+        for i, d in enumerate(structure.distances):
+            name = f"layer_{i}.obj"
+            write_mesh(out / name, structure.layer_mesh(i))
+            ctx.files[name] = {"what": f"offset layer at {d:g} mm"}
+    from fabricate import export
+
+    wanted = [(key, fname, fn) for key, fname, fn in EXPORTS if getattr(cfg.outputs, key)]
+    for key, fname, fn in wanted:
+        ctx.progress.advance("exports", 1, fname)
+        try:
+            facts = getattr(export, fn)(ctx["parts"], out / fname)
+        except ExportError:
+            raise
+        except Exception as exc:  # an exporter bug or an OCC failure: exit 4, with the file named
+            raise ExportError(f"{fname}: export failed: {type(exc).__name__}: {exc}") from exc
+        ctx.files[fname] = dict(facts or {})
+    if not cfg.outputs.bom:  # the checks compare every file with the bill of materials
+        ctx.values["check"] = {"pass": None, "skipped": "bom.csv was not written (outputs.bom: false)",
+                               "checks": {}}
+        return f"{len(ctx.files)} files, not checked"
+    from fabricate.check import check_outputs
+
+    ctx.progress.advance("exports", 1, "checking the files")
+    check = check_outputs(out, tol=cfg.tolerances.to_tolerances())
+    ctx.values["check"] = check
+    failed = [k for k, v in check.get("checks", {}).items() if isinstance(v, dict) and v.get("pass") is False]
+    return f"{len(ctx.files)} files, " + (f"check FAILED: {', '.join(failed)}" if failed else "checked")
+
+
+# -- report ----------------------------------------------------------------------------
+def stage_report(ctx) -> str:
+    """report.json, pictures, model.glb and report.html (``fabricate.report``)."""
+    from fabricate.report import write_report
+
+    try:
+        written = write_report(ctx)
+    except (ExportError, MeshError, ConfigError):
+        raise
+    except Exception as exc:
+        raise ExportError(f"report: {type(exc).__name__}: {exc}") from exc
+    return f"{len(written)} report files"
+
+
+def _plain(value: Any) -> Any:
+    """JSON-ready copy (numpy scalars and arrays to Python)."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    return value

@@ -1,0 +1,255 @@
+"""The pipeline end to end: the README quickstart, outcomes and exit codes, atomic output folders."""
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+import zipfile
+
+import pytest
+
+import fabricate.stages as stages
+from fabricate.config import load_config
+from fabricate.pipeline import STAGES, run_pipeline
+from fabricate.progress import RecordingProgress
+from optimize.errors import ConfigError, ExportError, MeshError
+from optimize.io import read_mesh
+
+from _pipeline_fixtures import REPO, finished_run, tiny_config  # noqa: F401 - fixtures
+
+EXPECTED = ("config.yaml", "mesh.obj", "layer_0.obj", "layer_1.obj", "model.step", "model.stl", "model.3mf",
+            "outlines.dxf", "outlines.svg", "bom.csv", "report.json", "report.html", "model.glb",
+            "model_glb.js", "assets/three-viewer.min.js", "planarity.png", "conical.png", "layers.png",
+            "history.png", "outlines.png")
+
+
+# -- the README quickstart: python -m fabricate run configs/quickstart.yaml --------------------
+def test_quickstart_command_succeeds_and_says_where(finished_run):
+    assert finished_run.returncode == 0, finished_run.stderr[-2000:]
+    assert "quickstart: ok" in finished_run.stdout
+    assert str(finished_run.out / "report.html") in finished_run.stdout
+    for stage in STAGES:  # one progress row per stage
+        assert stage in finished_run.stderr
+
+
+def test_quickstart_writes_every_file_and_they_are_valid(finished_run):
+    out, report = finished_run.out, finished_run.report
+    missing = [f for f in EXPECTED if not (out / f).is_file()]
+    assert not missing, missing
+    assert not list(out.parent.glob(".*"))  # no temporary folder beside the result
+    # the mesh and the layers read back with the same faces
+    mesh = read_mesh(out / "mesh.obj")
+    assert (mesh.n_faces, mesh.n_vertices) == (report["result_mesh"]["faces"], report["result_mesh"]["vertices"])
+    layer = read_mesh(out / "layer_1.obj")
+    assert (layer.F == mesh.F).all()
+    # the CAD files: STEP header, 3MF zip, SVG and DXF parse, BOM lists every part
+    assert (out / "model.step").read_text(errors="replace").startswith("ISO-10303-21")
+    with zipfile.ZipFile(out / "model.3mf") as z:
+        assert any(n.endswith(".model") for n in z.namelist())
+    ET.parse(out / "outlines.svg")
+    import ezdxf
+
+    assert len(ezdxf.readfile(out / "outlines.dxf").modelspace()) > 0
+    bom = list(csv.DictReader((out / "bom.csv").open()))
+    assert len(bom) >= report["parts"]["total"]["count"] > 0
+    # the configuration as run loads again and gives the same settings
+    again = load_config(out / "config.yaml")
+    assert again.as_dict() == report["config"]
+    # and the output check of the CAD stage agrees
+    from fabricate.check import check_outputs
+
+    assert _all_pass(check_outputs(out))
+
+
+def _all_pass(check: dict) -> bool:
+    if "pass" in check:
+        return bool(check["pass"])
+    return all(v.get("pass", True) for v in check.get("checks", {}).values() if isinstance(v, dict))
+
+
+def test_quickstart_report_quotes_measures_with_tolerances(finished_run):
+    report = finished_run.report
+    assert report["status"] == "ok" and report["exit_code"] == 0
+    m = report["measures"]
+    assert m["planarity"]["pass"] and m["planarity"]["max"] <= m["planarity"]["tolerance"]
+    assert m["conical"]["enforced"] and m["conical"]["pass"]
+    assert m["beam_planarity"]["enforced"] and m["beam_planarity"]["max_twist_mm"] < 1e-3
+    assert report["optimization"]["status"] == "converged"
+    assert report["versions"]["numpy"] and report["versions"]["fabricate"]
+
+
+# -- outcomes -----------------------------------------------------------------------------------
+def test_progress_reports_every_stage_in_order(tmp_path):
+    rec = RecordingProgress()
+    summary = run_pipeline(tiny_config(tmp_path), tmp_path / "out", progress=rec)
+    assert [s for e, s, _ in rec.events if e == "start"] == list(STAGES)
+    assert [s for e, s, _ in rec.events if e == "done"] == list(STAGES)
+    assert summary.status == "ok", summary.message
+    assert sorted(p.name for p in (tmp_path / "out" / "tiny").iterdir()) == \
+        ["config.yaml", "layer_0.obj", "layer_1.obj", "mesh.obj", "report.json"]
+
+
+def test_tolerance_not_reached_is_written_and_marked(tmp_path):
+    cfg = tiny_config(tmp_path, "strict", outputs={"step": False, "stl": False, "3mf": False, "dxf": False,
+                                                   "svg": False, "bom": False, "pictures": False, "html": True},
+                      optimize={"target": "conical", "max_iter": 1})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    out = tmp_path / "out" / "strict"
+    assert summary.status == "tolerance_not_reached" and summary.exit_code == 3
+    report = json.loads((out / "report.json").read_text())
+    assert report["status"] == "tolerance_not_reached" and report["failed"]
+    for name in report["failed"]:
+        assert report["measures"][name]["pass"] is False and report["measures"][name]["enforced"]
+    marker = (out / "TOLERANCE_NOT_REACHED.txt").read_text()
+    assert report["failed"][0] in marker
+    assert "TOLERANCE NOT REACHED" in (out / "report.html").read_text()
+
+
+def test_cli_exit_codes_bad_input(tmp_path):
+    broken = tmp_path / "broken.yaml"
+    broken.write_text("input: {mesh: grid.obj}\nparts: {glass_thicknes: 8}\n")
+    proc = _cli("run", str(broken), "--out", str(tmp_path / "out"), cwd=tmp_path)
+    assert proc.returncode == 2
+    assert "broken.yaml" in proc.stderr and "did you mean 'glass_thickness'" in proc.stderr
+    bad_mesh = tmp_path / "bad.obj"
+    bad_mesh.write_text("v 0 0 0\nv 1 0 0\nf 1 2 7\n")
+    cfg = tmp_path / "m.yaml"
+    cfg.write_text("input: {mesh: bad.obj}\n")
+    proc = _cli("run", str(cfg), "--out", str(tmp_path / "out"), "-q", cwd=tmp_path)
+    assert proc.returncode == 2 and "bad.obj:3" in proc.stderr
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def _cli(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "fabricate", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=300, env=dict(os.environ, PYTHONPATH=str(REPO)))
+
+
+def test_export_failure_raises_export_error_and_leaves_nothing(tmp_path, monkeypatch):
+    import fabricate.export as export
+
+    def broken_writer(parts, path):
+        raise RuntimeError("disk on fire")
+
+    monkeypatch.setattr(export, "write_stl", broken_writer)
+    cfg = tiny_config(tmp_path, "exp", outputs={"stl": True, "step": False, "3mf": False, "dxf": False,
+                                                "svg": False, "bom": False, "pictures": False, "html": False})
+    with pytest.raises(ExportError, match="model.stl: export failed: RuntimeError: disk on fire") as info:
+        run_pipeline(cfg, tmp_path / "out")
+    assert info.value.exit_code == 4
+    assert list((tmp_path / "out").iterdir()) == []
+
+
+def test_failed_output_check_is_exit_4_written_and_marked(tmp_path, monkeypatch):
+    import fabricate.check as check
+
+    def failing_check(outdir, tol=None):
+        return {"pass": False, "checks": {"bom": {"pass": True}, "stl": {"pass": False, "why": "injected"}}}
+
+    monkeypatch.setattr(check, "check_outputs", failing_check)
+    cfg = tiny_config(tmp_path, "chk", outputs={"bom": True, "step": False, "stl": False, "3mf": False,
+                                                "dxf": False, "svg": False, "pictures": False, "html": False})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    assert (summary.status, summary.exit_code) == ("export_failed", 4)
+    assert "check:stl" in summary.failed
+    out = tmp_path / "out" / "chk"
+    assert "failed the output check" in (out / "CHECK_FAILED.txt").read_text()
+    assert json.loads((out / "report.json").read_text())["check"]["checks"]["stl"]["why"] == "injected"
+
+
+# -- atomic output folders ------------------------------------------------------------------------
+@pytest.mark.parametrize("stage,error", [("report", RuntimeError), ("exports", KeyboardInterrupt),
+                                         ("offset", MeshError)])
+def test_failure_in_a_stage_leaves_no_folder(tmp_path, monkeypatch, stage, error):
+    original = getattr(stages, f"stage_{stage}")
+
+    def fail_after(ctx):
+        original(ctx)  # the stage has written its files into the temporary folder
+        raise error("injected")
+
+    monkeypatch.setattr(stages, f"stage_{stage}", fail_after)
+    with pytest.raises(error):
+        run_pipeline(tiny_config(tmp_path), tmp_path / "out")
+    assert list((tmp_path / "out").iterdir()) == []  # neither outputs/tiny nor a temporary folder
+
+
+def test_rerun_replaces_only_when_complete(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    first = run_pipeline(tiny_config(tmp_path), out)
+    before = (out / "tiny" / "report.json").read_text()
+    monkeypatch.setattr(stages, "stage_report", lambda ctx: (_ for _ in ()).throw(RuntimeError("late")))
+    with pytest.raises(RuntimeError):
+        run_pipeline(tiny_config(tmp_path), out)
+    assert (out / "tiny" / "report.json").read_text() == before  # the previous result is untouched
+    monkeypatch.undo()
+    second = run_pipeline(tiny_config(tmp_path), out)
+    assert second.status == first.status
+    assert [p.name for p in out.iterdir()] == ["tiny"]  # no temporary or old folder left
+    assert json.loads((out / "tiny" / "report.json").read_text())["created_utc"]
+
+
+def test_sigterm_during_a_run_leaves_no_folder(tmp_path):
+    """``kill`` of a running ``fabricate run`` unwinds like Ctrl-C: the temporary folder is removed."""
+    cfg = tmp_path / "slow.yaml"
+    cfg.write_text("name: slow\ninput:\n  shape: {name: dome, params: {meridians: 6, rings: 3}}\n")
+    driver = ("import sys, time\nimport fabricate.stages as s\n"
+              "def slow(ctx):\n    print('IN CAD', flush=True)\n    time.sleep(120)\n"
+              "s.stage_cad = slow\nfrom fabricate.cli import main\n"
+              f"sys.exit(main(['run', {str(cfg)!r}, '--out', {str(tmp_path / 'out')!r}, '-q']))\n")
+    proc = subprocess.Popen([sys.executable, "-c", driver], cwd=REPO, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "IN CAD"
+        assert any((tmp_path / "out").iterdir())  # the temporary folder exists while it runs
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, proc.stderr.read()
+    assert list((tmp_path / "out").iterdir()) == []
+
+
+def test_input_mesh_is_not_changed_and_units_convert(tmp_path, monkeypatch):
+    """A mesh file in metres comes out in mm; the stages never mutate what they are given."""
+    from optimize import shapes
+    from optimize.io import write_mesh
+
+    mesh = shapes.revolution(shapes.dome_profile(6.0, 2.0, 4), 8)  # metres, exactly conical
+    write_mesh(tmp_path / "dome_m.obj", mesh)
+    (tmp_path / "m.yaml").write_text("input: {mesh: dome_m.obj}\nunits: m\noptimize: {target: conical}\n"
+                                     "outputs: {step: false, stl: false, 3mf: false, dxf: false, svg: false, "
+                                     "bom: false, pictures: false, html: false}\n")
+    summary = run_pipeline(load_config(tmp_path / "m.yaml"), tmp_path / "out")
+    assert summary.status == "ok", summary.message
+    out = read_mesh(tmp_path / "out" / "m" / "mesh.obj")
+    assert out.bbox_diagonal() == pytest.approx(mesh.bbox_diagonal() * 1000.0, rel=1e-6)
+    assert read_mesh(tmp_path / "dome_m.obj").V.tolist() == mesh.V.tolist()
+
+
+def test_design_parameter_error_from_the_config(tmp_path):
+    (tmp_path / "d.yaml").write_text("input:\n  shape: {name: dome, params: {rings: 1}}\n")
+    with pytest.raises(ConfigError, match=r"d.yaml:2: input.shape: .*rings=1"):
+        load_config(tmp_path / "d.yaml")
+
+
+def test_surface_input_is_remeshed_into_quads(tmp_path):
+    """A triangle surface (a saddle in metres) goes through remeshing, then the whole pipeline."""
+    from optimize import Mesh, shapes
+    from optimize.io import write_mesh
+
+    g = shapes.grid(12, 12, size=(6.0, 6.0), height=lambda X, Y: 0.15 * ((X - 3) ** 2 - 0.5 * (Y - 3) ** 2))
+    write_mesh(tmp_path / "saddle.obj", Mesh(g.V, g.triangulate(), name="saddle"))
+    (tmp_path / "s.yaml").write_text("input: {surface: saddle.obj, edge_length: 2.0}\nunits: m\n"
+                                     "outputs: {step: false, stl: false, 3mf: false, dxf: false, svg: false, "
+                                     "bom: false, pictures: false, html: false}\n")
+    summary = run_pipeline(load_config(tmp_path / "s.yaml"), tmp_path / "out")
+    report = json.loads((tmp_path / "out" / "s" / "report.json").read_text())
+    assert report["input"]["kind"] == "surface" and report["input"]["remesh"]["faces"] == summary.faces
+    mesh = read_mesh(tmp_path / "out" / "s" / "mesh.obj")
+    assert (mesh.face_sizes == 4).mean() > 0.5  # quad-dominant
+    assert summary.status in ("ok", "tolerance_not_reached"), summary.message

@@ -1,0 +1,200 @@
+"""Reports: the GLB writer, the pictures, the measures table, and report.html in a real browser."""
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fabricate.report import GlbMesh, build_scene, glb_bytes, read_accessor, read_glb
+from fabricate.report.glb import Z_UP_TO_Y_UP
+from fabricate.report.html import ASSETS, VIEWER_FILES, copy_viewer
+from fabricate.report.measures import entry, planarity_scale
+from fabricate.report.pictures import (picture_defect, picture_history, picture_layers, picture_outlines,
+                                       shelf_layout)
+from optimize import measures, shapes
+
+from _pipeline_fixtures import finished_run  # noqa: F401 - a fixture
+
+
+# -- GLB -------------------------------------------------------------------------
+def test_glb_round_trip_keeps_geometry(revolution):
+    mesh = revolution.with_vertices(revolution.V * 1000.0)  # planar quads, in mm
+    scene = build_scene(mesh, measures.planarity(mesh), tolerance=1e-6)
+    doc, binary = read_glb(glb_bytes(scene))
+    assert doc["asset"]["version"] == "2.0"
+    assert [m["name"] for m in doc["meshes"]] == [m.name for m in scene]
+    design = doc["meshes"][0]["primitives"][0]
+    P = read_accessor(doc, binary, design["attributes"]["POSITION"])
+    T = read_accessor(doc, binary, design["indices"]).reshape(-1, 3)
+    expected = scene[0].positions @ Z_UP_TO_Y_UP.T * 1e-3  # mm, z up -> m, y up
+    np.testing.assert_allclose(P, expected, rtol=1e-6, atol=1e-9)
+    np.testing.assert_array_equal(T, scene[0].indices)
+    acc = doc["accessors"][design["attributes"]["POSITION"]]
+    np.testing.assert_allclose(acc["min"], P.min(axis=0), rtol=1e-6)
+    # the triangles cover the planar faces: same total area (m^2 = mm^2 * 1e-6)
+    tri_area = 0.5 * np.linalg.norm(np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]), axis=1).sum()
+    assert tri_area == pytest.approx(measures.face_areas(mesh).sum() * 1e-6, rel=1e-3)
+    edges = doc["meshes"][1]["primitives"][0]
+    assert edges["mode"] == 1 and doc["accessors"][edges["indices"]]["count"] == 2 * len(mesh.topology.edges)
+
+
+def test_glb_layout_is_aligned_and_checked():
+    P = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]])
+    data = glb_bytes([GlbMesh("t", P, np.array([[0, 1, 2]]), colors=np.ones((3, 3)))])
+    assert len(data) % 4 == 0 and data[:4] == b"glTF"
+    doc, binary = read_glb(data)
+    assert all(v["byteOffset"] % 4 == 0 for v in doc["bufferViews"])
+    with pytest.raises(ValueError, match="indices range"):
+        glb_bytes([GlbMesh("bad", P, np.array([[0, 1, 3]]))])
+    with pytest.raises(ValueError, match="header says"):
+        read_glb(data[:-4])
+
+
+def test_scene_face_colours_follow_planarity():
+    grid = shapes.grid(3, 3)  # 4 quads
+    scene = build_scene(grid, np.array([1e-9, 1e-2, 1e-9, 1e-2]), tolerance=1e-6)
+    colours = scene[0].colors.reshape(grid.n_faces, 4, 4)  # 4 unshared corners per quad
+    assert np.all(colours == colours[:, :1])  # one flat colour per face
+    np.testing.assert_array_equal(colours[0], colours[2])
+    assert colours[1, 0, 1] > colours[0, 0, 1] + 0.3  # viridis: the worse face is brighter
+
+
+# -- measures -----------------------------------------------------------------------
+def test_planarity_scale_turns_relative_into_mm(revolution):
+    mesh = revolution.with_vertices(revolution.V * 1000.0)
+    q = mesh.F[0]
+    d = 0.5 * (np.linalg.norm(mesh.V[q[2]] - mesh.V[q[0]]) + np.linalg.norm(mesh.V[q[3]] - mesh.V[q[1]]))
+    assert planarity_scale(mesh)[0] == pytest.approx(d)
+
+
+def test_measure_entry_names_worst_elements():
+    e = entry(np.array([1e-9, 5e-3, 2e-7]), 1e-6, "relative", "face", ids=np.array([10, 11, 12]),
+              enforced=True, extra={"mm": np.array([1e-6, 5.0, 2e-4])})
+    assert e["pass"] is False and e["max"] == 5e-3 and e["max_mm"] == 5.0
+    assert [w["face"] for w in e["worst"]] == [11, 12, 10]
+    assert e["worst"][0]["mm"] == 5.0
+    assert entry(np.array([]), 1e-6, "rad", "vertex")["pass"] is True
+
+
+# -- pictures -------------------------------------------------------------------------
+def _png_ok(path: Path) -> None:
+    from matplotlib.image import imread
+
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    img = imread(path)
+    assert img.shape[0] > 200 and img.shape[1] > 200
+    assert img[..., :3].std() > 0.05  # not a blank canvas
+
+
+def test_pictures_are_real_images(tmp_path, perturbed_revolution):
+    mesh = perturbed_revolution
+    picture_defect(mesh, measures.planarity(mesh), tmp_path / "p.png", title="p", label="planarity",
+                   tolerance=1e-6)
+    picture_defect(mesh, measures.conical_defect(mesh), tmp_path / "c.png", title="c", label="rad",
+                   tolerance=1e-6, vertices=mesh.topology.interior_valence4)
+    e = mesh.topology.edges
+    L = mesh.V - [0, 0, 0.5]
+    Q = np.stack([mesh.V[e[:, 0]], mesh.V[e[:, 1]], L[e[:, 1]], L[e[:, 0]]], axis=1)
+    picture_layers([mesh.V, L], e, Q, tmp_path / "l.png", title="l", distances=(0, -500))
+    hist = [{"planarity": 10.0 ** -k, "conical": 10.0 ** (-k / 2)} for k in range(8)]
+    picture_history([("level 1", hist), ("level 2", hist)], tmp_path / "h.png",
+                    tolerances={"planarity": 1e-6, "conical": 1e-6}, title="h")
+    picture_history([], tmp_path / "h0.png", tolerances={}, title="no history")
+    rng = np.random.default_rng(1)
+    picture_outlines([(f"P{i:04d}", rng.random((4, 2)) * 500) for i in range(30)], tmp_path / "o.png", title="o")
+    for name in ("p", "c", "l", "h", "h0", "o"):
+        _png_ok(tmp_path / f"{name}.png")
+    assert not list(tmp_path.glob(".*"))  # no temporary files left
+
+
+def test_shelf_layout_never_overlaps():
+    rng = np.random.default_rng(3)
+    sizes = rng.random((40, 2)) * [300, 200] + 10
+    corners = shelf_layout(sizes, 1000.0, 5.0)
+    lo, hi = corners, corners + sizes
+    overlap = ((lo[:, None, 0] < hi[None, :, 0]) & (lo[None, :, 0] < hi[:, None, 0])
+               & (lo[:, None, 1] < hi[None, :, 1]) & (lo[None, :, 1] < hi[:, None, 1]))
+    np.fill_diagonal(overlap, False)
+    assert not overlap.any()
+
+
+# -- the viewer assets -------------------------------------------------------------------
+def test_viewer_bundle_is_vendored_with_its_licence():
+    js = (ASSETS / "three-viewer.min.js").read_text()
+    assert js.startswith("/*! three.js") and "SPDX-License-Identifier: MIT" in js
+    assert "FabViewer" in js and "import " not in js[:2000]  # a classic script, not an ES module
+    assert (ASSETS / "three-viewer.min.js").stat().st_size < 1_500_000
+    assert "MIT License" in (ASSETS / "three.LICENSE").read_text()
+
+
+def test_copy_viewer_writes_assets_and_embedded_model(tmp_path):
+    glb = glb_bytes([GlbMesh("t", np.eye(3), np.array([[0, 1, 2]]))])
+    files = copy_viewer(tmp_path, glb)
+    assert sorted(files) == sorted([f"assets/{n}" for n in VIEWER_FILES] + ["model_glb.js"])
+    import base64
+
+    text = (tmp_path / "model_glb.js").read_text()
+    assert base64.b64decode(re.search(r'"([A-Za-z0-9+/=]+)"', text).group(1)) == glb
+
+
+# -- a real browser ---------------------------------------------------------------------------
+def chromium_path() -> str | None:
+    return next((p for p in map(shutil.which, ("chromium", "chromium-browser", "google-chrome")) if p), None)
+
+
+def browser_dom(html: Path, tmp_path: Path) -> str:
+    """The DOM of ``html`` after its scripts ran, from headless chromium (no network)."""
+    exe = chromium_path()
+    if exe is None:
+        pytest.skip("chromium is not installed (apt-get install chromium); CI installs it")
+    cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+           "--disable-background-networking", "--disable-dev-shm-usage", "--no-first-run",
+           "--disable-extensions", "--disable-sync", f"--user-data-dir={tmp_path / 'chromium-profile'}",
+           "--virtual-time-budget=15000", "--window-size=1200,900", "--dump-dom", html.resolve().as_uri()]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=180)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return proc.stdout
+
+
+def viewer_state(dom: str) -> dict[str, str]:
+    tag = re.search(r'<div id="view"[^>]*>', dom)
+    assert tag, "report.html has no 3D view element"
+    return dict(re.findall(r'data-([a-z]+)="([^"]*)"', tag.group(0)))
+
+
+def test_report_html_3d_view_in_headless_chromium(finished_run, tmp_path):
+    """report.html opened from disk: the GLB is parsed by three.js and a frame is drawn."""
+    out = finished_run.out
+    dom = browser_dom(out / "report.html", tmp_path)
+    state = viewer_state(dom)
+    assert state.get("viewer") == "ready", state
+    doc, binary = read_glb((out / "model.glb").read_bytes())
+    triangles = sum(doc["accessors"][p["indices"]]["count"] // 3 for m in doc["meshes"]
+                    for p in m["primitives"] if p.get("mode", 4) == 4)
+    meshes = sum(1 for m in doc["meshes"] if m["primitives"][0].get("mode", 4) == 4)
+    assert int(state["meshes"]) == meshes and int(state["triangles"]) == triangles
+    assert float(state["painted"]) > 0.01  # the model covers part of the canvas
+    assert "[3D ready]" in re.search(r"<title>(.*?)</title>", dom).group(1)
+
+
+def test_report_json_and_html_content(finished_run):
+    out = finished_run.out
+    report = json.loads((out / "report.json").read_text())
+    assert report["name"] == finished_run.summary.name
+    for key in ("config", "versions", "timings_s", "measures", "files", "input"):
+        assert report[key], key
+    for stage in ("input", "optimize", "offset", "cad", "exports", "before_report"):
+        assert report["timings_s"][stage] >= 0
+    plan = report["measures"]["planarity"]
+    assert {"max", "tolerance", "pass", "worst", "max_mm", "unit"} <= set(plan)
+    assert plan["pass"] == (plan["max"] <= plan["tolerance"])
+    html = (out / "report.html").read_text()
+    for name in report["pictures"]:
+        assert f'src="{name}"' in html and (out / name).is_file()
+        _png_ok(out / name)
+    assert "http://" not in html and "https://" not in html  # nothing from the network
