@@ -1,0 +1,157 @@
+"""The CAD stage against a raw OpenCASCADE writer, measured in the same run.
+
+Goal (issue 7): the whole CAD stage (build_parts and every file: STEP, STL,
+3MF, DXF, SVG, BOM) for ~5,000 panels plus their ~10,000 beams within 2x of
+a raw OpenCASCADE writer of the same 5,000 panels alone (each face polygon
+made into a face and extruded by the glass thickness with
+BRepBuilderAPI/BRepPrimAPI, named in an XCAF document, written by
+STEPCAFControl_Writer with its default settings), and peak memory under 4 GiB.
+
+Each side runs in its own child process (clean peak memory, no shared
+caches), one after the other.  Prints a JSON line per side and the ratio.
+
+    python benchmarks/bench_cad.py               # 5,000 panels
+    python benchmarks/bench_cad.py --panels 500  # quick
+    python benchmarks/bench_cad.py --check       # also time `fabricate check` on the output
+
+On a shared machine the timings are noisy: compare ratios, not seconds.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def structure(panels: int):
+    """A dome of revolution (conical by construction) with about ``panels`` faces, in mm."""
+    from fabricate.offset import offset_structure
+    from optimize import shapes
+
+    around = max(8, int(round((2 * panels) ** 0.5)))
+    rows = max(2, int(round(panels / around)))
+    m = shapes.revolution(shapes.dome_profile(radius=40.0, rise=15.0, k=rows + 1), around, name="bench_dome")
+    return offset_structure(m.with_vertices(m.V * 1000.0), (0.0, -200.0))
+
+
+def run_stage(panels: int, out: Path) -> dict:
+    """The whole CAD stage: build_parts, then every writer."""
+    from fabricate.cad import PartSpec, build_parts
+    from fabricate.export import write_3mf, write_bom, write_dxf, write_step, write_stl, write_svg
+
+    s = structure(panels)
+    t0 = time.perf_counter()
+    parts = build_parts(s, PartSpec())
+    times = {"build_parts": time.perf_counter() - t0}
+    for name, fn in (("model.step", write_step), ("model.stl", write_stl), ("model.3mf", write_3mf),
+                     ("outlines.dxf", write_dxf), ("outlines.svg", write_svg), ("bom.csv", write_bom)):
+        t = time.perf_counter()
+        fn(parts, out / name)
+        times[name] = time.perf_counter() - t
+    return {"side": "cad_stage", "panels": len(parts.panels), "beams": len(parts.beams),
+            "seconds": time.perf_counter() - t0, "parts_seconds": {k: round(v, 3) for k, v in times.items()}}
+
+
+def run_baseline(panels: int, out: Path) -> dict:
+    """Raw OpenCASCADE: every face polygon extruded by 10 mm, named, STEPCAFControl default settings."""
+    import numpy as np
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace, BRepBuilderAPI_MakePolygon
+    from OCP.BRepPrimAPI import BRepPrimAPI_MakePrism
+    from OCP.gp import gp_Pnt, gp_Vec
+    from OCP.STEPCAFControl import STEPCAFControl_Writer
+    from OCP.STEPControl import STEPControl_StepModelType
+    from OCP.TCollection import TCollection_ExtendedString
+    from OCP.TDataStd import TDataStd_Name
+    from OCP.TDocStd import TDocStd_Document
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.XCAFApp import XCAFApp_Application
+    from OCP.XCAFDoc import XCAFDoc_DocumentTool
+    from OCP.XSControl import XSControl_WorkSession
+
+    s = structure(panels)
+    mesh = s.mesh
+    polys = mesh.V[mesh.F]
+    normals = np.asarray(s.normals)
+    t0 = time.perf_counter()
+    doc = TDocStd_Document(TCollection_ExtendedString("XmlOcaf"))
+    XCAFApp_Application.GetApplication_s().NewDocument(TCollection_ExtendedString("MDTV-XCAF"), doc)
+    tool = XCAFDoc_DocumentTool.ShapeTool_s(doc.Main())
+    top = tool.NewShape()
+    for i, (P, n) in enumerate(zip(polys.tolist(), (10.0 * normals).tolist())):
+        poly = BRepBuilderAPI_MakePolygon()
+        for p in P:
+            poly.Add(gp_Pnt(*p))
+        poly.Close()
+        face = BRepBuilderAPI_MakeFace(poly.Wire(), True).Face()
+        solid = BRepPrimAPI_MakePrism(face, gp_Vec(*n)).Shape()
+        label = tool.AddShape(solid, False, False)
+        TDataStd_Name.Set_s(label, TCollection_ExtendedString(f"P{i + 1:04d}"))
+        tool.AddComponent(top, label, TopLoc_Location())
+    tool.UpdateAssemblies()
+    writer = STEPCAFControl_Writer(XSControl_WorkSession(), False)
+    writer.SetNameMode(True)
+    writer.Transfer(doc, STEPControl_StepModelType.STEPControl_AsIs)
+    writer.Write(str(out / "baseline.step"))
+    return {"side": "raw_occ_baseline", "panels": int(mesh.n_faces), "seconds": time.perf_counter() - t0}
+
+
+def run_check(out: Path) -> dict:
+    from fabricate.check import check_outputs
+
+    t0 = time.perf_counter()
+    r = check_outputs(out)
+    return {"side": "check", "pass": r["pass"], "seconds": time.perf_counter() - t0,
+            "checks_seconds": {k: v.get("seconds") for k, v in r["checks"].items()}}
+
+
+def child(side: str, panels: int, out: str) -> None:
+    sys.path.insert(0, str(ROOT))
+    import logging
+
+    logging.disable(logging.WARNING)
+    fn = {"stage": run_stage, "baseline": run_baseline}.get(side)
+    result = fn(panels, Path(out)) if fn else run_check(Path(out))
+    result["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(json.dumps(result))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--panels", type=int, default=5000)
+    ap.add_argument("--check", action="store_true", help="also time fabricate check on the stage output")
+    ap.add_argument("--child", choices=("stage", "baseline", "check"), help=argparse.SUPPRESS)
+    ap.add_argument("--out", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        child(args.child, args.panels, args.out)
+        return
+    with tempfile.TemporaryDirectory(prefix="bench_cad_") as tmp:
+        results = {}
+        sides = ("baseline", "stage") + (("check",) if args.check else ())
+        for side in sides:
+            cmd = [sys.executable, __file__, "--child", side, "--panels", str(args.panels), "--out", tmp]
+            line = subprocess.run(cmd, check=True, capture_output=True, text=True,
+                                  env=dict(os.environ, PYTHONPATH=str(ROOT))).stdout.strip().splitlines()[-1]
+            results[side] = json.loads(line)
+            print(line, flush=True)
+        sizes = {p.name: p.stat().st_size for p in Path(tmp).iterdir()}
+    stage, base = results["stage"], results["baseline"]
+    ratio = stage["seconds"] / base["seconds"]
+    print(f"files (bytes): {sizes}")
+    print(f"CAD stage {stage['panels']} panels + {stage['beams']} beams: {stage['seconds']:.2f} s, "
+          f"peak {stage['peak_rss_mib']:.0f} MiB; raw OCC {base['panels']} panels: {base['seconds']:.2f} s, "
+          f"peak {base['peak_rss_mib']:.0f} MiB")
+    print(f"ratio CAD stage / raw OCC writer = {ratio:.2f} (goal <= 2.0); peak memory "
+          f"{stage['peak_rss_mib'] / 1024:.2f} GiB (goal < 4 GiB)")
+
+
+if __name__ == "__main__":
+    main()

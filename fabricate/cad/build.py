@@ -1,0 +1,192 @@
+"""``build_parts``: the offset stage's geometry in, panels, beams and nodes out (pure numpy).
+
+Every part is a planar-faced solid built from planes (see ``panels``,
+``beams``, ``nodes``); here the batches become :class:`PartGroup` objects
+with ids, analytic volumes, flat outlines, neighbours, and are validated:
+every face must be convex and turn the right way about its outward normal,
+every volume positive.  A part that fails raises :class:`ConfigError` naming
+the part, its mesh element, the face and the setting to change.
+"""
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+
+from optimize.errors import ConfigError, MeshError
+
+from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, beam_planes, beam_solids
+from .geometry import (convexity, dot, flat_frame, min_area_rectangle, polygon_area_normal, rotate2d,
+                       to_plane, unit, volumes)
+from .nodes import node_solids
+from .parts import PartGroup, Parts, part_ids
+from .spec import PartSpec
+
+log = logging.getLogger(__name__)
+CONVEX_MIN = 1e-9
+"""Smallest accepted ``sin`` of a face corner's turn (a fold or a collapsed edge below it)."""
+
+
+def build_parts(structure, spec: PartSpec | None = None) -> Parts:
+    """Panels (one per face), beams (one per edge) and nodes (one per vertex, if ``node_radius``).
+
+    structure : :class:`fabricate.offset.OffsetStructure` (mm); the beams run
+        between its first and last layer, the glass bears on the first layer
+        and lies on the side away from the beams.
+    spec : :class:`PartSpec` (default dimensions when None).
+    Returns :class:`Parts`; the inputs are not modified.
+    """
+    spec = spec or PartSpec()
+    d, P0, P1 = span_positions(structure)
+    s_beam = 1.0 if d[-1] > d[0] else -1.0
+    mode = spec.edge_mode(bool(structure.is_conical))
+    mesh = structure.mesh
+    topo = mesh.topology
+    if len(structure.beam_quads) != len(topo.edges):
+        raise MeshError(f"{mesh.name}: {len(structure.beam_quads)} beam quads for {len(topo.edges)} edges")
+    pid = np.array(part_ids("panel", np.arange(mesh.n_faces)))
+    bid = np.array(part_ids("beam", np.arange(len(topo.edges))))
+    nid = np.array(part_ids("node", np.arange(mesh.n_vertices)))
+    with_nodes = spec.node_radius > 0
+    bp = beam_planes(structure)
+    from .panels import panel_solids
+
+    groups = []
+    for g in panel_solids(structure, bp, P0, spec.glass_thickness, spec.joint_gap, mode, s_beam):
+        f = g["faces_index"]
+        nb = [tuple(bid[row]) + (tuple(nid[mesh.F[i, :g["k"]]]) if with_nodes else ())
+              for i, row in zip(f.tolist(), g["edges"])]
+        groups.append(_group("panel", pid[f], f, g["vertices"], g["faces"], g["normals"], g["bearing_face"],
+                             1 - g["bearing_face"], g["planarity_mm"], np.full(len(f), spec.glass_thickness),
+                             np.zeros(len(f)), nb, spec))
+    beams = beam_solids(structure, P0, spec.beam_width, spec.node_radius, s_beam)
+    e = np.arange(len(topo.edges))
+    X = beams["vertices"]
+    along = unit(X[:, 1] - X[:, 0])
+    proj = dot(X, along[:, None, :])
+    nb = []
+    for i, (fp, fm) in enumerate(beams["faces"].tolist()):
+        others = [b for b in beams["neighbour_beams"][i].ravel().tolist() if b != i]
+        nb.append(tuple(pid[sorted({fp, fm})]) + tuple(bid[sorted(set(others))])
+                  + (tuple(nid[topo.edges[i]]) if with_nodes else ()))
+    groups.append(_group("beam", bid, e, X, FACES, beams["normals"], OUTLINE_FACE, BEVEL_FACE,
+                         beams["planarity_mm"], np.full(len(e), spec.beam_width),
+                         proj.max(axis=1) - proj.min(axis=1), nb, spec))
+    node_facts = {}
+    if with_nodes:
+        nodes = node_solids(structure, P0, P1, spec.node_radius, spec.node_sides)
+        v = np.arange(mesh.n_vertices)
+        inc = [[] for _ in v]
+        for i, (a, b) in enumerate(topo.edges.tolist()):  # incidence lists, built once
+            inc[a].append(i)
+            inc[b].append(i)
+        nb = [tuple(bid[row]) for row in inc]
+        groups.append(_group("node", nid, v, nodes["vertices"], nodes["faces"], nodes["normals"], 0, 1,
+                             np.zeros(len(v)), np.full(len(v), 2 * spec.node_radius), nodes["length"], nb, spec))
+        node_facts = {"theta_max_deg": float(np.degrees(nodes["theta_max"].max()))}
+    report = _report(groups, spec, mode, s_beam, d, beams, node_facts)
+    return Parts(groups=tuple(groups), spec=spec, edge_mode=mode, report=report, mesh=mesh)
+
+
+def span_positions(structure) -> tuple[list[float], np.ndarray, np.ndarray]:
+    """The beam span ``[d0, d1]`` and the vertex positions ``(n, 3)`` at ``d0`` (glass) and ``d1``.
+
+    ``structure.beam_span`` when given (one distance ``d`` spans ``(0, d)``), else the
+    first and last distance; positions ``V + d * axes / cos_theta`` (the layers).
+    """
+    span = getattr(structure, "beam_span", None)
+    ds = [float(x) for x in structure.distances]
+    d = [float(span[0]), float(span[1])] if span is not None else [ds[0], ds[-1]]
+    if d[0] == d[1]:
+        raise ConfigError(f"offset distances {ds}: the beams need two distinct layers, found span {d}")
+    V = structure.mesh.V
+    off = getattr(structure, "offset", None)
+    if off is None:
+        off = np.asarray(structure.axes, dtype=float) / np.asarray(structure.cos_theta, dtype=float)[:, None]
+    return d, V + d[0] * off, V + d[1] * off
+
+
+def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thickness, length,
+           neighbours, spec) -> PartGroup:
+    """Validate one batch and derive volumes, outlines and residuals."""
+    element = np.asarray(element)
+    _validate(kind, ids, element, V, faces, normals, spec)
+    vol = volumes(V, faces)
+    bad = vol <= 0
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): volume {vol[i]:.6g} mm3, "
+                          "expected a positive volume; check the parts dimensions")
+    residual = np.zeros(len(V))
+    for fi, face in enumerate(faces):  # loop over the faces of one combinatorial type
+        h = dot(V[:, list(face)], normals[:, fi][:, None, :])
+        residual = np.maximum(residual, h.max(axis=1) - h.min(axis=1))
+    P = V[:, list(faces[outline])]
+    origin, ex, ey = flat_frame(P, normals[:, outline])
+    Q = to_plane(P, origin, ex, ey)
+    Qb = to_plane(V[:, list(faces[bevel])], origin, ex, ey) if bevel >= 0 else None
+    both = Q if Qb is None else np.concatenate([Q, Qb], axis=1)
+    ang, _, _ = min_area_rectangle(both)
+    Q = rotate2d(Q, ang)
+    both = rotate2d(both, ang)
+    low = both.min(axis=1, keepdims=True)
+    Q = Q - low
+    Qb = None if Qb is None else rotate2d(Qb, ang) - low
+    rect = (both - low).max(axis=1)
+    area, _ = polygon_area_normal(P)
+    return PartGroup(kind=kind, ids=tuple(str(i) for i in ids), element=element, vertices=V, faces=tuple(faces),
+                     normals=normals, volume_mm3=vol, outline_face=outline, bevel_face=bevel, flat=Q,
+                     flat_bevel=Qb, rect=rect, area_mm2=area, length_mm=np.asarray(length, dtype=float),
+                     thickness_mm=np.asarray(thickness, dtype=float),
+                     planarity_mm=np.asarray(planarity, dtype=float), residual_mm=residual,
+                     neighbours=tuple(tuple(str(x) for x in nb) for nb in neighbours))
+
+
+HINTS = {"panel": "parts.joint_gap may be too large for this face, or the face is degenerate",
+         "beam": "the beam may be shorter than its end trims: reduce parts.beam_width or parts.node_radius",
+         "node": "parts.node_radius may be too large for the layer distance"}
+
+
+def _validate(kind, ids, element, V, faces, normals, spec) -> None:
+    """Raise ConfigError at the first folded, reversed or collapsed face."""
+    if not np.all(np.isfinite(V)):
+        i = int(np.argwhere(~np.isfinite(V))[0, 0])
+        raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): a corner is not finite "
+                          f"(parallel planes); {HINTS[kind]}")
+    names = FACE_NAMES if kind == "beam" else None
+    for fi, face in enumerate(faces):  # loop over the faces of one combinatorial type
+        turn = convexity(V[:, list(face)], normals[:, fi])
+        if (turn < CONVEX_MIN).any():
+            i = int(np.argmin(turn))
+            name = names[fi] if names else ("lower" if fi == 0 else "upper" if fi == 1 else f"side {fi - 2}")
+            raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): face {name} is folded or "
+                              f"collapsed (corner turn {turn[i]:.3g}, expected > 0); {HINTS[kind]}")
+
+
+def _report(groups, spec, mode, s_beam, distances, beams, node_facts) -> dict:
+    """JSON-ready facts: counts, volumes, masses, worst planarity and residual, trims."""
+    out: dict = {"edge_mode": mode, "glass_side": "opposite the beams",
+                 "beams_toward": "+normal" if s_beam > 0 else "-normal",
+                 "layers_mm": distances[:1] + distances[-1:]}
+    for kind in ("panel", "beam", "node"):
+        gs = [g for g in groups if g.kind == kind]
+        if not gs:
+            out[kind + "s"] = {"count": 0}
+            continue
+        vol = np.concatenate([g.volume_mm3 for g in gs])
+        pl = np.concatenate([g.planarity_mm for g in gs])
+        res = np.concatenate([g.residual_mm for g in gs])
+        ids = [i for g in gs for i in g.ids]
+        density = spec.density(kind)
+        out[kind + "s"] = {
+            "count": int(len(vol)), "volume_mm3": float(vol.sum()), "mass_kg": float(vol.sum() * density * 1e-9),
+            "density_kg_m3": density, "planarity_mm_max": float(pl.max()),
+            "planarity_worst": ids[int(np.argmax(pl))],
+            "residual_mm_max": float(res.max()), "residual_worst": ids[int(np.argmax(res))]}
+    sb = beams["setback"]
+    out["beams"]["end_setback_mm"] = {"min": float(sb.min()), "max": float(sb.max())}
+    out["beams"]["bearing_width_mm"] = 0.5 * (spec.beam_width - spec.joint_gap)
+    out["beams"]["depth_mm"] = abs(distances[-1] - distances[0])
+    if node_facts:
+        out["nodes"].update(node_facts)
+    return out

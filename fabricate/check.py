@@ -1,0 +1,290 @@
+"""``check_outputs``: re-validate a finished run from its files alone.
+
+The bill of materials is the reference (ids, kinds, analytic volumes,
+neighbours).  Each file is read back by an independent reader and compared
+with it:
+
+- ``step``: OpenCASCADE reads ``model.step``; part count and names equal the
+  BOM's; every solid passes ``BRepCheck_Analyzer``; its volume equals the
+  analytic volume to ``1e-6`` relative; the file's unit is mm; every solid
+  has a colour, one per kind, different kinds different.
+- ``3mf``: one object per BOM row, same names; manifold3d (double precision)
+  accepts each as a closed 2-manifold; volumes to ``1e-6``.
+- ``stl``: split into parts with the 3MF's triangle counts, welded per part;
+  manifold3d status ok, one component per part, genus ``1 - parts``; volume
+  within the float32 bound ``4 eps32 max|x| area``.
+- ``intersections``: no two parts overlap (3MF meshes; bounding-box pairs,
+  a separating face plane or a manifold3d intersection volume below
+  ``cad_linear_mm x`` the smaller surface area).
+- ``bearing``: every panel touches each beam listed as its neighbour
+  (manifold3d gap below ``cad_linear_mm``).
+- ``dxf``: ezdxf audit clean, units mm, one CUT outline (id in XDATA) and
+  one ETCH id per panel and beam, and each outline has the area (``1e-9``
+  relative) and the edge lengths (``1e-6`` mm) of a face of the STEP solid
+  with the same id.
+- ``svg``: parses, one group per panel and beam.
+
+A check whose file was not written is reported with ``pass: None`` and the
+reason, never silently left out.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+
+import numpy as np
+
+from optimize.errors import ExportError
+from optimize.tolerances import DEFAULT, Tolerances
+
+log = logging.getLogger(__name__)
+FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
+         "dxf": "outlines.dxf", "svg": "outlines.svg"}
+VOLUME_REL_TOL = 1e-6
+AREA_REL_TOL = 1e-9
+EDGE_TOL_MM = 1e-6
+
+
+def check_outputs(outdir, tol: Tolerances = DEFAULT) -> dict:
+    """Run every check on ``outdir``; returns ``{"outdir", "pass", "checks": {name: {...}}, "seconds"}``.
+
+    ``pass`` is False when any check failed (``pass: False``); skipped checks
+    (file not written) carry ``pass: None`` and ``skipped``.  Raises
+    ExportError only when the folder or the bill of materials is unusable.
+    """
+    from .export.bom import read_bom
+
+    t0 = time.perf_counter()
+    out = Path(outdir)
+    if not out.is_dir():
+        raise ExportError(f"{out}: not a folder; expected the output folder of a run")
+    paths = {k: out / v for k, v in FILES.items()}
+    if not paths["bom"].exists():
+        raise ExportError(f"{paths['bom']}: missing; the checks compare every file with the bill of materials")
+    bom = read_bom(paths["bom"])
+    checks: dict[str, dict] = {"bom": _check_bom(bom)}
+    read: dict[str, object] = {}  # what one check read and the next ones use: STEP solids, 3MF meshes
+    for name, key, needs, run in (
+            ("step", "step", None, lambda: _check_step(paths["step"], bom)),
+            ("3mf", "3mf", None, lambda: _check_3mf(paths["3mf"], bom)),
+            ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
+            ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
+            ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
+            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"]), None)),
+            ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None))):
+        t1 = time.perf_counter()
+        if not paths[key].exists():
+            checks[name] = {"pass": None, "skipped": f"{FILES[key]} was not written"}
+            continue
+        if needs and read.get(needs) is None:
+            checks[name] = {"pass": None, "skipped": f"needs a readable {FILES[needs]}"}
+            continue
+        try:
+            result, read[name] = run()
+        except ExportError as exc:
+            result = {"pass": False, "error": str(exc)}
+        result["seconds"] = round(time.perf_counter() - t1, 3)
+        checks[name] = result
+        log.info("check %s: %s", name, {True: "ok", False: "FAILED"}.get(result.get("pass"), "skipped"))
+    failed = [k for k, v in checks.items() if v.get("pass") is False]
+    return {"outdir": str(out), "pass": not failed, "failed": failed, "checks": checks,
+            "seconds": round(time.perf_counter() - t0, 3)}
+
+
+def _volumes(bom) -> dict[str, float]:
+    return {r["id"]: float(r["volume_mm3"]) for r in bom}
+
+
+def _check_bom(bom) -> dict:
+    ids = [r["id"] for r in bom]
+    dup = len(ids) - len(set(ids))
+    bad = [r["id"] for r in bom if not float(r["volume_mm3"]) > 0]
+    kinds = {k: sum(r["kind"] == k for r in bom) for k in ("panel", "beam", "node")}
+    return {"pass": dup == 0 and not bad and len(ids) > 0, "rows": len(ids), "duplicate_ids": dup,
+            "nonpositive_volume": bad[:20], **kinds}
+
+
+def _check_step(path, bom):
+    from .export.brep import solid_facts
+    from .export.step_read import read_step
+
+    solids, facts = read_step(path)
+    names = [n for n, _ in solids]
+    expected = _volumes(bom)
+    missing = sorted(set(expected) - set(names))
+    extra = sorted(set(names) - set(expected))
+    invalid, worst, worst_id, errors = [], 0.0, None, []
+    for name, shape in solids:  # BRepCheck per solid
+        f = solid_facts(shape)
+        if not f["valid"] or f["solids"] != 1:
+            invalid.append(name)
+        if name in expected:
+            rel = abs(f["volume_mm3"] - expected[name]) / expected[name]
+            if rel > worst:
+                worst, worst_id = rel, name
+            if rel > VOLUME_REL_TOL:
+                errors.append(name)
+    unit_mm = "SI_UNIT(.MILLI.,.METRE.)" in _head(path, 1 << 16).replace(" ", "")
+    colours = facts.pop("colours", {})
+    kind_of = {r["id"]: r["kind"] for r in bom}
+    by_kind = {k: sorted({colours[n] for n in names if kind_of.get(n) == k and n in colours})
+               for k in set(kind_of.values())}
+    uncoloured = [n for n in names if n not in colours]
+    coloured_by_kind = (not uncoloured and all(len(c) == 1 for c in by_kind.values())
+                        and len({c[0] for c in by_kind.values()}) == len(by_kind))
+    ok = (not missing and not extra and not invalid and not errors and unit_mm and len(names) == len(expected)
+          and coloured_by_kind)
+    return ({"pass": ok, "solids": len(names), "bom_rows": len(expected), "missing": missing[:20],
+             "unexpected": extra[:20], "invalid": invalid[:20], "n_invalid": len(invalid),
+             "volume_rel_error_max": worst, "worst": worst_id, "volume_tolerance": VOLUME_REL_TOL,
+             "volume_failures": errors[:20], "unit_mm": unit_mm, "coloured_by_kind": coloured_by_kind,
+             "colours": {k: [list(c) for c in v] for k, v in by_kind.items()}, "uncoloured": uncoloured[:20],
+             **facts}, dict(solids))
+
+
+def _head(path, n: int) -> str:
+    with open(path, "rb") as fh:
+        return fh.read(n).decode("ascii", errors="replace")
+
+
+def _check_3mf(path, bom):
+    from .export.threemf import read_3mf
+    from .export.verify import Solid
+
+    objects = read_3mf(path)
+    expected = _volumes(bom)
+    missing = sorted(set(expected) - set(objects))
+    extra = sorted(set(objects) - set(expected))
+    solids, bad, worst, worst_id, errors = {}, [], 0.0, None, []
+    for name, (V, T) in objects.items():  # manifold3d per object
+        s = Solid(name, V, T)
+        solids[name] = s
+        if s.manifold.status().name != "NoError" or s.manifold.genus() != 0:
+            bad.append(name)
+            continue
+        if name in expected:
+            rel = abs(s.manifold.volume() - expected[name]) / expected[name]
+            if rel > worst:
+                worst, worst_id = rel, name
+            if rel > VOLUME_REL_TOL:
+                errors.append(name)
+    split = _split_objects(list(objects.values()))
+    ok = not missing and not extra and not bad and not errors and not split
+    return ({"pass": ok, "objects": len(objects), "missing": missing[:20], "unexpected": extra[:20],
+             "not_manifold": bad[:20], "not_one_piece": split[:20], "volume_rel_error_max": worst,
+             "worst": worst_id, "volume_failures": errors[:20]}, solids)
+
+
+def _split_objects(objects: list[tuple[np.ndarray, np.ndarray]]) -> list[int]:
+    """Indices of the meshes ``[(V, T), ...]`` that are not one connected piece (one graph for all)."""
+    if not objects:
+        return []
+    sizes = np.array([len(V) for V, _ in objects])
+    base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    T = np.concatenate([t + b for (_, t), b in zip(objects, base)])
+    labels = _components(np.zeros((int(sizes.sum()), 3)), T, labels=True)
+    lo = np.minimum.reduceat(labels, base)
+    hi = np.maximum.reduceat(labels, base)
+    return np.nonzero(lo != hi)[0].tolist()
+
+
+def _check_stl(path, bom, meshes):
+    import manifold3d
+
+    from .export.stl import read_stl
+
+    P, header = read_stl(path)
+    order = [r["id"] for r in bom]
+    counts = [len(meshes[i].T) if i in meshes else -1 for i in order]
+    if min(counts, default=0) < 0 or sum(counts) != len(P):
+        return {"pass": False, "error": f"{len(P)} triangles in the STL, {sum(counts)} in the 3MF parts "
+                                        "(or a part is missing); expected the same triangles"}
+    verts, tris, base = [], [], 0
+    start = np.concatenate([[0], np.cumsum(counts)])
+    for k in range(len(order)):  # weld each part's corners (exact float32 equality)
+        X = P[start[k]:start[k + 1]].reshape(-1, 3)
+        U, inv = np.unique(X, axis=0, return_inverse=True)
+        verts.append(U)
+        tris.append(inv.reshape(-1, 3) + base)
+        base += len(U)
+    V = np.concatenate(verts).astype(np.float32)
+    m = manifold3d.Manifold(manifold3d.Mesh(vert_properties=V, tri_verts=np.concatenate(tris).astype(np.uint32)))
+    status = m.status().name
+    comps = _components(V, np.concatenate(tris))
+    analytic = sum(_volumes(bom).values())
+    A = P.astype(float)
+    area = 0.5 * float(np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1).sum())
+    bound = 4 * float(np.finfo(np.float32).eps) * float(np.abs(A).max()) * area
+    dv = abs(m.volume() - analytic)
+    ok = status == "NoError" and comps == len(order) and m.genus() == 1 - len(order) and dv <= bound
+    return {"pass": ok, "status": status, "triangles": int(len(P)), "components": comps, "parts": len(order),
+            "genus": int(m.genus()), "expected_genus": 1 - len(order), "volume_mm3": m.volume(),
+            "volume_error_mm3": dv, "float32_bound_mm3": bound, "origin_mm": header["origin"].tolist()}
+
+
+def _components(V: np.ndarray, T: np.ndarray, labels: bool = False):
+    """Number of connected components of a triangle mesh (vertex graph through triangle edges),
+    or the component label of every vertex ``(n,)`` with ``labels``."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    a = np.concatenate([T[:, 0], T[:, 1], T[:, 2]])
+    b = np.concatenate([T[:, 1], T[:, 2], T[:, 0]])
+    G = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(len(V), len(V)))
+    n, lab = connected_components(G, directed=False)
+    return lab if labels else int(n)
+
+
+def _check_intersections(meshes, tol):
+    from .export.verify import intersections
+
+    return intersections(list(meshes.values()), tol.cad_linear_mm)
+
+
+def _check_bearing(meshes, bom, tol):
+    from .export.verify import bearing
+
+    supports = {r["id"]: [n for n in r["neighbours"].split() if n.startswith("B")]
+                for r in bom if r["kind"] == "panel"}
+    return bearing(meshes, supports, tol.cad_linear_mm)
+
+
+def _check_dxf(path, bom, solids_step):
+    from .export.dxf import read_outlines
+    from .export.verify import face_polygons, match_outline
+
+    outlines, facts = read_outlines(path)
+    flat = [r["id"] for r in bom if r["kind"] in ("panel", "beam")]
+    missing = sorted(set(flat) - set(outlines))
+    worst_a, worst_e, worst_id, failures = 0.0, 0.0, None, []
+    for pid, Q in outlines.items():  # one outline per part
+        shape = solids_step.get(pid)
+        if shape is None:
+            failures.append({"id": pid, "error": "no STEP solid of that name"})
+            continue
+        fi, rel, err = match_outline(Q, face_polygons(shape))
+        if err > worst_e:
+            worst_e, worst_id = err, pid
+        worst_a = max(worst_a, rel)
+        if fi < 0 or rel > AREA_REL_TOL or err > EDGE_TOL_MM:
+            failures.append({"id": pid, "face": fi, "area_rel_error": rel, "edge_error_mm": err})
+    ok = (facts["audit_errors"] == 0 and facts["units"] == 4 and not missing and not failures
+          and facts["texts"] >= len(flat))
+    return {"pass": ok, "outlines": len(outlines), "expected": len(flat), "missing": missing[:20],
+            "area_rel_error_max": worst_a, "edge_error_mm_max": worst_e, "worst": worst_id,
+            "tolerances": {"area_rel": AREA_REL_TOL, "edge_mm": EDGE_TOL_MM}, "failures": failures[:20],
+            "failed": len(failures), **facts}
+
+
+def _check_svg(path, bom):
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        return {"pass": False, "error": f"{path.name}: not well-formed XML ({exc})"}
+    ids = {g.get("id") for g in root.iter("{http://www.w3.org/2000/svg}g") if g.get("id")}
+    flat = {r["id"] for r in bom if r["kind"] in ("panel", "beam")}
+    missing = sorted(flat - ids)
+    return {"pass": not missing, "groups": len(ids & flat), "expected": len(flat), "missing": missing[:20]}

@@ -1,0 +1,42 @@
+"""``fabricate check OUTDIR``: re-validate the files of a finished run."""
+from __future__ import annotations
+
+import json
+
+
+def register(sub) -> None:
+    p = sub.add_parser("check", help="re-validate a finished run's STEP, STL, 3MF, DXF, SVG and BOM",
+                       description="Read every file of a run folder back and check it against the bill of "
+                                   "materials: STEP solids valid (BRepCheck) with the analytic volumes and "
+                                   "names, STL/3MF manifold with the same volumes, no two parts overlapping, "
+                                   "panels touching their beams, DXF audit clean with outlines equal to the "
+                                   "3D faces. Exit 0 when every check passes, 4 otherwise.")
+    p.add_argument("outdir", help="a run's output folder (with bom.csv, model.step, ...)")
+    p.add_argument("--json", action="store_true", help="print the full result as JSON")
+    p.set_defaults(handler=run)
+
+
+def run(args) -> int:
+    from fabricate.check import check_outputs
+
+    result = check_outputs(args.outdir)
+    if args.json:
+        print(json.dumps(result, indent=2, default=str))
+    else:
+        for name, r in result["checks"].items():
+            state = {True: "ok  ", False: "FAIL", None: "skip"}[r.get("pass")]
+            detail = r.get("skipped") or r.get("error") or _summary(name, r)
+            print(f"{state} {name:13s} {detail}")
+        print(f"{'all checks passed' if result['pass'] else 'FAILED: ' + ', '.join(result['failed'])} "
+              f"({result['seconds']:.1f} s)")
+    return 0 if result["pass"] else 4
+
+
+def _summary(name: str, r: dict) -> str:
+    keys = {"bom": ("rows", "panel", "beam", "node"), "step": ("solids", "n_invalid", "volume_rel_error_max"),
+            "3mf": ("objects", "volume_rel_error_max"), "stl": ("status", "components", "genus", "volume_error_mm3"),
+            "intersections": ("box_pairs", "boolean_pairs", "max_volume_mm3", "failed"),
+            "bearing": ("pairs", "max_gap_mm", "failed"),
+            "dxf": ("outlines", "audit_errors", "area_rel_error_max", "edge_error_mm_max", "failed"),
+            "svg": ("groups", "expected")}.get(name, ())
+    return ", ".join(f"{k}={r[k]:.3g}" if isinstance(r.get(k), float) else f"{k}={r.get(k)}" for k in keys)

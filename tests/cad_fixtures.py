@@ -1,0 +1,39 @@
+"""Small structures for the CAD and export tests (surfaces of revolution: conical exactly)."""
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from optimize import shapes
+
+
+def dome_mesh(n_around: int = 8, k: int = 4, radius_m: float = 6.0, rise_m: float = 2.0, sweep=2 * np.pi):
+    """A dome of revolution in mm (PQ, conical and circular by construction)."""
+    m = shapes.revolution(shapes.dome_profile(radius=radius_m, rise=rise_m, k=k), n_around, sweep=sweep,
+                          name="dome")
+    return m.with_vertices(m.V * 1000.0)
+
+
+@functools.lru_cache(maxsize=None)
+def dome_structure(n_around: int = 8, k: int = 4, depth: float = 200.0, flip: bool = False, sweep=2 * np.pi):
+    from fabricate.offset import offset_structure
+
+    return offset_structure(dome_mesh(n_around, k, sweep=sweep), (0.0, -depth), flip=flip)
+
+
+def rigid(V: np.ndarray, seed: int = 3) -> np.ndarray:
+    """``V (n, 3)`` after a seeded random rotation and translation."""
+    rng = np.random.default_rng(seed)
+    q, _ = np.linalg.qr(rng.standard_normal((3, 3)))
+    q *= np.sign(np.linalg.det(q))
+    return V @ q.T + rng.uniform(-5000, 5000, 3)
+
+
+def capped_dome_mesh(n_around: int = 7, k: int = 3):
+    """The dome with its top ring closed by one ``n_around``-gon (mixed face sizes)."""
+    from optimize.mesh import Mesh
+
+    m = dome_mesh(n_around, k)
+    faces = m.faces_list() + [[i * k + (k - 1) for i in range(n_around)]]
+    return Mesh(m.V, faces, name="capped_dome")
