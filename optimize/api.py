@@ -1,0 +1,155 @@
+"""``optimize_mesh``: make a mesh PQ, conical or circular, fair and close to a reference.
+
+The default method is the regularized Gauss-Newton of :mod:`optimize.guided`
+on the quadratic formulation of :mod:`optimize.formulation`.  The paper's own
+methods (``"penalty"``, ``"sqp"``, ``"hybrid"``) live in ``optimize.paper`` and
+are imported only when asked for.
+"""
+from __future__ import annotations
+
+import logging
+import time
+
+import numpy as np
+
+from . import measures
+from .closeness import Reference
+from .constraints import fixed as fixed_mod
+from .constraints import glide as glide_mod
+from .errors import ConfigError
+from .formulation import TARGETS, Formulation
+from .guided import Glide, solve
+from .linalg import BACKENDS
+from .mesh import Mesh
+from .result import OptimizeResult
+from .tolerances import Tolerances
+
+log = logging.getLogger(__name__)
+
+METHODS = ("default", "penalty", "sqp", "hybrid")
+
+
+def normalization(mesh: Mesh) -> tuple[np.ndarray, float]:
+    """Centre ``(3,)`` and scale (mean edge length) that map ``mesh`` to unit edges."""
+    return mesh.V.mean(axis=0), float(measures.edge_lengths(mesh).mean())
+
+
+def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
+                  reference: Mesh | None = None, fixed=None, glide_boundary: bool = False,
+                  fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = Tolerances(),
+                  max_iter: int = 200, callback=None, linear_solver: str = "superlu",
+                  **options) -> OptimizeResult:
+    """Move the vertices of ``mesh`` so that it becomes ``target``; never mutates ``mesh``.
+
+    mesh : Mesh, quads with n-gons and triangles allowed, boundary allowed.
+    target : ``"pq"`` (every face planar) | ``"conical"`` (PQ, and the faces
+        around every interior valence-4 vertex tangent to one cone) |
+        ``"circular"`` (PQ, and every quad has a circumcircle).
+    method : ``"default"`` (regularized Gauss-Newton) | ``"penalty"`` | ``"sqp"`` |
+        ``"hybrid"`` (the paper's methods, ``optimize.paper``).
+    reference : Mesh or None.  Surface the vertices stay close to (the input
+        when None); triangulated inside.
+    fixed : None | "none" | "boundary" | "corners" | (k,) int vertex indices that do not move.
+    glide_boundary : keep free boundary vertices on the reference's boundary curve
+        (corner vertices, with one face, are then fixed).
+    fairness, closeness : weights of the scale-free fairness and tangent-plane
+        closeness energies relative to the constraints (halved every iteration).
+    tol : Tolerances; the run converges when every defect of the target is within it.
+    max_iter : iteration budget.
+    callback : ``callback(entry: dict)`` after each iteration.
+    linear_solver : one of ``optimize.linalg.BACKENDS`` (default method only).
+    options : extras of the paper's methods (``mu``, ``kkt_tol``, ...), passed on
+        to ``optimize.paper.run_paper_method``; none for the default method.
+
+    Returns :class:`OptimizeResult` (``success`` only when every tolerance is met).
+    Raises :class:`ConfigError` for unknown target, method, fixed or solver values.
+    """
+    if method not in METHODS:
+        raise ConfigError(f"method: {method!r} is not known, expected one of {METHODS}")
+    if method != "default":
+        return _paper(mesh, target, method=method, reference=reference, fixed=fixed,
+                      glide_boundary=glide_boundary, fairness=fairness, closeness=closeness,
+                      tol=tol, max_iter=max_iter, callback=callback, **options)
+    if options:
+        raise ConfigError(f"options {sorted(options)} are only for the paper's methods, not {method!r}")
+    if target == "strip":
+        raise ConfigError("target: 'strip' is solved by the paper's methods only; use "
+                          "method='penalty', 'sqp' or 'hybrid'")
+    if target not in TARGETS:
+        raise ConfigError(f"target: {target!r} is not known, expected one of {TARGETS}")
+    if linear_solver not in BACKENDS:
+        raise ConfigError(f"linear_solver: {linear_solver!r} is not known, expected one of {BACKENDS}")
+    for key, val in (("fairness", fairness), ("closeness", closeness)):
+        if not (np.isfinite(val) and val >= 0):
+            raise ConfigError(f"{key}: weight {val!r}, expected a finite number >= 0")
+    if int(max_iter) < 0:
+        raise ConfigError(f"max_iter: {max_iter!r}, expected a non-negative integer")
+    t0 = time.perf_counter()
+    centre, h = normalization(mesh)
+    norm = mesh.with_vertices((mesh.V - centre) / h)
+    ref_mesh = reference if reference is not None else mesh
+    ref_norm = ref_mesh.with_vertices((ref_mesh.V - centre) / h) if reference is not None else norm
+    ref = Reference(ref_norm)
+    fixed_idx = fixed_mod.resolve(mesh, fixed)
+    glide = None
+    if glide_boundary:  # corners stay: a point cannot glide around a kink of the curve
+        fixed_idx = np.union1d(fixed_idx, fixed_mod.corner_vertices(mesh))
+        bnd = np.setdiff1d(np.nonzero(mesh.topology.is_boundary_vertex)[0], fixed_idx)
+        if bnd.size:
+            glide = Glide(bnd, glide_mod.BoundaryCurve(ref_norm))
+    form = Formulation(norm, target)
+    x0 = form.start(norm.V)
+    t_setup = time.perf_counter() - t0
+    run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=fairness,
+                closeness=closeness, tol=tol, max_iter=int(max_iter), callback=callback,
+                backend=linear_solver)
+    L = form.layout
+    Xn = L.view(run.x, "vertices")
+    V = Xn * h + centre if run.nit else mesh.V.copy()  # no step taken: bit-exact input
+    V[fixed_idx] = mesh.V[fixed_idx]  # bit-exact: fixed means fixed
+    out = mesh.with_vertices(V)
+    t1 = time.perf_counter()
+    normals = _unit(L.view(run.x, "normals"))
+    axes = cone_angles = None
+    if target == "conical":
+        axes, cone_angles = _node_axes(form, run.x, normals)
+    max_distance = float(ref.distance(Xn).max() / ref.bbox_diagonal)
+    defects = measures.summary(out, tol)
+    timings = dict(run.timings, setup=t_setup, report=time.perf_counter() - t1,
+                   total=time.perf_counter() - t0)
+    success = run.status == "converged"
+    log.info("optimize_mesh(%s, %s): %s", mesh.name, target, run.message)
+    return OptimizeResult(mesh=out, success=success, status=run.status, message=run.message,
+                          nit=run.nit, history=run.history, defects=defects, max_distance=max_distance,
+                          normals=normals, axes=axes, cone_angles=cone_angles, timings=timings,
+                          method=method, target=target)
+
+
+def _unit(U: np.ndarray) -> np.ndarray:
+    return U / np.maximum(np.linalg.norm(U, axis=1, keepdims=True), 1e-300)
+
+
+def _node_axes(form: Formulation, x: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit axes ``(n, 3)`` and cone angles ``(n,)``: the solved ones at interior
+    valence-4 vertices, elsewhere the normalized mean of the adjacent face normals."""
+    t = form.mesh.topology
+    SF = t.star_faces
+    valid = SF >= 0
+    Ns = np.where(valid[:, :, None], normals[np.maximum(SF, 0)], 0.0)  # (n, s, 3)
+    axes = _unit(Ns.sum(axis=1))
+    cosines = np.einsum("nsj,nj->ns", Ns, axes).sum(axis=1) / valid.sum(axis=1)
+    cv = form.cone_vertices
+    a = form.layout.view(x, "axes")
+    axes[cv] = _unit(a)
+    cosines[cv] = form.layout.view(x, "cos") / np.linalg.norm(a, axis=1)
+    return axes, np.arccos(np.clip(cosines, -1.0, 1.0))
+
+
+def _paper(mesh, target, **kwargs) -> OptimizeResult:
+    """Dispatch to ``optimize.paper.run_paper_method`` (teammate H3), imported lazily."""
+    try:
+        from . import paper
+    except ImportError as exc:
+        raise ConfigError(f"method: {kwargs['method']!r} needs optimize.paper (the paper's penalty "
+                          f"and SQP methods), which is not available: {exc}") from exc
+    return paper.run_paper_method(mesh, target, **kwargs)

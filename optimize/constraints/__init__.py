@@ -1,0 +1,10 @@
+"""Constraints of the optimizer, one module each.
+
+Every module has ``terms(x, layout, ...) -> (r, J)``: the residual vector
+``r (p,)`` (zero when the constraint holds) and its sparse Jacobian
+``J (p, layout.size)`` at the unknown vector ``x``.  All residuals are at most
+quadratic in ``x``.  The solver, not the constraint, applies weights.
+"""
+from . import anglebalance, angles, anglesum, circular, conical, fixed, glide, planarity, unit
+
+__all__ = ["anglebalance", "angles", "anglesum", "circular", "conical", "fixed", "glide", "planarity", "unit"]

@@ -1,0 +1,139 @@
+"""The unknowns, their starting values and the stacked constraints of one target.
+
+Targets (all with auxiliary variables so every constraint is at most quadratic):
+
+- ``pq``: vertices, unit face normals; planarity on every face.
+- ``conical``: ``pq`` plus a unit axis and ``c = cos(theta)`` per interior
+  valence-4 vertex (``constraints.conical``) and the angle balance there
+  (``constraints.anglebalance``, which excludes degenerate cones).
+- ``circular``: ``pq`` plus a centre and squared radius per quad
+  (``constraints.circular``) and the opposite-angle sums (``constraints.anglesum``,
+  which exclude crossed quads).
+
+Starting values come from the current mesh: face normals by Newell's method;
+axes by a least-squares fit to the normals around each vertex (the normal of
+the plane best fitting the four unit normals, oriented like them) and ``c``
+their mean dot product; circle centres by a least-squares circle fit in the
+best-fit plane of each quad.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from .constraints import anglebalance, anglesum, circular, conical, planarity, unit
+from .errors import ConfigError
+from .measures import face_normals
+from .mesh import Mesh
+from .variables import Layout
+
+TARGETS = ("pq", "conical", "circular")
+
+
+def fit_axes(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axes ``(p, 3)`` and ``c (p,)`` best fitting ``n . a = c`` for normals ``N (p, s, 3)``."""
+    centred = N - N.mean(axis=1, keepdims=True)
+    cov = np.einsum("psi,psj->pij", centred, centred)
+    _, vecs = np.linalg.eigh(cov)
+    a = vecs[:, :, 0]
+    mean = N.mean(axis=1)
+    a = np.where((np.einsum("pi,pi->p", a, mean) < 0)[:, None], -a, a)
+    return a, np.einsum("psj,pj->ps", N, a).mean(axis=1)
+
+
+def fit_circles(P: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centres ``(q, 3)`` and squared radii ``(q,)`` of circles fitted to ``P (q, 4, 3)``.
+
+    The circle lies in the plane through the mean point with unit normal
+    ``n (q, 3)``; algebraic least squares ``|p|^2 = 2 p.c + k`` in that plane.
+    """
+    o = P.mean(axis=1)
+    helper = np.where((np.abs(n[:, 0]) < 0.9)[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    e1 = np.cross(n, helper)
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(n, e1)
+    d = P - o[:, None, :]
+    u, v = np.einsum("qsj,qj->qs", d, e1), np.einsum("qsj,qj->qs", d, e2)
+    M = np.stack([2 * u, 2 * v, np.ones_like(u)], axis=2)  # (q, 4, 3)
+    rhs = u ** 2 + v ** 2
+    MtM = np.einsum("qsi,qsj->qij", M, M) + 1e-12 * np.eye(3)
+    sol = np.linalg.solve(MtM, np.einsum("qsi,qs->qi", M, rhs)[..., None])[..., 0]
+    C = o + sol[:, :1] * e1 + sol[:, 1:2] * e2
+    R = np.einsum("qsj,qsj->qs", P - C[:, None, :], P - C[:, None, :]).mean(axis=1)
+    return C, R
+
+
+class Formulation:
+    """Layout, starting vector and constraints of ``target`` for the topology of ``mesh``."""
+
+    def __init__(self, mesh: Mesh, target: str):
+        if target not in TARGETS:
+            raise ConfigError(f"target: {target!r} is not known, expected one of {TARGETS}")
+        self.mesh = mesh
+        self.target = target
+        self.layout = L = Layout().add("vertices", mesh.n_vertices, 3).add("normals", mesh.n_faces, 3)
+        self.cone_vertices = mesh.topology.interior_valence4 if target == "conical" else np.zeros(0, int)
+        self.quads = circular.circle_faces(mesh) if target == "circular" else np.zeros(0, int)
+        if target == "conical":
+            L.add("axes", len(self.cone_vertices), 3).add("cos", len(self.cone_vertices), 1)
+        # cone vertices with an angle-balance row: all of them.  (Adding rows only
+        # where a vertex is caught on the degenerate branch was tried: no reliable
+        # detector was found before convergence, it flagged most vertices anyway.)
+        self.angle_mask = np.ones(len(self.cone_vertices), dtype=bool)
+        if target == "circular":
+            L.add("centres", len(self.quads), 3).add("radius2", len(self.quads), 1)
+
+    def start(self, V: np.ndarray) -> np.ndarray:
+        """The starting unknown vector for positions ``V (n, 3)``."""
+        N = face_normals(self.mesh, V)
+        blocks = {"vertices": V, "normals": N}
+        if self.target == "conical":
+            blocks["axes"], blocks["cos"] = fit_axes(N[conical.cone_faces(self.mesh)])
+        if self.target == "circular":
+            Fq = self.mesh.F[self.quads, :4]
+            blocks["centres"], blocks["radius2"] = fit_circles(V[Fq], N[self.quads])
+        return self.layout.pack(**blocks)
+
+    def terms(self, x: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
+        """All constraint residuals ``(p,)`` stacked, and their Jacobian ``(p, layout.size)``."""
+        r, J, wide = self.split_terms(x)
+        return (np.concatenate([r] + [w[0] for w in wide]),
+                sp.vstack([J] + [w[1] for w in wide], format="csr"))
+
+    def split_terms(self, x: np.ndarray, exact_angles: bool = True):
+        """``(r, J, wide)``: the compact-stencil constraints (each row within one face,
+        or one vertex and its faces' normals) and the list of wide ones as
+        ``(r_w, J_w, parts)`` with ``J_w = sum(parts)``, each part within one face
+        (the angle balance couples a whole vertex star; with ``exact_angles`` it
+        is among the compact rows instead)."""
+        parts = [planarity.terms(x, self.layout, self.mesh), unit.terms(x, self.layout, "normals")]
+        wide = []
+        if self.target == "conical":
+            parts += [conical.terms(x, self.layout, self.mesh), unit.terms(x, self.layout, "axes")]
+            which = np.nonzero(self.angle_mask)[0]
+            if exact_angles:
+                parts.append(anglebalance.terms(x, self.layout, self.mesh, which=which))
+            else:
+                wide.append(anglebalance.terms(x, self.layout, self.mesh, parts=True, which=which))
+        if self.target == "circular":
+            parts += [circular.terms(x, self.layout, self.mesh), anglesum.terms(x, self.layout, self.mesh)]
+        return (np.concatenate([r for r, _ in parts]), sp.vstack([J for _, J in parts], format="csr"),
+                wide)
+
+    def face_blocks(self) -> np.ndarray:
+        """(m, b) int: per-face auxiliary unknowns (normal, and centre + radius for circular quads).
+
+        They couple only within their face: the ``"eliminate"`` solver removes them first.
+        Conical couples normals with vertex axes, so there only the vertex-free
+        blocks are returned when that holds (never for conical: ``None``).
+        """
+        if self.target == "conical":
+            return None
+        N = self.layout.index("normals")
+        if self.target == "pq":
+            return N
+        B = np.full((self.mesh.n_faces, 7), -1, dtype=np.int64)
+        B[:, :3] = N
+        B[self.quads, 3:6] = self.layout.index("centres")
+        B[self.quads, 6] = self.layout.index("radius2")
+        return B

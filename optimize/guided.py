@@ -1,0 +1,278 @@
+"""Regularized Gauss-Newton on quadratic constraints ("guided projection").
+
+After Tang, Sun, Gomes, Wallner, Pottmann, "Form-finding with polyhedral
+meshes made simple" (SIGGRAPH 2014): every constraint is at most quadratic in
+the unknowns (positions plus auxiliary normals, axes, centres), so its
+linearization is cheap and accurate.  One iteration solves
+
+    min_dx |phi + J dx|^2 + w_f |K (x + dx)|^2 + w_c |r_c + C dx|^2
+           + |r_g + G dx|^2 + mu |dx|^2
+
+Rows with wide stencils (fairness ``a - 2v + b``) would fill the sparse
+factor.  Each is written as a sum of ``P`` parts that stay within one face
+(``(a - v) + (b - v)``; one part per corner) and enters the matrix through
+the majorant ``(r + sum_k J_k dx)^2 <= sum_k (r / sqrt(P) + sqrt(P) J_k dx)^2``:
+same value and gradient at ``dx = 0``, no fill, so the step is a
+majorize-minimize descent step for those rows while the constraints keep
+exact Gauss-Newton rows.  (The conical angle balance could be split the
+same way, one part per corner; that was measured to stall in local minima
+or converge only linearly, so it stays exact: ``split_terms(exact_angles=True)``.)
+
+(constraints ``phi``; fairness ``K``; tangent-plane closeness ``r_c`` with
+footpoints recomputed at ``x``; boundary gliding ``r_g``; Levenberg-Marquardt
+damping ``mu``) as one sparse SPD system.  A step is accepted when it lowers
+that objective (otherwise ``mu`` grows and the system is solved again); the
+soft weights ``w_f, w_c`` are halved every iteration, as in the paper's
+penalty method, so that the constraints become exact while the first steps
+stay fair and close; within a factor 100 of the tolerances (or after ten
+halvings) they are dropped and the damped Gauss-Newton iteration finishes
+quadratically.
+
+Everything runs in normalized coordinates (centred, unit mean edge length):
+the weights mean the same at every scale.  The run stops on tests: every
+measured defect within tolerance (converged), no progress for ``patience``
+iterations or no step lowering the objective (stalled), non-finite values
+(diverged, the last good iterate is kept), or ``max_iter``.
+"""
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from . import measures
+from .closeness import Reference
+from .constraints import glide as glide_mod
+from .fairness import fairness_matrix, fairness_matrix_parts
+from .formulation import Formulation
+from .linalg import NormalSolver, SolveError, normal_matrix
+from .tolerances import Tolerances
+
+log = logging.getLogger(__name__)
+
+MU_START, MU_MIN, MU_MAX = 1e-3, 1e-8, 1e8
+
+
+@dataclass
+class Glide:
+    """Boundary gliding: ``vertices (b,)`` kept on ``curve`` (normalized coordinates)."""
+
+    vertices: np.ndarray
+    curve: glide_mod.BoundaryCurve
+
+
+@dataclass
+class RunState:
+    """What :func:`solve` returns: the final unknowns and how the run went."""
+
+    x: np.ndarray
+    status: str
+    message: str
+    nit: int
+    history: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    defects: dict = field(default_factory=dict)
+
+
+def target_defects(form: Formulation, V: np.ndarray) -> dict[str, np.ndarray]:
+    """The measured defects the target must bring under tolerance, ``name -> (k,)``."""
+    out = {"planarity": measures.planarity(form.mesh, V)}
+    if form.target == "conical":
+        out["conical"] = measures.conical_defect(form.mesh, V)
+    if form.target == "circular":
+        out["circular"] = measures.circular_defect(form.mesh, V)
+    return out
+
+
+def _score(defects: dict, tol: Tolerances) -> float:
+    """log10 of the worst defect / tolerance ratio (<= 0 means converged).
+
+    ``glide`` (distance of gliding vertices to the boundary curve / mean edge
+    length) is held to the planarity tolerance.
+    """
+    limit = {"glide": tol.planarity}
+    worst = [max(float(d.max(initial=0.0)), 1e-300) / limit.get(k, getattr(tol, k, None) or 1.0)
+             for k, d in defects.items()]
+    return float(np.log10(max(worst)))
+
+
+def _embed(M: sp.spmatrix, n_cols: int) -> sp.csr_matrix:
+    """Rows over the leading ``vertices`` block, widened to ``n_cols`` columns."""
+    M = M.tocsr()
+    return sp.csr_matrix((M.data, M.indices, M.indptr), shape=(M.shape[0], n_cols))
+
+
+def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np.ndarray,
+          glide: Glide | None, fairness: float, closeness: float, tol: Tolerances,
+          max_iter: int, callback=None, backend: str = "superlu", patience: int = 10,
+          decay: float = 0.5, finish: float = 2.0,
+          soft_iters: int = 10) -> RunState:
+    """Run the iteration from ``x0 (layout.size,)`` (normalized coordinates).
+
+    fixed : (k,) int vertices whose coordinates are not unknowns.
+    decay : factor applied to the soft weights after each iteration; they are
+        dropped once the worst defect is within ``10**finish`` of its tolerance
+        or after ``soft_iters`` iterations (then ``0.5**10`` of their start).
+    callback : called with each iteration's history dict (observes only).
+    """
+    t_start = time.perf_counter()
+    L = form.layout
+    timings = {"closest": 0.0, "assemble": 0.0, "solve": 0.0, "measure": 0.0}
+    free = np.ones(L.size, dtype=bool)
+    free[L.index("vertices")[fixed].ravel()] = False
+    free_idx = np.nonzero(free)[0]
+    S = sp.csr_matrix((np.ones(len(free_idx)), (free_idx, np.arange(len(free_idx)))),
+                      shape=(L.size, len(free_idx)))
+    blocks = form.face_blocks() if backend == "eliminate" else None
+    if blocks is not None:
+        pos = np.full(L.size, -1, dtype=np.int64)
+        pos[free_idx] = np.arange(len(free_idx))
+        blocks = np.where(blocks >= 0, pos[np.maximum(blocks, 0)], -1)
+    solver = NormalSolver(backend, blocks)
+    K = _embed(fairness_matrix(form.mesh), L.size)
+    K1, K2 = (_embed(k, L.size) for k in fairness_matrix_parts(form.mesh))
+    wf, wc = float(fairness), float(closeness)
+    use_close = ref is not None and wc > 0
+
+    def residuals(x, foot, gfoot):
+        """Stacked weighted residual, Jacobian of the exact rows, Jacobian of the
+        majorized rows (fairness, wide constraint stencils) and the constraints."""
+        phi, J, wide = form.split_terms(x)
+        rs, Js = [phi], [J]
+        if wf > 0:
+            wide = wide + [(np.sqrt(wf) * (K @ x), None, [np.sqrt(wf) * K1, np.sqrt(wf) * K2])]
+        if use_close and wc > 0:
+            from .closeness import closeness_terms
+
+            Jc, rc = closeness_terms(L.view(x, "vertices"), ref, *foot)
+            rs.append(np.sqrt(wc) * rc)
+            Js.append(np.sqrt(wc) * _embed(Jc, L.size))
+        if glide is not None:
+            rg, Jg = glide_mod.terms(x, L, glide.vertices, glide.curve, gfoot)
+            rs.append(rg)
+            Js.append(Jg)
+        rw = [w[0] for w in wide]
+        phi_all = np.concatenate([phi] + [w[0] for w in wide if w[1] is not None])
+        return np.concatenate(rs + rw), sp.vstack(Js, format="csr"), [w[2] for w in wide], phi_all
+
+    def measure(x):
+        tm = time.perf_counter()
+        V = L.view(x, "vertices")
+        out = target_defects(form, V)
+        if glide is not None:
+            Y, _ = glide.curve.closest(V[glide.vertices])
+            out["glide"] = np.linalg.norm(V[glide.vertices] - Y, axis=1)  # mean edge length is 1
+        timings["measure"] += time.perf_counter() - tm
+        return out
+
+    x = x0.copy()
+    # While the soft terms act, the damping stays at least the initial fairness weight:
+    # in directions no constraint sees, the fairness step is then wf / mu of a full
+    # fairing step and shrinks as wf halves (a damping that fell with wf would let
+    # the mesh drift along the surface every iteration).
+    mu_floor = max(MU_MIN, float(fairness))
+    defects = measure(x)
+    score = best = _score(defects, tol)
+    history: list[dict] = []
+    status, message, nit, since_best, mu = None, "", 0, 0, MU_START
+    if score <= 0:
+        status, message = "converged", "the input already satisfies every tolerance"
+    while status is None:
+        if nit >= max_iter:
+            status = "max_iter"
+            message = f"stopped after {nit} iterations (max_iter) with worst defect/tolerance 10^{score:.2f}"
+            break
+        nit += 1
+        t_it = time.perf_counter()
+        V = L.view(x, "vertices")
+        tc = time.perf_counter()
+        foot = ref.closest(V) if use_close and wc > 0 else None  # footpoints while the term acts
+        gfoot = glide.curve.closest(V[glide.vertices]) if glide is not None else None
+        timings["closest"] += time.perf_counter() - tc
+        ta = time.perf_counter()
+        r, J, wide_parts, phi = residuals(x, foot, gfoot)
+        Jf = J @ S
+        JtJ = Jf.T @ Jf
+        # gradient of the wide rows: the sum of their parts; matrix: the majorant
+        Jw = sp.vstack([sum(p[1:], p[0]) for p in wide_parts] or [sp.csr_matrix((0, L.size))], format="csr")
+        g = sp.vstack([Jf, Jw @ S], format="csr").T @ r
+        for p in wide_parts:
+            for Jk in p:
+                Jk = Jk @ S
+                JtJ = JtJ + len(p) * (Jk.T @ Jk)
+        JtJ = JtJ.tocsr()
+        merit0 = float(r @ r)
+        timings["assemble"] += time.perf_counter() - ta
+        accepted, tries = False, 0
+        while not accepted and mu <= MU_MAX:
+            tries += 1
+            ts = time.perf_counter()
+            try:
+                dx = solver.solve(JtJ + sp.diags(np.full(JtJ.shape[0], mu)), -g)
+            except SolveError as exc:
+                log.info("iteration %d: %s; raising the damping", nit, exc)
+                timings["solve"] += time.perf_counter() - ts
+                mu *= 10
+                continue
+            timings["solve"] += time.perf_counter() - ts
+            xn = x + S @ dx
+            ta = time.perf_counter()
+            rn, _, _, _ = residuals(xn, foot, gfoot)
+            timings["assemble"] += time.perf_counter() - ta
+            merit1 = float(rn @ rn)
+            if np.isfinite(merit1) and merit1 < merit0:
+                accepted = True
+                mu = max(mu / 3, mu_floor)
+            else:
+                mu *= 10
+        if not accepted:
+            status = "stalled"
+            message = (f"iteration {nit}: no step lowers the objective even with damping {MU_MAX:g} "
+                       f"(a local minimum; worst defect/tolerance 10^{score:.2f})")
+            nit -= 1
+            break
+        if not np.all(np.isfinite(xn)):
+            status, message = "diverged", f"iteration {nit}: non-finite unknowns; the last good iterate is kept"
+            break
+        step = float(np.abs(xn - x)[L.slice("vertices")].max())
+        x = xn
+        defects = measure(x)
+        score = _score(defects, tol)
+        entry = {"iteration": nit, "step": step, "mu": mu, "tries": tries, "objective": merit1,
+                 "constraint_residual": float(np.abs(phi).max(initial=0.0)),
+                 "fairness_weight": wf, "closeness_weight": wc,
+                 "seconds": time.perf_counter() - t_it}
+        for k, d in defects.items():
+            entry[k] = float(d.max(initial=0.0))
+            entry[k + "_mean"] = float(d.mean()) if d.size else 0.0
+        entry["fairness"] = float(np.sum((K @ x) ** 2) / max(1, K.shape[0] // 3))
+        if foot is not None:
+            entry["closeness"] = float(np.linalg.norm(V - foot[0], axis=1).max() / ref.bbox_diagonal)
+        history.append(entry)
+        log.info("iteration %d: %s", nit, {k: f"{v:.3g}" for k, v in entry.items() if isinstance(v, float)})
+        if callback is not None:
+            callback(entry)
+        if score <= 0:
+            status = "converged"
+            message = f"every tolerance reached in {nit} iterations"
+        elif score < best - 0.01:
+            best, since_best = score, 0
+        elif wf == 0 and wc == 0:  # progress is judged once the soft terms are gone
+            since_best += 1
+            if since_best >= patience:
+                status = "stalled"
+                message = (f"no progress in {patience} iterations (worst defect/tolerance "
+                           f"10^{score:.2f}, best 10^{best:.2f})")
+        if score < finish or nit >= soft_iters:  # plain damped Gauss-Newton converges fast
+            wf = wc = 0.0
+            mu_floor = MU_MIN
+        wf *= decay
+        wc *= decay
+    timings["total"] = time.perf_counter() - t_start
+    timings["factorizations"] = solver.factorizations
+    timings["cg_iterations"] = solver.cg_iterations
+    return RunState(x=x, status=status, message=message, nit=nit, history=history, timings=timings,
+                    defects={k: float(d.max(initial=0.0)) for k, d in defects.items()})

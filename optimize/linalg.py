@@ -1,0 +1,185 @@
+"""Sparse solves of the regularized Gauss-Newton systems.
+
+Each iteration solves ``(J^T J + D + mu I) dx = -g``: a symmetric positive
+definite matrix with the same sparsity pattern every iteration.  Backends:
+
+- ``"superlu"`` (default): SciPy's SuperLU in symmetric mode
+  (``diag_pivot_thresh=0``, ``MMD_AT_PLUS_A`` ordering).
+- ``"cholespy"``: sparse Cholesky (CHOLMOD inside cholespy, which ships a
+  reference BLAS, so its supernodal kernels are slow: measured 1-3x slower
+  than SuperLU on these systems, see ``benchmarks/bench_optimize.py --linalg``).
+- ``"eliminate"``: per-face auxiliary unknowns (normals, circle centres)
+  couple only within their face, so their diagonal blocks are small and
+  independent; they are eliminated (batched dense inverses, Schur
+  complement), the smaller system is factored with SuperLU and the
+  eliminated unknowns recovered by back substitution.
+
+Neither library exposes a numeric-only refactorization (cholespy factors in
+its constructor; factoring SuperLU's matrix permuted by a previous ``perm_c``
+with the ``NATURAL`` ordering was measured 10x slower, the etree postorder
+being lost).  What is reused across iterations instead is the whole factor:
+a new system is first solved by conjugate gradients preconditioned with the
+last factor (a few steps while the matrix changes little) and factored anew
+only when that does not reach ``cg_rtol`` within ``cg_maxiter`` steps.
+"""
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+log = logging.getLogger(__name__)
+
+BACKENDS = ("cholespy", "superlu", "eliminate")
+
+
+class SolveError(RuntimeError):
+    """The factorization failed (matrix not positive definite or singular)."""
+
+
+def _cholespy_factor(A: sp.spmatrix):
+    """A function ``b -> A^{-1} b`` from a cholespy (CHOLMOD) factorization of SPD ``A``."""
+    from cholespy import CholeskySolverD, MatrixType
+
+    A = A.tocsr()
+    A.sort_indices()
+    solver = CholeskySolverD(A.shape[0], A.indptr.astype(np.int32), A.indices.astype(np.int32),
+                             np.ascontiguousarray(A.data), MatrixType.CSR)
+
+    def apply(b):
+        x = np.zeros(b.shape)
+        solver.solve(np.ascontiguousarray(b, dtype=np.float64), x)
+        return x
+
+    return apply
+
+
+def _cholespy_solve(A: sp.spmatrix, b: np.ndarray) -> np.ndarray:
+    return _cholespy_factor(A)(b)
+
+
+def _superlu_factor(A: sp.spmatrix):
+    """A function ``b -> A^{-1} b`` from SuperLU in symmetric mode (``MMD_AT_PLUS_A`` ordering)."""
+    lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                   options=dict(SymmetricMode=True))
+    return lu.solve
+
+
+class NormalSolver:
+    """Solves ``A x = b`` for SPD ``A`` with a fixed pattern; remembers the ordering.
+
+    backend : one of :data:`BACKENDS`.
+    blocks : (m, b) int or None
+        For ``"eliminate"``: the unknowns forming independent diagonal blocks
+        (``-1`` padded), e.g. each face's normal.
+    """
+
+    def __init__(self, backend: str = "superlu", blocks: np.ndarray | None = None,
+                 reuse: bool = True, cg_rtol: float = 1e-6, cg_maxiter: int = 30):
+        if backend not in BACKENDS:
+            raise ValueError(f"linear solver backend {backend!r}, expected one of {BACKENDS}")
+        if backend == "eliminate" and blocks is None:
+            backend = "superlu"
+        self.backend = backend
+        self.blocks = blocks
+        self._factor = None
+        self.reuse = reuse
+        self.cg_rtol, self.cg_maxiter = cg_rtol, cg_maxiter
+        self.factorizations = 0
+        self.cg_iterations = 0
+
+    def solve(self, A: sp.spmatrix, b: np.ndarray) -> np.ndarray:
+        """``x (k,)`` with ``A (k, k) x = b (k,)``.  Raises :class:`SolveError` on failure."""
+        if self.reuse and self._factor is not None:
+            x = self._preconditioned_cg(A, b)
+            if x is not None:
+                return x
+        self.factorizations += 1
+        try:
+            if self.backend == "cholespy":
+                self._factor = _cholespy_factor(A)
+            elif self.backend == "superlu":
+                self._factor = _superlu_factor(A)
+            else:
+                self._factor = self._eliminate_factor(A)
+            x = self._factor(b)
+        except (RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
+            raise SolveError(f"sparse factorization failed ({self.backend}): {exc}") from exc
+        if not np.all(np.isfinite(x)):
+            raise SolveError(f"sparse solve ({self.backend}) returned non-finite values")
+        return x
+
+    def _preconditioned_cg(self, A, b):
+        """CG on ``A x = b`` preconditioned by the last factor; None if it does not converge."""
+        A = A.tocsr()
+        M = self._factor
+        x = M(b)
+        r = b - A @ x
+        z = M(r)
+        p = z.copy()
+        rz = r @ z
+        stop = self.cg_rtol * np.linalg.norm(b)
+        for k in range(self.cg_maxiter):
+            if np.linalg.norm(r) <= stop:
+                self.cg_iterations += k
+                return x
+            Ap = A @ p
+            alpha = rz / (p @ Ap)
+            x += alpha * p
+            r -= alpha * Ap
+            z = M(r)
+            rz, rz_old = r @ z, rz
+            p = z + (rz / rz_old) * p
+        if np.linalg.norm(r) <= stop:
+            self.cg_iterations += self.cg_maxiter
+            return x
+        return None
+
+    def _eliminate_factor(self, A):
+        A = A.tocsr()
+        k = A.shape[0]
+        B = self.blocks
+        valid = B >= 0
+        e_idx = B[valid]
+        is_e = np.zeros(k, dtype=bool)
+        is_e[e_idx] = True
+        keep = np.nonzero(~is_e)[0]
+        # dense diagonal blocks (m, w, w); padded slots get an identity
+        m, w = B.shape
+        Bi = np.where(valid, B, 0)
+        rows = np.broadcast_to(Bi[:, :, None], (m, w, w)).ravel()
+        cols = np.broadcast_to(Bi[:, None, :], (m, w, w)).ravel()
+        D = np.asarray(A[rows, cols]).reshape(m, w, w)
+        mask = valid[:, :, None] & valid[:, None, :]
+        D = np.where(mask, D, 0.0) + np.where(~valid, 1.0, 0.0)[:, :, None] * np.eye(w)[None]
+        Dinv = np.linalg.inv(D)
+        # block-diagonal inverse as a sparse matrix in the local numbering of the eliminated set
+        pos = np.full(k, -1, dtype=np.int64)
+        pos[e_idx] = np.arange(len(e_idx))
+        loc = np.where(valid, pos[Bi], -1)
+        ok = (loc[:, :, None] >= 0) & (loc[:, None, :] >= 0)
+        r_ = np.broadcast_to(loc[:, :, None], (m, w, w))[ok]
+        c_ = np.broadcast_to(loc[:, None, :], (m, w, w))[ok]
+        ne = len(e_idx)
+        Einv = sp.csr_matrix((Dinv[ok], (r_, c_)), shape=(ne, ne))
+        A_kk = A[keep][:, keep]
+        A_ke = A[keep][:, e_idx]
+        S = (A_kk - A_ke @ Einv @ A_ke.T).tocsr()
+        inner = _superlu_factor(S)
+
+        def apply(b):
+            b_k, b_e = b[keep], b[e_idx]
+            x_k = inner(b_k - A_ke @ (Einv @ b_e))
+            x = np.empty(k)
+            x[keep], x[e_idx] = x_k, Einv @ (b_e - A_ke.T @ x_k)
+            return x
+
+        return apply
+
+
+def normal_matrix(J: sp.csr_matrix, mu: np.ndarray | float) -> sp.csr_matrix:
+    """``J^T J + diag(mu)`` (CSR); ``mu`` scalar or ``(k,)``."""
+    k = J.shape[1]
+    return (J.T @ J + sp.diags(np.broadcast_to(mu, (k,)).astype(float))).tocsr()

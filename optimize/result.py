@@ -1,0 +1,101 @@
+"""The result of an optimization run (every method, every target).
+
+Modelled on ``scipy.optimize.OptimizeResult``: the optimized mesh plus how the
+run ended (``success``, ``status``, ``message``, ``nit``), the history of every
+defect and energy per iteration, the final measured defects, the auxiliary
+variables the later stages need (face normals; node axes and cone angles of a
+conical mesh) and timings.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .mesh import Mesh
+
+STATUSES = ("converged", "stalled", "max_iter", "diverged")
+
+
+@dataclass
+class OptimizeResult:
+    """What an optimizer returns.
+
+    mesh : Mesh
+        The optimized mesh: same faces and vertex order as the input.
+    success : bool
+        True exactly when every tolerance of the target was reached.
+    status : str
+        ``"converged"`` | ``"stalled"`` (no progress) | ``"max_iter"`` |
+        ``"diverged"`` (the last good iterate is returned).
+    message : str
+        One sentence saying why the run stopped, with the figures.
+    nit : int
+        Iterations done.
+    history : list of dict
+        One dict per iteration: ``planarity``, ``conical``, ``circular``
+        (max defects), ``fairness``, ``closeness`` (energies), ``step``,
+        ``residual`` and solver details.
+    defects : dict
+        Final measures (``measures.summary``-like).
+    max_distance : float
+        Max distance of a vertex to the reference surface / bbox diagonal of
+        the reference.
+    normals : (m, 3) float or None
+        Unit face normals of the result.
+    axes : (n, 3) float or None
+        Unit node axes (conical target; rows of vertices where the cone is not
+        defined hold the vertex normal estimate).
+    cone_angles : (n,) float or None
+        Cone half-angle ``theta_v`` (radians) between the axis and the face
+        normals (conical target).
+    multipliers : array or None
+        Lagrange multipliers (SQP only).
+    timings : dict
+        Seconds per phase (``total``, ``solve``, ``assemble``, ``closest``...).
+    method, target : str
+    """
+
+    mesh: Mesh
+    success: bool
+    status: str
+    message: str
+    nit: int
+    history: list = field(default_factory=list)
+    defects: dict = field(default_factory=dict)
+    max_distance: float = 0.0
+    normals: np.ndarray | None = None
+    axes: np.ndarray | None = None
+    cone_angles: np.ndarray | None = None
+    multipliers: np.ndarray | None = None
+    timings: dict = field(default_factory=dict)
+    method: str = "default"
+    target: str = "pq"
+
+    def __post_init__(self) -> None:
+        if self.status not in STATUSES:
+            raise ValueError(f"OptimizeResult.status is {self.status!r}, expected one of {STATUSES}")
+        if self.success and self.status != "converged":
+            raise ValueError(f"OptimizeResult: success=True with status {self.status!r}; "
+                             "only a converged run is a success")
+
+    def report(self) -> dict:
+        """A JSON-ready summary (no arrays): how the run ended, defects, timings, history."""
+        return {
+            "method": self.method, "target": self.target, "success": bool(self.success),
+            "status": self.status, "message": self.message, "nit": int(self.nit),
+            "max_distance": float(self.max_distance), "defects": self.defects,
+            "timings": {k: float(v) for k, v in self.timings.items()},
+            "history": [{k: _plain(v) for k, v in h.items()} for h in self.history],
+        }
+
+    def __repr__(self) -> str:
+        return (f"OptimizeResult({self.method}/{self.target}: {self.status}, nit={self.nit}, "
+                f"success={self.success}, max_distance={self.max_distance:.3g}, {self.mesh!r})")
+
+
+def _plain(v):
+    """A JSON-ready scalar for numpy numbers."""
+    if isinstance(v, (np.floating, np.integer, np.bool_)):
+        return v.item()
+    return v

@@ -1,0 +1,141 @@
+"""Every constraint of the optimizer: Jacobian against finite differences, zero on meshes
+that satisfy it by construction, layout bookkeeping."""
+import numpy as np
+import pytest
+
+from optimize import shapes
+from optimize.constraints import anglebalance, anglesum, circular, conical, glide, planarity, unit
+from optimize.errors import ConfigError
+from optimize.constraints import fixed as fixed_mod
+from optimize.formulation import Formulation
+from optimize.variables import Layout
+
+
+def _revolution():
+    return shapes.revolution(shapes.dome_profile(k=6), 12)
+
+
+def _translational():
+    u = np.linspace(0, 3, 6)
+    a = np.stack([u, np.zeros_like(u), 0.3 * np.sin(u)], axis=1)
+    w = np.linspace(0, 2, 5)
+    b = np.stack([np.zeros_like(w), w, 0.2 * w ** 2], axis=1)
+    return shapes.translational(a, b)
+
+
+def _fd_check(fun, x, seed=0, h=1e-6):
+    """Max relative error of J @ d against central differences along random directions."""
+    rng = np.random.default_rng(seed)
+    r, J = fun(x)
+    worst = 0.0
+    for _ in range(3):
+        d = rng.standard_normal(x.size)
+        fd = (fun(x + h * d)[0] - fun(x - h * d)[0]) / (2 * h)
+        worst = max(worst, np.abs(fd - J @ d).max() / max(1.0, np.abs(fd).max()))
+    return worst
+
+
+def _random_x(form, seed=1):
+    """A generic point: perturbed positions and auxiliary values (no constraint holds)."""
+    rng = np.random.default_rng(seed)
+    x = form.start(form.mesh.V)
+    return x + 0.1 * rng.standard_normal(x.size)
+
+
+@pytest.mark.parametrize("target", ["pq", "conical", "circular"])
+def test_formulation_jacobian_finite_differences(target):
+    form = Formulation(shapes.perturbed(_revolution(), 0.1, seed=2), target)
+    x = _random_x(form)
+    assert _fd_check(form.terms, x) < 1e-7
+
+
+@pytest.mark.parametrize("module,target", [(planarity, "pq"), (conical, "conical"), (anglesum, "circular"),
+                                           (anglebalance, "conical"), (circular, "circular")])
+def test_each_constraint_jacobian(module, target):
+    form = Formulation(shapes.perturbed(_revolution(), 0.1, seed=3), target)
+    x = _random_x(form, seed=4)
+    r, J = module.terms(x, form.layout, form.mesh)
+    assert J.shape == (r.size, form.layout.size) and r.size > 0
+    assert _fd_check(lambda y: module.terms(y, form.layout, form.mesh), x) < 1e-7
+
+
+@pytest.mark.parametrize("name", ["normals", "axes"])
+def test_unit_jacobian(name):
+    form = Formulation(_revolution(), "conical")
+    x = _random_x(form, seed=5)
+    assert _fd_check(lambda y: unit.terms(y, form.layout, name), x) < 1e-7
+
+
+def test_glide_jacobian_and_footpoints():
+    mesh = shapes.perturbed(shapes.grid(5, 4, height=lambda x, y: x * y), 0.05, seed=6)
+    form = Formulation(mesh, "pq")
+    curve = glide.BoundaryCurve(mesh)
+    bnd = np.nonzero(mesh.topology.is_boundary_vertex)[0]
+    x = form.start(mesh.V)
+    r, _ = glide.terms(x, form.layout, bnd, curve)
+    assert np.abs(r).max() < 1e-12  # the mesh's own boundary lies on its curve
+    rng = np.random.default_rng(7)
+    x = x + 0.01 * rng.standard_normal(x.size)
+    foot = curve.closest(form.layout.view(x, "vertices")[bnd])
+    assert _fd_check(lambda y: glide.terms(y, form.layout, bnd, curve, foot), x) < 1e-9
+    # exact closest points against brute force over all segments
+    P = mesh.V[bnd] + 0.3 * rng.standard_normal((len(bnd), 3))
+    Y, _ = curve.closest(P)
+    best = np.min([np.linalg.norm(glide.closest_on_segments(P, np.broadcast_to(a, P.shape),
+                                                            np.broadcast_to(b, P.shape)) - P, axis=1)
+                   for a, b in zip(curve.A, curve.B)], axis=0)
+    np.testing.assert_allclose(np.linalg.norm(Y - P, axis=1), best, atol=1e-14)
+
+
+def test_zero_residual_on_translational_surface_pq():
+    form = Formulation(_translational(), "pq")
+    r, _ = form.terms(form.start(form.mesh.V))
+    assert np.abs(r).max() < 1e-12
+
+
+@pytest.mark.parametrize("target", ["conical", "circular"])
+def test_zero_residual_on_surface_of_revolution(target):
+    form = Formulation(_revolution(), target)
+    r, _ = form.terms(form.start(form.mesh.V))
+    assert np.abs(r).max() < 1e-10
+
+
+def test_nonzero_residual_on_noise():
+    for target in ("pq", "conical", "circular"):
+        form = Formulation(shapes.perturbed(_revolution(), 0.1, seed=8), target)
+        r, _ = form.terms(form.start(form.mesh.V))
+        assert np.abs(r).max() > 1e-3
+
+
+def test_ngon_planarity_rows_vanish_on_planar_cap():
+    cap = shapes.revolution(np.array([[1.0, 0.0], [1.0, 1.0]]), 8)
+    faces = cap.faces_list() + [list(range(0, 16, 2))]  # bottom octagon, planar
+    from optimize import Mesh
+
+    mesh = Mesh(cap.V, faces)
+    form = Formulation(mesh, "pq")
+    r, _ = form.terms(form.start(mesh.V))
+    assert np.abs(r).max() < 1e-12
+
+
+def test_layout_named_slices():
+    L = Layout().add("vertices", 4, 3).add("cos", 2, 1)
+    x = L.pack(vertices=np.arange(12.0), cos=[7.0, 8.0])
+    assert L.size == 14 and L.view(x, "cos").tolist() == [7.0, 8.0]
+    assert L.index("cos").tolist() == [12, 13] and L.view(x, "vertices").shape == (4, 3)
+    with pytest.raises(ValueError, match="expected 2 x 1"):
+        L.pack(vertices=np.zeros(12), cos=[1.0])
+    with pytest.raises(KeyError):
+        L.offset("normals")
+
+
+def test_fixed_resolution():
+    mesh = shapes.grid(4, 3)
+    assert fixed_mod.resolve(mesh, "corners").tolist() == [0, 2, 9, 11]
+    assert len(fixed_mod.resolve(mesh, "boundary")) == 10
+    assert fixed_mod.resolve(mesh, None).size == 0
+    assert fixed_mod.resolve(mesh, [3, 1, 3]).tolist() == [1, 3]
+    with pytest.raises(ConfigError, match="out of range"):
+        fixed_mod.resolve(mesh, [12])
+    with pytest.raises(ConfigError, match="not known"):
+        fixed_mod.resolve(mesh, "edges")
