@@ -1,0 +1,123 @@
+"""The stacked constraint rows of a target, assembled on a sparsity pattern fixed once.
+
+Every iteration of penalty and SQP evaluates the same rows at new positions;
+the positions of the Jacobian's nonzeros never change.  :class:`Pattern`
+computes, once, where each triplet of a fixed ``(rows, cols)`` list lands in
+a CSR matrix (duplicates summed, fixed columns dropped, free columns
+renumbered), so each evaluation is one ``np.bincount`` instead of a COO sort.
+:class:`ConstraintSystem` lays the blocks of :func:`optimize.paper.targets.target_terms`
+out in that way.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..mesh import Mesh
+from .angles import angle_local, angle_values, corner_vertices
+from .det import ALTERNATING, det_combined_local, det_local, det_quads, det_values
+
+
+class Pattern:
+    """A CSR pattern for triplets at fixed ``rows (t,)``, ``cols (t,)``.
+
+    shape : (r, N) of the full matrix.  free : (k,) int columns kept (renumbered
+    0..k-1), or None for all.  :meth:`matrix` takes the ``(t,)`` values.
+    """
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, shape: tuple[int, int],
+                 free: np.ndarray | None = None):
+        rows, cols = np.asarray(rows).ravel(), np.asarray(cols).ravel()
+        ncols = shape[1]
+        if free is not None:
+            colmap = np.full(shape[1], -1, dtype=np.int64)
+            colmap[free] = np.arange(len(free))
+            cols = colmap[cols]
+            ncols = len(free)
+        self.keep = cols >= 0
+        key = rows[self.keep] * ncols + cols[self.keep]
+        uniq, self.inv = np.unique(key, return_inverse=True)
+        self.nnz = len(uniq)
+        self.indices = (uniq % ncols).astype(np.int32)
+        self.indptr = np.searchsorted(uniq // ncols, np.arange(shape[0] + 1)).astype(np.int32)
+        self.shape = (shape[0], ncols)
+        self._all = bool(self.keep.all())
+
+    def matrix(self, vals: np.ndarray) -> sp.csr_matrix:
+        """(r, k) CSR with the triplet values ``vals (t,)`` summed into place."""
+        v = vals.ravel() if self._all else vals.ravel()[self.keep]
+        data = np.bincount(self.inv, weights=v, minlength=self.nnz)
+        return sp.csr_matrix((data, self.indices, self.indptr), shape=self.shape)
+
+
+class ConstraintSystem:
+    """Residuals ``c (r,)`` and Jacobian ``A (r, k)`` of a list of terms, on free columns.
+
+    mesh : Mesh.  terms : list of :class:`optimize.paper.targets.Term`.
+    free : (k,) int free coordinates of ``x = V.ravel()`` (None: all ``3 n``).
+    """
+
+    def __init__(self, mesh: Mesh, terms: list, free: np.ndarray | None = None):
+        self.mesh, self.terms = mesh, terms
+        t = mesh.topology
+        self.vid = corner_vertices(t)  # (c, 3)
+        nc, n = len(self.vid), mesh.n_vertices
+        ccols = (3 * self.vid[:, :, None] + np.arange(3)).reshape(nc, 9)
+        self.quads = mesh.F[det_quads(mesh), :4]
+        qcols = (3 * self.quads[:, :, None] + np.arange(3)).reshape(-1, 12)
+        self.blocks, self._entries, rows, cols, at = {}, [], [], [], 0
+        for term in terms:
+            if term.kind in ("det", "det1"):
+                per = 4 if term.kind == "det" else 1
+                r = per * len(self.quads)
+                rows.append(np.repeat(at + np.arange(r), 12))
+                cols.append(np.repeat(qcols, per, axis=0).ravel())
+                self._entries.append(None)
+            else:
+                S = term.signs_matrix(nc).tocoo()
+                r = S.shape[0]
+                rows.append(np.repeat(at + S.row, 9))
+                cols.append(ccols[S.col].ravel())
+                self._entries.append((S.col, S.data, S.tocsr()))
+            self.blocks[term.name] = slice(at, at + r)
+            at += r
+        self.n_rows = at
+        self.pattern = Pattern(np.concatenate(rows), np.concatenate(cols), (at, 3 * n), free)
+
+    def evaluate(self, V: np.ndarray, jac: bool = True, weighted: bool = False):
+        """``c (r,)`` and, with ``jac``, ``A (r, k)`` csr at ``V (n, 3)``.
+
+        weighted : multiply each block by ``sqrt(term.weight)`` (penalty rows).
+        """
+        kinds = {term.kind for term in self.terms}
+        if jac:
+            phi, G = angle_local(V[self.vid])
+            if "det" in kinds:
+                D, GD = det_local(V[self.quads])
+            if "det1" in kinds:
+                D1, G1 = det_combined_local(V[self.quads])
+        else:
+            phi = angle_values(V[self.vid])
+            if kinds & {"det", "det1"}:
+                D = det_values(V[self.quads])
+                D1 = D @ ALTERNATING
+        cs, vals = [], []
+        for term, ent in zip(self.terms, self._entries):
+            w = np.sqrt(term.weight) if weighted and term.weight != 1.0 else 1.0
+            if term.kind == "det":
+                cs.append(w * D.ravel())
+                if jac:
+                    vals.append(w * GD.reshape(-1, 12))
+            elif term.kind == "det1":
+                cs.append(w * D1)
+                if jac:
+                    vals.append(w * G1)
+            else:
+                corner, sign, S = ent
+                cs.append(w * (S @ phi + term.const))
+                if jac:
+                    vals.append((w * sign)[:, None] * G[corner])
+        c = np.concatenate(cs)
+        if not jac:
+            return c
+        return c, self.pattern.matrix(np.concatenate([v.ravel() for v in vals]))
