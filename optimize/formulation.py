@@ -123,14 +123,13 @@ class Formulation:
     def face_blocks(self) -> np.ndarray:
         """(m, b) int: per-face auxiliary unknowns (normal, and centre + radius for circular quads).
 
-        They couple only within their face: the ``"eliminate"`` solver removes them first.
-        Conical couples normals with vertex axes, so there only the vertex-free
-        blocks are returned when that holds (never for conical: ``None``).
+        Every constraint row touches at most one face's block, so the blocks of
+        the normal matrix are independent ``b x b`` diagonal blocks: the
+        ``"eliminate"`` solver removes them first (for conical the normals still
+        couple to the vertex axes, which stay in the reduced system).
         """
-        if self.target == "conical":
-            return None
         N = self.layout.index("normals")
-        if self.target == "pq":
+        if self.target in ("pq", "conical"):
             return N
         B = np.full((self.mesh.n_faces, 7), -1, dtype=np.int64)
         B[:, :3] = N

@@ -44,7 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import measures
-from .closeness import Reference
+from .closeness import Reference, closeness_terms
 from .constraints import glide as glide_mod
 from .fairness import fairness_matrix, fairness_matrix_parts
 from .formulation import Formulation
@@ -53,7 +53,8 @@ from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
 
-MU_START, MU_MIN, MU_MAX = 1e-3, 1e-8, 1e8
+MU_START, MU_MIN, MU_MAX = 1e-3, 1e-12, 1e8
+STAY = 1.0  # damping floor / fairness weight while the soft terms act
 
 
 @dataclass
@@ -145,8 +146,6 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         if wf > 0:
             wide = wide + [(np.sqrt(wf) * (K @ x), None, [np.sqrt(wf) * K1, np.sqrt(wf) * K2])]
         if use_close and wc > 0:
-            from .closeness import closeness_terms
-
             Jc, rc = closeness_terms(L.view(x, "vertices"), ref, *foot)
             rs.append(np.sqrt(wc) * rc)
             Js.append(np.sqrt(wc) * _embed(Jc, L.size))
@@ -169,11 +168,12 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         return out
 
     x = x0.copy()
-    # While the soft terms act, the damping stays at least the initial fairness weight:
-    # in directions no constraint sees, the fairness step is then wf / mu of a full
-    # fairing step and shrinks as wf halves (a damping that fell with wf would let
-    # the mesh drift along the surface every iteration).
-    mu_floor = max(MU_MIN, float(fairness))
+    # While the soft terms act, the damping stays at least the fairness weight: in
+    # directions no constraint sees, the (majorized, so only partial) fairing step is
+    # then at most about half a full one, and the mesh does not drift along the surface
+    # every iteration.  Afterwards the floor is MU_MIN: smooth, global deformations
+    # of large meshes have tiny eigenvalues and a larger damping would stall them.
+    mu_floor = max(MU_MIN, STAY * float(fairness))
     defects = measure(x)
     score = best = _score(defects, tol)
     history: list[dict] = []
@@ -206,7 +206,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         JtJ = JtJ.tocsr()
         merit0 = float(r @ r)
         timings["assemble"] += time.perf_counter() - ta
-        accepted, tries = False, 0
+        accepted, tries, broken = False, 0, 0
         while not accepted and mu <= MU_MAX:
             tries += 1
             ts = time.perf_counter()
@@ -216,6 +216,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
                 log.info("iteration %d: %s; raising the damping", nit, exc)
                 timings["solve"] += time.perf_counter() - ts
                 mu *= 10
+                broken += 1
                 continue
             timings["solve"] += time.perf_counter() - ts
             xn = x + S @ dx
@@ -227,15 +228,19 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
                 accepted = True
                 mu = max(mu / 3, mu_floor)
             else:
+                broken += not np.isfinite(merit1)
                 mu *= 10
+        if not accepted and broken == tries:
+            status = "diverged"
+            message = (f"iteration {nit}: every trial step failed or gave non-finite values "
+                       f"({tries} tries up to damping {MU_MAX:g}); the last good iterate is kept")
+            nit -= 1
+            break
         if not accepted:
             status = "stalled"
             message = (f"iteration {nit}: no step lowers the objective even with damping {MU_MAX:g} "
                        f"(a local minimum; worst defect/tolerance 10^{score:.2f})")
             nit -= 1
-            break
-        if not np.all(np.isfinite(xn)):
-            status, message = "diverged", f"iteration {nit}: non-finite unknowns; the last good iterate is kept"
             break
         step = float(np.abs(xn - x)[L.slice("vertices")].max())
         x = xn
@@ -271,6 +276,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             mu_floor = MU_MIN
         wf *= decay
         wc *= decay
+        mu_floor = max(MU_MIN, STAY * wf)
     timings["total"] = time.perf_counter() - t_start
     timings["factorizations"] = solver.factorizations
     timings["cg_iterations"] = solver.cg_iterations

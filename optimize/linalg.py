@@ -14,17 +14,24 @@ definite matrix with the same sparsity pattern every iteration.  Backends:
   complement), the smaller system is factored with SuperLU and the
   eliminated unknowns recovered by back substitution.
 
+Measured on 10k-face systems (one fresh factorization, shared 2-core
+machine): PQ 60k unknowns cholespy 0.62 s, SuperLU 0.56 s, eliminate 0.51 s;
+circular 100k: 0.89 / 0.53 / 0.40 s; conical 100k: 18.1 / 8.3 / 12.1 s (the
+conical rows couple a whole vertex star: much more fill).
+
 Neither library exposes a numeric-only refactorization (cholespy factors in
 its constructor; factoring SuperLU's matrix permuted by a previous ``perm_c``
 with the ``NATURAL`` ordering was measured 10x slower, the etree postorder
 being lost).  What is reused across iterations instead is the whole factor:
 a new system is first solved by conjugate gradients preconditioned with the
 last factor (a few steps while the matrix changes little) and factored anew
-only when that does not reach ``cg_rtol`` within ``cg_maxiter`` steps.
+only when that does not reach ``cg_rtol`` within a budget of steps (by
+default about half the time of the last factorization, 10 to 200 steps).
 """
 from __future__ import annotations
 
 import logging
+import time
 
 import numpy as np
 import scipy.sparse as sp
@@ -68,16 +75,20 @@ def _superlu_factor(A: sp.spmatrix):
 
 
 class NormalSolver:
-    """Solves ``A x = b`` for SPD ``A`` with a fixed pattern; remembers the ordering.
+    """Solves ``A x = b`` for a sequence of SPD matrices ``A`` with one sparsity pattern.
 
     backend : one of :data:`BACKENDS`.
     blocks : (m, b) int or None
         For ``"eliminate"``: the unknowns forming independent diagonal blocks
         (``-1`` padded), e.g. each face's normal.
+    reuse : try CG preconditioned by the last factor before factoring anew.
+    cg_rtol : relative residual the CG solve must reach (an inexact Gauss-Newton
+        step; the solver's acceptance test guards the outer iteration).
+    cg_maxiter : CG step budget; None = about half the last factorization time.
     """
 
     def __init__(self, backend: str = "superlu", blocks: np.ndarray | None = None,
-                 reuse: bool = True, cg_rtol: float = 1e-6, cg_maxiter: int = 30):
+                 reuse: bool = True, cg_rtol: float = 1e-6, cg_maxiter: int | None = None):
         if backend not in BACKENDS:
             raise ValueError(f"linear solver backend {backend!r}, expected one of {BACKENDS}")
         if backend == "eliminate" and blocks is None:
@@ -87,6 +98,7 @@ class NormalSolver:
         self._factor = None
         self.reuse = reuse
         self.cg_rtol, self.cg_maxiter = cg_rtol, cg_maxiter
+        self._budget = 30  # CG steps worth trying before a refactorization (see solve)
         self.factorizations = 0
         self.cg_iterations = 0
 
@@ -97,6 +109,7 @@ class NormalSolver:
             if x is not None:
                 return x
         self.factorizations += 1
+        t0 = time.perf_counter()
         try:
             if self.backend == "cholespy":
                 self._factor = _cholespy_factor(A)
@@ -104,11 +117,16 @@ class NormalSolver:
                 self._factor = _superlu_factor(A)
             else:
                 self._factor = self._eliminate_factor(A)
+            t1 = time.perf_counter()
             x = self._factor(b)
+            t2 = time.perf_counter()
         except (RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
             raise SolveError(f"sparse factorization failed ({self.backend}): {exc}") from exc
         if not np.all(np.isfinite(x)):
             raise SolveError(f"sparse solve ({self.backend}) returned non-finite values")
+        # CG with the old factor is worth up to about half a new factorization
+        self._budget = (self.cg_maxiter if self.cg_maxiter is not None else
+                        int(np.clip((t1 - t0) / max(2 * (t2 - t1), 1e-6), 10, 200)))
         return x
 
     def _preconditioned_cg(self, A, b):
@@ -121,7 +139,7 @@ class NormalSolver:
         p = z.copy()
         rz = r @ z
         stop = self.cg_rtol * np.linalg.norm(b)
-        for k in range(self.cg_maxiter):
+        for k in range(self._budget):
             if np.linalg.norm(r) <= stop:
                 self.cg_iterations += k
                 return x
@@ -133,7 +151,7 @@ class NormalSolver:
             rz, rz_old = r @ z, rz
             p = z + (rz / rz_old) * p
         if np.linalg.norm(r) <= stop:
-            self.cg_iterations += self.cg_maxiter
+            self.cg_iterations += self._budget
             return x
         return None
 

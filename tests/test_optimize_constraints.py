@@ -139,3 +139,17 @@ def test_fixed_resolution():
         fixed_mod.resolve(mesh, [12])
     with pytest.raises(ConfigError, match="not known"):
         fixed_mod.resolve(mesh, "edges")
+
+
+def test_fairness_and_angle_parts_sum_to_the_whole():
+    from optimize.fairness import fairness_matrix, fairness_matrix_parts
+
+    mesh = shapes.perturbed(_revolution(), 0.1, seed=9)
+    K1, K2 = fairness_matrix_parts(mesh)
+    assert abs(K1 + K2 - fairness_matrix(mesh)).max() == 0
+    form = Formulation(mesh, "conical")
+    x = _random_x(form, seed=10)
+    r, J, parts = anglebalance.terms(x, form.layout, mesh, parts=True)
+    assert len(parts) == 4 and abs(sum(parts[1:], parts[0]) - J).max() < 1e-12
+    # each part stays inside one face: at most the 3 vertices of one corner per row
+    assert max(np.diff(p.tocsr().indptr).max() for p in parts) <= 9

@@ -162,3 +162,40 @@ def test_history_records_every_defect_and_energy(noisy_dome):
     for key in ("planarity", "conical", "fairness", "closeness", "step", "objective", "mu"):
         assert key in res.history[0]
     assert res.timings["total"] > 0 and res.timings["solve"] > 0
+
+
+def test_paper_methods_dispatch_lazily(monkeypatch):
+    import optimize.paper
+
+    seen = {}
+
+    def fake(mesh, target, **kwargs):
+        seen.update(kwargs, target=target)
+        return "from paper"
+
+    monkeypatch.setattr(optimize.paper, "run_paper_method", fake)
+    mesh = shapes.grid(3, 3)
+    assert optimize_mesh(mesh, "strip", method="sqp", kkt_tol=1e-9) == "from paper"
+    assert seen["method"] == "sqp" and seen["target"] == "strip" and seen["kkt_tol"] == 1e-9
+    with pytest.raises(ConfigError, match="only for the paper"):
+        optimize_mesh(mesh, "pq", kkt_tol=1e-9)
+    with pytest.raises(ConfigError, match="paper's methods only"):
+        optimize_mesh(mesh, "strip")
+
+
+def test_divergence_is_detected_and_the_last_good_iterate_kept(noisy_dome, monkeypatch):
+    from optimize import linalg
+
+    calls = {"n": 0}
+    real = linalg.NormalSolver.solve
+
+    def flaky(self, A, b):
+        calls["n"] += 1
+        x = real(self, A, b)
+        return x if calls["n"] <= 2 else np.full_like(x, np.nan)  # a solver gone bad
+
+    monkeypatch.setattr(linalg.NormalSolver, "solve", flaky)
+    res = optimize_mesh(noisy_dome, "conical")
+    assert res.status == "diverged" and not res.success
+    assert "non-finite" in res.message and res.nit >= 1
+    assert np.all(np.isfinite(res.mesh.V))
