@@ -139,7 +139,8 @@ def offset_structure(mesh: Mesh, distances, *, axes=None, flip: bool = False,
     mesh : Mesh, orientable; faces oriented by their order (``flip`` reverses)
     distances : sequence of ``L`` distinct signed distances (mm), e.g. ``(0, 20, 120)``
     axes : (n, 3) float or None, node axes to use (e.g. the optimizer's
-        ``result.axes``); rows that are NaN or zero are fitted
+        ``result.axes``); rows that are NaN or zero are fitted (and, with
+        ``free_axes="planar_beams"``, turned like fitted axes); given rows are kept
     flip : reverse the face normals (layers go to the other side)
     tol : tolerances quoted and checked in the report
     free_axes : ``"planar_beams"`` (default) turns the axes that the faces leave
@@ -155,12 +156,9 @@ def offset_structure(mesh: Mesh, distances, *, axes=None, flip: bool = False,
     normals, _ = face_planes(mesh, flip)
     edges = mesh.topology.edges.copy()
     straighten = None
-    if axes is None:
-        fit = fit_axes(mesh, normals)
-        if free_axes == "planar_beams":
-            fit, straighten = straighten_free_axes(mesh.V, edges, fit)
-    else:
-        fit = given_axes(mesh, normals, axes)
+    fit = fit_axes(mesh, normals) if axes is None else given_axes(mesh, normals, axes)
+    if free_axes == "planar_beams":  # only the axes the faces leave free are turned
+        fit, straighten = straighten_free_axes(mesh.V, edges, fit)
     layers = offset_layers(mesh.V, fit.offset, ds)
     span = (ds[0], ds[-1]) if len(ds) > 1 else (0.0, ds[0])
     lo, hi = (mesh.V + span[0] * fit.offset, mesh.V + span[1] * fit.offset)
