@@ -199,8 +199,18 @@ class PartsSection(Section):
     node_sides: int = Field(default=24, ge=6)
 
 
+CHECK_AUTO_MAX_PARTS = 3000
+"""``outputs.check: auto`` runs the full check up to this many parts, the fast one above."""
+
+
 class OutputsSection(Section):
-    """Which files to write (``true``/``false``); report.json is always written."""
+    """Which files to write (``true``/``false``); report.json is always written.
+
+    ``check``: how the written files are re-validated (``fabricate.check``):
+    ``full`` (every check, with OpenCASCADE reading model.step back: about 10 ms
+    per part), ``fast`` (the same without the STEP read-back), ``off``, or
+    ``auto`` (full up to :data:`CHECK_AUTO_MAX_PARTS` parts, fast above).
+    """
 
     mesh: bool = True
     layers: bool = True
@@ -212,6 +222,13 @@ class OutputsSection(Section):
     bom: bool = True
     pictures: bool = True
     html: bool = True
+    check: Literal["auto", "full", "fast", "off"] = "auto"
+
+    def check_mode(self, parts: int) -> str:
+        """``full`` | ``fast`` | ``off`` for a model of ``parts`` parts (``auto`` resolved)."""
+        if self.check != "auto":
+            return self.check
+        return "full" if parts <= CHECK_AUTO_MAX_PARTS else "fast"
 
 
 class RunConfig(Section):

@@ -9,7 +9,7 @@ input    -> values["input_mesh"] (mm), ["plan"] (levels, scheme, target, source 
 optimize -> ["mesh"] (final), ["result"] (OptimizeResult or None), ["levels"] (hierarchy facts)
 offset   -> ["structure"] (OffsetStructure)
 cad      -> ["parts"] (Parts)
-exports  -> files in the work folder, ctx.files facts, ["check"]
+exports  -> files in the work folder, ctx.files facts, ["check"] (with its "mode": full | fast | off)
 report   -> ["measures"], report.json, pictures, model.glb, report.html
 """
 from __future__ import annotations
@@ -90,8 +90,7 @@ def stage_optimize(ctx) -> str:
                   fairness=opt.fairness, closeness=opt.closeness, tol=cfg.tolerances.to_tolerances(),
                   max_iter=opt.max_iter, callback=callback)
     hier = subdivide_and_perturb(mesh, levels, scheme=plan["scheme"], target=target, **kwargs)
-    ctx.values["levels"] = [_plain({k: v for k, v in lv.as_dict().items() if k != "measures"})
-                            for lv in hier.levels]
+    ctx.values["levels"] = [_plain(_level_facts(lv)) for lv in hier.levels]
     ctx.values["level_results"] = [lv.result for lv in hier.levels]
     result = hier.levels[-1].result
     mesh = hier.mesh
@@ -100,6 +99,16 @@ def stage_optimize(ctx) -> str:
     if result is None:
         return f"no optimization ({mesh.n_faces} faces)"
     return f"{result.status} after {result.nit} iterations"
+
+
+def _level_facts(level) -> dict[str, Any]:
+    """One level of the hierarchy for report.json: its facts without the bulky measures, but with
+    the strip analysis (kind, singular curve entering the patch, development error) of strip meshes."""
+    facts = {k: v for k, v in level.as_dict().items() if k != "measures"}
+    strips = (level.measures or {}).get("strips")
+    if strips is not None:
+        facts["strips"] = strips
+    return facts
 
 
 def _fixed(fixed):
@@ -148,7 +157,9 @@ EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl
 
 
 def stage_exports(ctx) -> str:
-    """The config as run, meshes, layers and the CAD files; then ``check_outputs``."""
+    """The config as run, meshes, layers and the CAD files; then the output check in the mode
+    ``outputs.check`` asks for (``fabricate.check_fast.run_check``: full, fast or off; ``auto`` by
+    the part count), recorded in ``values["check"]["mode"]``."""
     import yaml
 
     from optimize.atomic import atomic_open
@@ -181,16 +192,23 @@ def stage_exports(ctx) -> str:
             raise ExportError(f"{fname}: export failed: {type(exc).__name__}: {exc}") from exc
         ctx.files[fname] = dict(facts or {})
     if not cfg.outputs.bom:  # the checks compare every file with the bill of materials
-        ctx.values["check"] = {"pass": None, "skipped": "bom.csv was not written (outputs.bom: false)",
-                               "checks": {}}
+        ctx.values["check"] = {"pass": None, "mode": "off", "checks": {},
+                               "skipped": "bom.csv was not written (outputs.bom: false)"}
         return f"{len(ctx.files)} files, not checked"
-    from fabricate.check import check_outputs
+    from fabricate.check_fast import run_check
 
-    ctx.progress.advance("exports", 1, "checking the files")
-    check = check_outputs(out, tol=cfg.tolerances.to_tolerances())
+    n_parts = count_parts(ctx["parts"])
+    mode = cfg.outputs.check_mode(n_parts)
+    ctx.progress.advance("exports", 1, f"checking the files ({mode})")
+    check = run_check(out, mode, tol=cfg.tolerances.to_tolerances())
+    check["mode_asked"] = cfg.outputs.check
+    check["parts"] = n_parts
     ctx.values["check"] = check
+    if mode == "off":
+        return f"{len(ctx.files)} files, not checked (outputs.check: off)"
     failed = [k for k, v in check.get("checks", {}).items() if isinstance(v, dict) and v.get("pass") is False]
-    return f"{len(ctx.files)} files, " + (f"check FAILED: {', '.join(failed)}" if failed else "checked")
+    return f"{len(ctx.files)} files, " + (f"{mode} check FAILED: {', '.join(failed)}" if failed
+                                          else f"{mode} check passed")
 
 
 # -- report ----------------------------------------------------------------------------

@@ -121,15 +121,28 @@ def railway_station(*, length: float = 80000.0, width: float = 24000.0, rise: fl
                   f"undulating canopy {L / 1000:g} x {W / 1000:g} m, {nu} x {nv} control quads", p)
 
 
-def _frenet(t: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Trefoil knot ``(r, 3)`` points and unit principal normal and binormal at parameters ``t``."""
+def _frenet(t: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Trefoil knot ``(r, 3)`` points, unit principal normal, binormal and Darboux direction at ``t``.
+
+    The Darboux direction ``(tau T + kappa B) / |...|`` is the ruling of the
+    knot's rectifying developable (the developable surface through the knot
+    whose normals are the principal normals), so a band along it is
+    developable up to the discretization.
+    """
     c = np.stack([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)], 1)
     d1 = np.stack([np.cos(t) + 4 * np.cos(2 * t), -np.sin(t) + 4 * np.sin(2 * t), -3 * np.cos(3 * t)], 1)
     d2 = np.stack([-np.sin(t) - 8 * np.sin(2 * t), -np.cos(t) + 8 * np.cos(2 * t), 9 * np.sin(3 * t)], 1)
+    d3 = np.stack([-np.cos(t) - 16 * np.cos(2 * t), np.sin(t) - 16 * np.sin(2 * t), 27 * np.cos(3 * t)], 1)
     T = d1 / np.linalg.norm(d1, axis=1, keepdims=True)
     N = d2 - np.einsum("ij,ij->i", d2, T)[:, None] * T
     N /= np.linalg.norm(N, axis=1, keepdims=True)
-    return scale * c, N, np.cross(T, N)
+    B = np.cross(T, N)
+    x = np.cross(d1, d2)
+    x2 = np.einsum("ij,ij->i", x, x)
+    kappa = np.sqrt(x2) / np.linalg.norm(d1, axis=1) ** 3
+    tau = np.einsum("ij,ij->i", x, d3) / x2
+    D = tau[:, None] * T + kappa[:, None] * B
+    return scale * c, N, B, D / np.linalg.norm(D, axis=1, keepdims=True)
 
 
 def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 42, levels: int = 3,
@@ -140,7 +153,8 @@ def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 
     width : band width (mm), below 1.2 x scale so the strands do not touch
     rulings : rulings of the control band (42 and 3 Chaikin levels give 336 quads)
     levels : Chaikin rounds on the band's boundary
-    twist : a half twist (a Moebius band); otherwise a closed two-sided band
+    twist : a half twist (a Moebius band, rulings turning about the knot); otherwise a closed
+        two-sided band on the knot's rectifying developable (rulings along the Darboux vector)
     noise : control-vertex noise, fraction of the mean edge length
     seed : noise seed
     """
@@ -153,9 +167,11 @@ def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 
     r = _int(name, "rulings", rulings, 6, 100000)
     levels = _int(name, "levels", levels, 0, 8)
     t = np.linspace(0.0, 2 * np.pi, r, endpoint=False)
-    c, N, B = _frenet(t, s)
-    phi = 0.5 * t if twist else np.zeros_like(t)
-    d = np.cos(phi)[:, None] * N + np.sin(phi)[:, None] * B
+    c, N, B, D = _frenet(t, s)
+    if twist:  # the paper's band: the ruling turns half a turn about the knot
+        d = np.cos(0.5 * t)[:, None] * N + np.sin(0.5 * t)[:, None] * B
+    else:  # nearly developable from the start: the optimizer moves little, no ruling collapses
+        d = D
     mesh = strip_mesh(c - 0.5 * w * d, c + 0.5 * w * d, closed=True, twist=bool(twist), name=name)
     mesh = _noisy(mesh, _pos(name, "noise", noise, zero=True), _int(name, "seed", seed, 0, 2 ** 31))
     return Design(name, mesh, levels, "chaikin", "strip",
@@ -163,20 +179,31 @@ def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 
 
 
 def developable_strips(*, count: int = 4, rulings: int = 9, length: float = 8000.0, width: float = 1200.0,
-                       gap: float = 600.0, amplitude: float = 1500.0, turn_deg: float = 40.0,
+                       gap: float = 600.0, amplitude: float = 1000.0, turn_deg: float = 20.0,
                        levels: int = 2, noise: float = 0.0, seed: int = 0) -> Design:
     """Several wavy strips side by side (paper Fig. 16), each made developable.
 
     count : number of strips
     rulings : control rulings per strip
     length : strip length along x (mm)
-    width : strip width (mm)
+    width : strip width across its centre line (mm)
     gap : clear distance between neighbouring strips (mm)
     amplitude : vertical wave amplitude of the strip centre lines (mm)
-    turn_deg : how far the rulings turn about the centre line along a strip (degrees)
+    turn_deg : how far a strip turns about its centre line, in step with the wave (degrees)
     levels : Chaikin rounds
     noise : control-vertex noise, fraction of the mean edge length
     seed : noise seed
+
+    Each control strip is already nearly developable, so the optimizer keeps
+    its shape: a strip whose tangent plane turns by ``ang`` about a centre
+    line of normal curvature ``kappa_n`` is developable only with rulings
+    leaning ``psi`` from across the strip, ``tan psi = -tau_g / kappa_n``
+    (geodesic torsion ``ang'`` over normal curvature).  The turn follows the slope
+    of the wave (``ang = turn cos``), so ``ang'`` vanishes where the wave has
+    its inflections and ``psi`` stays bounded; the singular curve then stays
+    well outside the strips (paper section 6).  A turn that would lean the
+    rulings by more than :data:`MAX_LEAN_DEG` is refused (thin sheared quads,
+    the singular curve running into the strip).
     """
     p = dict(locals())  # the parameters as given
     name = "developable_strips"
@@ -188,18 +215,59 @@ def developable_strips(*, count: int = 4, rulings: int = 9, length: float = 8000
         raise ConfigError(f"design {name}: parameter turn_deg={turn_deg!r}, expected a finite number")
     turn = np.radians(float(turn_deg))
     levels = _int(name, "levels", levels, 0, 8)
+    k = 2 * np.pi / L  # wave number: one wave along the length
+    lean = _strip_lean(turn, A * k)
+    if not lean <= MAX_LEAN_DEG:
+        raise ConfigError(
+            f"design {name}: parameters turn_deg={turn_deg!r}, amplitude={amplitude!r}: a developable strip "
+            f"turning that much needs rulings leaning {lean:.0f} deg from across the strip, expected at most "
+            f"{MAX_LEAN_DEG:g} deg; use a smaller turn_deg or a larger amplitude")
     x = np.linspace(0.0, L, r)
     strips = []
-    for k in range(n):  # a handful of strips
-        ph = np.pi * k / max(n, 1)
-        centre = np.stack([x, np.full(r, k * (w + g)), A * np.sin(2 * np.pi * x / L + ph)], axis=1)
-        ang = turn * np.sin(np.pi * x / L + ph)
-        d = np.stack([np.zeros(r), np.cos(ang), np.sin(ang)], axis=1)
-        strips.append(strip_mesh(centre - 0.5 * w * d, centre + 0.5 * w * d, name=f"{name}{k}"))
+    for i in range(n):  # a handful of strips
+        th = k * x + np.pi * i / n
+        centre = np.stack([x, np.full(r, i * (w + g)), A * np.sin(th)], axis=1)
+        t = np.stack([np.ones(r), np.zeros(r), A * k * np.cos(th)], axis=1)
+        t /= np.linalg.norm(t, axis=1, keepdims=True)
+        y = np.broadcast_to([0.0, 1.0, 0.0], t.shape)
+        ang = turn * np.cos(th)
+        across = np.cos(ang)[:, None] * y + np.sin(ang)[:, None] * np.cross(t, y)
+        psi = _strip_psi(turn, A * k, th)
+        d = (across + np.tan(psi)[:, None] * t)  # a ruling reaching `width` across the centre line
+        strips.append(strip_mesh(centre - 0.5 * w * d, centre + 0.5 * w * d, name=f"{name}{i}"))
     mesh = _noisy(join_meshes(strips, name=name), _pos(name, "noise", noise, zero=True),
                   _int(name, "seed", seed, 0, 2 ** 31))
     return Design(name, mesh, levels, "chaikin", "strip",
-                  f"{n} wavy strips {L / 1000:g} m long, {w / 1000:g} m wide", p)
+                  f"{n} wavy strips {L / 1000:g} m long, {w / 1000:g} m wide, turning {turn_deg:g} deg", p)
+
+
+MAX_LEAN_DEG = 60.0
+"""Largest lean of the control rulings of ``developable_strips`` from across the strip (degrees)."""
+
+
+def _strip_psi(turn: float, ak: float, th: np.ndarray) -> np.ndarray:
+    """(r,) float: lean of the developable rulings (radians) along a centre line ``z = A sin(th)``
+    whose tangent plane turns by ``turn cos(th)``; ``ak`` = amplitude x wave number.
+
+    ``tan psi = -(n . e') / (n . t')`` (``e`` across the strip, ``t`` along it,
+    ``n = t x e``, derivatives in x): ``n . e' = ang' = -turn k sin th`` and
+    ``n . t' = -A k^2 sin th cos(ang) / (1 + (A k cos th)^2)``; the ``sin th``
+    cancels, so ``psi`` is finite everywhere (0 for ``turn = 0``).  The
+    control strip is then developable up to O(h^2) in the ruling spacing.
+    """
+    if turn == 0.0:
+        return np.zeros_like(th)
+    ang = turn * np.cos(th)
+    return np.arctan(-turn * (1.0 + (ak * np.cos(th)) ** 2) / (ak * np.cos(ang)))
+
+
+def _strip_lean(turn: float, ak: float) -> float:
+    """Largest ``|psi|`` of :func:`_strip_psi` (degrees; inf for a turn without a wave)."""
+    if turn == 0.0:
+        return 0.0
+    if ak == 0.0:
+        return float("inf")
+    return float(np.degrees(np.abs(_strip_psi(turn, ak, np.array([0.0, np.pi]))).max()))
 
 
 def hypar_roof(*, size: float = 12000.0, rise: float = 3000.0, n: int = 12, grid_kind: str = "parabolas",

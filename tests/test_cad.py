@@ -176,6 +176,85 @@ def test_pq_mesh_that_is_not_conical_builds_with_twisted_beams_reported():
     assert all(np.all(g.volume_mm3 > 0) for g in parts.groups)
 
 
+def _twisted_structure():
+    """A translational net (PQ exactly, not conical): the interior beams twist by up to ~5 mm."""
+    a = np.stack([np.linspace(0, 6000, 5), np.zeros(5), 2000 * np.sin(np.linspace(0, 2, 5))], axis=1)
+    b = np.stack([np.zeros(4), np.linspace(0, 4500, 4), 2000 * np.cos(np.linspace(0, 2, 4))], axis=1)
+    return offset_structure(shapes.translational(a, b), (0.0, -200.0))
+
+
+@pytest.mark.parametrize("edge", ["perpendicular", "axis"])
+def test_twisted_beams_are_flat_plates_hinged_on_the_node_axes(edge):
+    """Beams of a PQ mesh that is not conical twist; each is a flat plate whose ends turn about the
+    node axes, so neighbouring beams share their end plane exactly and nothing overlaps."""
+    structure = _twisted_structure()
+    parts = build_parts(structure, PartSpec(edge=edge))
+    assert parts.report["beams"]["planarity_mm_max"] > 1.0  # mm: really twisted
+    assert max(g.residual_mm.max() for g in parts.groups) < 1e-8  # and still exactly planar faces
+    assert intersections(_solids(parts), 1e-3)["pass"]
+    P0, axes = structure.layers[0], structure.axes
+    E = structure.mesh.topology.edges
+    ends = {}  # node -> normals of the end faces of its beams
+    for b in parts.beams:
+        for end, faces in ((0, (6, 7)), (1, (8, 9))):
+            v = int(E[b.element][end])
+            for fi in faces:
+                n = b.normals[fi]
+                np.testing.assert_allclose((b.vertices[list(b.faces[fi])] - P0[v]) @ n, 0.0, atol=1e-8)
+                assert abs(n @ axes[v]) < 1e-12  # the end plane holds the node axis
+                ends.setdefault(v, []).append(n)
+    interior = ~structure.mesh.topology.is_boundary_vertex
+    for v in np.nonzero(interior)[0].tolist():  # every end plane at an inner node has its twin
+        N = np.array(ends[v])
+        np.testing.assert_allclose((N @ N.T).min(axis=1), -1.0, atol=1e-12)
+
+
+def test_twisted_beams_carry_their_panels():
+    structure = _twisted_structure()
+    parts = build_parts(structure, PartSpec())
+    by_id = parts.by_id
+    for p in parts.panels:
+        bearing = p.vertices[list(p.faces[p.group.outline_face])]
+        for bid in p.neighbours:
+            b = by_id[bid]
+            d = min(np.abs((bearing - b.vertices[b.faces[t][0]]) @ b.normals[t]).max() for t in (2, 3))
+            assert d < 1e-6  # the glass lies on a top face of every beam under it
+
+
+def test_a_plate_thinner_than_its_twist_is_refused_naming_the_twist():
+    with pytest.raises(ConfigError, match=r"beam B\d{4} .*quad twists: corners up to 1.5 mm off"):
+        build_parts(_twisted_structure(), PartSpec(beam_width=2.0, joint_gap=1.0))
+
+
+def test_a_panel_too_narrow_for_the_joint_names_the_gap_that_works():
+    x = np.array([0.0, 1500.0, 1508.0, 3000.0])  # the middle column of quads is 8 mm wide
+    a = np.stack([x, np.zeros(4), 1e-4 * (x - 1500.0) ** 2], axis=1)
+    b = np.stack([np.zeros(3), [0.0, 1200.0, 2400.0], np.zeros(3)], axis=1)
+    structure = offset_structure(shapes.translational(a, b), (0.0, -200.0))
+    with pytest.raises(ConfigError) as info:
+        build_parts(structure, PartSpec(joint_gap=10.0))
+    msg = str(info.value)
+    assert msg.startswith("panel P0003 (face 2)") and "2 panels fail (P0003, P0004)" in msg
+    assert "width 8.0 mm" in msg
+    fits = float(msg.split("parts.joint_gap <= ")[1].split(" mm")[0])
+    assert 5.0 < fits < 8.0  # the tilted sides (edge axis) of the 10 mm glass narrow it further
+    parts = build_parts(structure, PartSpec(joint_gap=fits, beam_width=fits + 0.5))  # the gap it names builds
+    assert all(np.all(g.volume_mm3 > 0) for g in parts.groups)
+    with pytest.raises(ConfigError, match="panel P0003"):
+        build_parts(structure, PartSpec(joint_gap=fits + 0.2, beam_width=fits + 0.7))
+    with pytest.raises(ConfigError, match=r"beam B\d{4} .*end trims"):  # 60 mm beams on an 8 mm quad: no
+        build_parts(structure, PartSpec(joint_gap=fits))
+
+
+def test_a_folded_mesh_face_is_named_as_such():
+    """A dart-shaped (non-convex) face: no part setting helps, the message says the mesh is at fault."""
+    mesh = shapes.grid(4, 4, size=(3000.0, 3000.0))
+    V = mesh.V.copy()
+    V[5, :2] = [1800.0, 1800.0]  # inside the triangle of the opposite corners of face 4
+    with pytest.raises(ConfigError, match=r"panel P0005 \(face 4\): the mesh face itself is folded"):
+        build_parts(offset_structure(mesh.with_vertices(V), (0.0, -200.0)), PartSpec())
+
+
 def test_a_joint_gap_that_swallows_a_panel_is_refused(dome):
     with pytest.raises(ConfigError, match=r"panel P\d{4} .*joint_gap"):
         build_parts(dome, PartSpec(joint_gap=3000.0, beam_width=4000.0))

@@ -10,7 +10,8 @@ import pytest
 from fabricate.cli import main
 from optimize import ConfigError, measures
 from optimize.designs import DESIGNS, describe, parse_params
-from optimize.hierarchy import TARGETS
+from optimize.hierarchy import TARGETS, subdivide_and_perturb
+from optimize.strip_analysis import analyze_strip
 from optimize.strips import strip_layouts
 from optimize.subdivision import SCHEMES, subdivide
 
@@ -76,6 +77,60 @@ def test_trefoil_band_is_a_moebius_band_of_336_quads():
     assert lay.closed and lay.twist and not fine.topology.orientable
     two_sided = DESIGNS["trefoil_band"](twist=False).mesh
     assert two_sided.topology.orientable and len(two_sided.topology.boundary_loops) == 2
+
+
+def _ruling_lengths(mesh):
+    return [np.linalg.norm(mesh.V[lay.b] - mesh.V[lay.a], axis=1) for lay in strip_layouts(mesh)]
+
+
+def test_two_sided_trefoil_band_lies_on_the_rectifying_developable():
+    """Rulings along the Darboux vector: the band's normals are the knot's principal normals and it
+    is nearly developable already, so the strip optimizer keeps its width (a band across the
+    principal normals shrank to 20 mm rulings and folded its glass)."""
+    r = 42
+    d = DESIGNS["trefoil_band"](twist=False, rulings=r)
+    assert measures.planarity(d.mesh).max() < 0.01
+    t = 2 * np.pi * (np.arange(r) + 0.5) / r  # quad i lies between rulings i and i + 1
+    knot = lambda t: np.stack([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)], 1)
+    h = 1e-4  # principal normal by central differences, independent of the design's formulas
+    d1, d2 = (knot(t + h) - knot(t - h)) / (2 * h), (knot(t + h) - 2 * knot(t) + knot(t - h)) / h ** 2
+    T = d1 / np.linalg.norm(d1, axis=1, keepdims=True)
+    N = d2 - np.sum(d2 * T, axis=1, keepdims=True) * T
+    N /= np.linalg.norm(N, axis=1, keepdims=True)
+    normals = measures.face_normals(d.mesh)[strip_layouts(d.mesh)[0].faces]
+    assert np.degrees(np.arccos(np.abs(np.sum(normals * N, axis=1)))).max() < 5.0
+    out = subdivide_and_perturb(d.mesh, 1, scheme="chaikin", target="strip")
+    (lengths,) = _ruling_lengths(out.mesh)
+    assert out.success and lengths.min() > 0.5 * 500.0  # across the principal normals: 40 mm
+
+
+def test_developable_strips_start_nearly_developable_with_the_singular_curve_outside():
+    d = DESIGNS["developable_strips"]()
+    assert measures.planarity(d.mesh).max() < 0.02
+    for lay in strip_layouts(d.mesh):
+        a = analyze_strip(d.mesh, lay)
+        t = np.concatenate([a.t, a.s])
+        t = t[np.isfinite(t)]
+        assert np.all((t < -0.5) | (t > 1.5))  # rulings meet well outside the strip
+    ruling = d.mesh.V[1] - d.mesh.V[0]  # first ruling of strip 0: centre line z = 1000 sin(2 pi x / 8000)
+    t = np.array([1.0, 0.0, 1000.0 * 2 * np.pi / 8000.0])
+    t /= np.linalg.norm(t)
+    assert np.linalg.norm(ruling - (ruling @ t) * t) == pytest.approx(1200.0, rel=1e-12)  # `width` across
+    assert np.degrees(np.arccos(np.linalg.norm(ruling - (ruling @ t) * t) / np.linalg.norm(ruling))) > 20.0
+    out = subdivide_and_perturb(DESIGNS["developable_strips"](count=2).mesh, 1, scheme="chaikin",
+                                target="strip")
+    assert out.success
+    for lengths in _ruling_lengths(out.mesh):  # the optimizer keeps the strips' width
+        assert lengths.min() > 0.9 * 1200.0
+
+
+def test_developable_strips_refuse_a_turn_no_developable_strip_can_make():
+    with pytest.raises(ConfigError, match=r"turn_deg=60.*amplitude=500.*leaning \d+ deg"):
+        DESIGNS["developable_strips"](turn_deg=60.0, amplitude=500.0)
+    with pytest.raises(ConfigError, match="amplitude"):
+        DESIGNS["developable_strips"](turn_deg=10.0, amplitude=0.0)
+    flat = DESIGNS["developable_strips"](turn_deg=0.0, amplitude=0.0).mesh
+    assert measures.planarity(flat).max() < 1e-12
 
 
 def test_developable_strips_are_separate_strips():

@@ -253,3 +253,57 @@ def test_surface_input_is_remeshed_into_quads(tmp_path):
     mesh = read_mesh(tmp_path / "out" / "s" / "mesh.obj")
     assert (mesh.face_sizes == 4).mean() > 0.5  # quad-dominant
     assert summary.status in ("ok", "tolerance_not_reached"), summary.message
+
+
+# -- outputs.check: full | fast | off | auto -------------------------------------------------------
+CAD_FILES = {"step": True, "stl": True, "3mf": True, "dxf": True, "svg": True, "bom": True,
+             "pictures": False, "html": False}
+
+
+def exact_config(folder, name, check):
+    """The tiny dome without noise and without optimization (conical by construction), all CAD files."""
+    return tiny_config(folder, name, outputs=dict(CAD_FILES, check=check), optimize={"target": "none"},
+                       input={"shape": {"name": "dome", "params": {"radius": 5000, "rise": 2000, "meridians": 6,
+                                                                    "rings": 3}}})
+
+
+def test_fast_check_skips_the_step_read_back_and_still_catches_bad_files(tmp_path):
+    from fabricate.check_fast import run_check
+
+    summary = run_pipeline(exact_config(tmp_path, "fast", "fast"), tmp_path / "out")
+    assert summary.status == "ok", summary.message
+    out = tmp_path / "out" / "fast"
+    check = json.loads((out / "report.json").read_text())["check"]
+    assert (check["mode"], check["mode_asked"], check["pass"]) == ("fast", "fast", True)
+    assert check["checks"]["step"]["read_back"] is False and check["checks"]["step"]["solids"] == summary.parts
+    assert check["checks"]["dxf"]["against"] == "bom" and check["checks"]["dxf"]["outlines"] > 0
+    assert all(check["checks"][k]["pass"] for k in ("bom", "3mf", "stl", "intersections", "bearing", "svg"))
+    full = run_check(out, "full")  # the full check of the same files agrees, reading the STEP back
+    assert full["mode"] == "full" and full["pass"] and "read_back" not in full["checks"]["step"]
+    step = (out / "model.step").read_text()
+    (out / "model.step").write_text(step.replace("'P0001'", "'P9999'"))
+    renamed = run_check(out, "fast")["checks"]["step"]
+    assert not renamed["pass"] and renamed["missing"] == ["P0001"] and renamed["unexpected"] == ["P9999"]
+    (out / "model.step").write_text(step[: len(step) // 2])
+    assert not run_check(out, "fast")["checks"]["step"]["complete"]
+    rows = list(csv.reader((out / "bom.csv").open()))
+    area = rows[0].index("area_m2")
+    rows[1][area] = f"{float(rows[1][area]) + 1e-5:.6f}"  # 10 mm2 more than the outline in the DXF
+    with (out / "bom.csv").open("w", newline="") as fh:
+        csv.writer(fh).writerows(rows)
+    dxf = run_check(out, "fast")["checks"]["dxf"]
+    assert not dxf["pass"] and dxf["failures"][0]["id"] == rows[1][0]
+
+
+def test_check_off_and_auto(tmp_path):
+    summary = run_pipeline(exact_config(tmp_path, "off", "off"), tmp_path / "out")
+    assert summary.status == "ok" and summary.exit_code == 0
+    check = json.loads((tmp_path / "out" / "off" / "report.json").read_text())["check"]
+    assert check["mode"] == "off" and check["pass"] is None and check["checks"] == {}
+    from fabricate.config import CHECK_AUTO_MAX_PARTS
+
+    auto = tiny_config(tmp_path, outputs=CAD_FILES).outputs
+    assert auto.check == "auto"
+    assert auto.check_mode(CHECK_AUTO_MAX_PARTS) == "full" and auto.check_mode(CHECK_AUTO_MAX_PARTS + 1) == "fast"
+    with pytest.raises(ConfigError, match=r"outputs.check.*'quick'.*full.*fast.*off"):
+        tiny_config(tmp_path, outputs=dict(CAD_FILES, check="quick"))

@@ -1,10 +1,11 @@
 """Beams: the planar beam quad of every edge, thickened and trimmed at its nodes.
 
 For an edge ``(a, b)`` the offset stage gives the quad ``[A0, B0, B1, A1]``
-between the first and last layer (``A`` on the axis of node ``a``).  The beam
-is the polyhedron bounded by ten planes:
+between the first and last layer (``A0``, ``A1`` on the axis of node ``a``).
+The beam is a plate cut from flat stock: the polyhedron bounded by ten planes:
 
-- ``F+``, ``F-``: the beam plane moved by ``+-beam_width / 2``;
+- ``F+``, ``F-``: the beam plane (fitted to the quad) moved by
+  ``+-beam_width / 2``;
 - ``T0+``, ``T0-``: through the edge ``A0 B0``, tilted like the face on that
   side (for a conical mesh: exactly the face planes at the first layer, so the
   glass bears on them); ``T1+-`` the same at the last layer;
@@ -15,6 +16,14 @@ is the polyhedron bounded by ten planes:
   with nodes, one plane normal to the beam, set back from the axis by the
   node radius or more (enough that neighbours cannot touch).
 
+The centre line corners are the quad's own corners, on the node axes: the
+end planes are hinged on the node axis itself (the same line, computed from
+the same numbers, for every beam of a node), so two neighbouring beams share
+their bisector plane exactly even where the quad is twisted (a PQ mesh that
+is not conical, boundary nodes, strips).  A twisted quad is then not in its
+plate's mid-plane: the BOM reports how far (``planarity_mm``), and the
+plate stays flat.
+
 Vertices (12, in this order) and faces (10 quads, outward) in the beam frame
 ``x`` = along ``a -> b``, ``y`` = beam normal (``+`` side), ``z`` = toward the
 first layer::
@@ -24,7 +33,8 @@ first layer::
     8 A0- 9 B0- 10 B1- 11 A1-      - side
 
 Every vertex is the meeting point of three of these planes (the centre ones:
-of an edge line and an end plane), so every face is planar up to round-off.
+of an edge line and the end planes through the axis), so every face is
+planar up to round-off.
 """
 from __future__ import annotations
 
@@ -39,24 +49,24 @@ OUTLINE_FACE, BEVEL_FACE = 0, 1
 
 
 def beam_planes(structure) -> dict[str, np.ndarray]:
-    """The plane of every beam, its quad projected into it, and a right-handed frame.
+    """The plane of every beam (its plate's mid-plane), its quad, and a right-handed frame.
 
     Returns a dict of arrays (``e`` edges):
-    ``quad (e, 4, 3)`` [A0, B0, B1, A1] projected onto the beam plane;
+    ``quad (e, 4, 3)`` [A0, B0, B1, A1] as given (corners on the node axes);
     ``normal (e, 3)`` unit, oriented so that ``(B0 - A0) x normal`` points from
-    the last layer toward the first; ``offset (e,)`` (``normal . x = offset``);
-    ``planarity_mm (e,)`` how far the quad corners moved onto the plane.
+    the last layer toward the first; ``offset (e,)`` (``normal . x = offset``,
+    the plane through the quad's centroid); ``planarity_mm (e,)`` the largest
+    distance of a quad corner from that plane (0 for a torsion-free beam).
     """
     Q = np.asarray(structure.beam_quads, dtype=float)
     n = unit(np.asarray(structure.beam_normals, dtype=float))
     c = Q.mean(axis=1)
     h = dot(Q - c[:, None, :], n[:, None, :])
-    Qp = Q - h[..., None] * n[:, None, :]
-    along = Qp[:, 1] - Qp[:, 0] + Qp[:, 2] - Qp[:, 3]
-    up = Qp[:, 0] - Qp[:, 3] + Qp[:, 1] - Qp[:, 2]
+    along = Q[:, 1] - Q[:, 0] + Q[:, 2] - Q[:, 3]
+    up = Q[:, 0] - Q[:, 3] + Q[:, 1] - Q[:, 2]
     flip = dot(np.cross(along, n), up) < 0
     n = np.where(flip[:, None], -n, n)
-    return {"quad": Qp, "normal": n, "offset": dot(n, c), "planarity_mm": np.abs(h).max(axis=1)}
+    return {"quad": Q, "normal": n, "offset": dot(n, c), "planarity_mm": np.abs(h).max(axis=1)}
 
 
 def _node_frames(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -108,15 +118,23 @@ def angular_neighbours(structure, P0: np.ndarray, normal: np.ndarray) -> dict[st
     return {"gap": gap.reshape(2, ne, 2).transpose(1, 0, 2), "beam": nb.reshape(2, ne, 2).transpose(1, 0, 2)}
 
 
-def _end_planes(A0, A1, u, n, alpha, setback):
+def _end_planes(A0, A1, toward, n, alpha, setback):
     """Outward end planes ``(normal (e, 2, 3), offset (e, 2))`` [side +, -] at one end.
 
-    A0, A1 : (e, 3) ends of the end line; u : (e, 3) unit, along the beam,
-    normal to the end line, into the beam; n : (e, 3) beam normal;
+    A0, A1 : (e, 3) the node at the first and last layer (the end line is the
+    node axis through them); toward : (e, 3) from this node to the other end
+    of the beam; n : (e, 3) oriented beam normal (which side is ``+``);
     alpha : (e, 2) half gaps (<= pi / 2); setback : (e,) or None.
+
+    The frame is built from the node axis and the direction to the other node
+    only (``u`` along the beam normal to the axis, ``w = ell x u`` turned to the
+    ``+`` side), so the bisector plane a beam computes at a node is the plane
+    its neighbour computes there, whatever the twist of either beam.
     """
     ell = unit(A1 - A0)
-    u = unit(u - dot(u, ell)[:, None] * ell)
+    u = unit(toward - dot(toward, ell)[:, None] * ell)
+    w = np.cross(ell, u)
+    n = np.where((dot(w, n) < 0)[:, None], -w, w)
     if setback is None:
         sa, ca = np.sin(alpha), np.cos(alpha)
         nu_p = -sa[:, :1] * u + ca[:, :1] * n
@@ -175,12 +193,8 @@ def beam_solids(structure, P0: np.ndarray, width: float, node_radius: float, s_b
     else:
         setback = np.zeros((len(Q), 2))
     sb = (lambda i: setback[:, i]) if node_radius > 0 else (lambda i: None)
-    ua = np.cross(n, unit(A1 - A0))  # along the beam, normal to the end line, right-handed frame
-    ub = -np.cross(n, unit(B1 - B0))
-    ua = np.where((dot(ua, B0 - A0) < 0)[:, None], -ua, ua)
-    ub = np.where((dot(ub, A0 - B0) < 0)[:, None], -ub, ub)
-    Ea, ea = _end_planes(A0, A1, ua, n, alpha[:, 0], sb(0))
-    Eb, eb = _end_planes(B0, B1, ub, n, alpha[:, 1], sb(1))
+    Ea, ea = _end_planes(A0, A1, B0 - A0, n, alpha[:, 0], sb(0))
+    Eb, eb = _end_planes(B0, B1, A0 - B0, n, alpha[:, 1], sb(1))
     half = 0.5 * width
     Fp, fp = n, off + half
     Fm, fm = -n, -off + half

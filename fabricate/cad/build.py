@@ -16,15 +16,13 @@ import numpy as np
 from optimize.errors import ConfigError, MeshError
 
 from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, beam_planes, beam_solids
-from .geometry import (convexity, dot, flat_frame, min_area_rectangle, polygon_area_normal, rotate2d,
-                       to_plane, unit, volumes)
+from .diagnose import CONVEX_MIN, beam_hint, min_turn, panel_failure
+from .geometry import dot, flat_frame, min_area_rectangle, polygon_area_normal, rotate2d, to_plane, unit, volumes
 from .nodes import node_solids
 from .parts import PartGroup, Parts, part_ids
 from .spec import PartSpec
 
 log = logging.getLogger(__name__)
-CONVEX_MIN = 1e-9
-"""Smallest accepted ``sin`` of a face corner's turn (a fold or a collapsed edge below it)."""
 
 
 def build_parts(structure, spec: PartSpec | None = None) -> Parts:
@@ -51,8 +49,13 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
     bp = beam_planes(structure)
     from .panels import panel_solids
 
+    def build(gap, edge_mode, faces=None):
+        return panel_solids(structure, bp, P0, spec.glass_thickness, gap, edge_mode, s_beam, faces)
+
+    batches = build(spec.joint_gap, mode)
+    _check_panels(batches, pid, mesh, structure.normals, P0, spec, mode, build)
     groups = []
-    for g in panel_solids(structure, bp, P0, spec.glass_thickness, spec.joint_gap, mode, s_beam):
+    for g in batches:
         f = g["faces_index"]
         nb = [tuple(bid[row]) + (tuple(nid[mesh.F[i, :g["k"]]]) if with_nodes else ())
               for i, row in zip(f.tolist(), g["edges"])]
@@ -69,6 +72,8 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
         others = [b for b in beams["neighbour_beams"][i].ravel().tolist() if b != i]
         nb.append(tuple(pid[sorted({fp, fm})]) + tuple(bid[sorted(set(others))])
                   + (tuple(nid[topo.edges[i]]) if with_nodes else ()))
+    _validate("beam", bid, e, X, FACES, beams["normals"],
+              lambda i: beam_hint(float(beams["planarity_mm"][i]), spec.beam_width))
     groups.append(_group("beam", bid, e, X, FACES, beams["normals"], OUTLINE_FACE, BEVEL_FACE,
                          beams["planarity_mm"], np.full(len(e), spec.beam_width),
                          proj.max(axis=1) - proj.min(axis=1), nb, spec))
@@ -110,7 +115,7 @@ def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thi
            neighbours, spec) -> PartGroup:
     """Validate one batch and derive volumes, outlines and residuals."""
     element = np.asarray(element)
-    _validate(kind, ids, element, V, faces, normals, spec)
+    _validate(kind, ids, element, V, faces, normals)
     vol = volumes(V, faces)
     bad = vol <= 0
     if bad.any():
@@ -147,20 +152,43 @@ HINTS = {"panel": "parts.joint_gap may be too large for this face, or the face i
          "node": "parts.node_radius may be too large for the layer distance"}
 
 
-def _validate(kind, ids, element, V, faces, normals, spec) -> None:
-    """Raise ConfigError at the first folded, reversed or collapsed face."""
+def _validate(kind, ids, element, V, faces, normals, hint=None) -> None:
+    """Raise ConfigError at the worst folded, reversed or collapsed face of the batch.
+
+    hint : None (the kind's :data:`HINTS`) or ``hint(i) -> str`` for solid ``i``.
+    """
     if not np.all(np.isfinite(V)):
         i = int(np.argwhere(~np.isfinite(V))[0, 0])
         raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): a corner is not finite "
-                          f"(parallel planes); {HINTS[kind]}")
-    names = FACE_NAMES if kind == "beam" else None
-    for fi, face in enumerate(faces):  # loop over the faces of one combinatorial type
-        turn = convexity(V[:, list(face)], normals[:, fi])
-        if (turn < CONVEX_MIN).any():
-            i = int(np.argmin(turn))
-            name = names[fi] if names else ("lower" if fi == 0 else "upper" if fi == 1 else f"side {fi - 2}")
-            raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): face {name} is folded or "
-                              f"collapsed (corner turn {turn[i]:.3g}, expected > 0); {HINTS[kind]}")
+                          f"(parallel planes); {hint(i) if hint else HINTS[kind]}")
+    turn, where = min_turn(V, faces, normals)
+    if (turn < CONVEX_MIN).any():
+        i = int(np.argmin(turn))
+        fi = int(where[i])
+        name = FACE_NAMES[fi] if kind == "beam" else ("lower" if fi == 0 else "upper" if fi == 1
+                                                      else f"side {fi - 2}")
+        raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): face {name} is folded or "
+                          f"collapsed (corner turn {turn[i]:.3g}, expected > 0); {hint(i) if hint else HINTS[kind]}")
+
+
+def _check_panels(batches, pid, mesh, structure_normals, P0, spec, mode, build) -> None:
+    """Raise the error of :func:`fabricate.cad.diagnose.panel_failure` when any panel folds."""
+    bad = []  # (turn, face name, mesh face) of every failing panel
+    for g in batches:
+        turn, where = min_turn(g["vertices"], g["faces"], g["normals"])
+        turn = np.where(np.isfinite(turn), turn, -np.inf)  # parallel planes count as folded
+        for i in np.nonzero(turn < CONVEX_MIN)[0].tolist():  # the failing panels only
+            fi = int(where[i])
+            name = "lower" if fi == 0 else "upper" if fi == 1 else f"side {fi - 2}"
+            bad.append((float(turn[i]), name, int(g["faces_index"][i])))
+    if not bad:
+        return
+    bad.sort()
+    turn, name, f = bad[0]
+    P = P0[mesh.F[f, :mesh.face_sizes[f]]][None]
+    faces = np.array([b[2] for b in bad])
+    normal = np.asarray(structure_normals[f], dtype=float)
+    raise panel_failure([pid[b[2]] for b in bad], faces, name, turn, P, normal, spec, mode, build)
 
 
 def _report(groups, spec, mode, s_beam, distances, beams, node_facts) -> dict:

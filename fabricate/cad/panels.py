@@ -31,8 +31,8 @@ def prism_faces(k: int) -> tuple[tuple[int, ...], ...]:
 
 
 def panel_solids(structure, beam_planes: dict, P0: np.ndarray, thickness: float, gap: float, mode: str,
-                 s_beam: float) -> list[dict]:
-    """Panels grouped by face size.
+                 s_beam: float, faces: np.ndarray | None = None) -> list[dict]:
+    """Panels grouped by face size (of every face, or of the mesh faces ``faces (q,)`` only).
 
     P0 : (n, 3) vertex positions at the first layer (the glass bears there).
     beam_planes : :func:`fabricate.cad.beams.beam_planes` of the structure.
@@ -48,8 +48,9 @@ def panel_solids(structure, beam_planes: dict, P0: np.ndarray, thickness: float,
     N = unit(np.asarray(structure.normals, dtype=float))
     sizes = mesh.face_sizes
     out = []
-    for k in np.unique(sizes).tolist():  # one batch per face size
-        f = np.nonzero(sizes == k)[0]
+    chosen = np.ones(len(sizes), dtype=bool) if faces is None else np.isin(np.arange(len(sizes)), faces)
+    for k in np.unique(sizes[chosen]).tolist():  # one batch per face size
+        f = np.nonzero((sizes == k) & chosen)[0]
         F = mesh.F[f, :k]
         P = P0[F]                                   # (p, k, 3)
         n = N[f]

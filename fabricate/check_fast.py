@@ -1,0 +1,121 @@
+"""The output check in the mode a run asks for (``outputs.check``): full, fast or off.
+
+``full`` is :func:`fabricate.check.check_outputs` as it is.  ``fast`` runs the
+same checks on a view of the run folder without ``model.step`` (OpenCASCADE
+reading the STEP back is nearly all of the time on big models: about 10 ms per
+part), then puts two light checks, from the files alone, in place of the two
+that need the STEP read back:
+
+- ``step``: the STEP text is scanned: complete (``END-ISO-10303-21;``), unit
+  mm, one ``MANIFOLD_SOLID_BREP`` per BOM row, product names equal the BOM ids;
+- ``dxf``: ezdxf audit clean, units mm, one CUT outline and one ETCH id per
+  panel and beam, each outline's area equal to the BOM's (to the BOM's
+  rounding, 1 mm2) instead of the STEP face's.
+
+Every check dict says how it was made; the result carries ``mode``.
+``fabricate check OUTDIR`` runs the full check on a finished run.
+"""
+from __future__ import annotations
+
+import re
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from optimize.tolerances import DEFAULT, Tolerances
+
+STEP_FILE = "model.step"
+DXF_FILE = "outlines.dxf"
+BOM_AREA_TOL_MM2 = 0.5
+"""The BOM writes areas in m2 with 6 decimals: equal to 1 mm2, half of it either way."""
+FAST_NOTE = ("fast check: the STEP text was scanned, OpenCASCADE did not read it back "
+             "(outputs.check: fast); `fabricate check OUTDIR` runs the full check")
+
+
+def run_check(outdir, mode: str, tol: Tolerances = DEFAULT) -> dict:
+    """Check a run folder in ``mode`` (``full`` | ``fast`` | ``off``).
+
+    Returns the dict of :func:`fabricate.check.check_outputs` (``pass``,
+    ``failed``, ``checks``, ``seconds``) with ``mode`` added; for ``off``,
+    ``pass`` is None with the reason in ``skipped``.
+    """
+    from .check import check_outputs
+
+    out = Path(outdir)
+    if mode == "off":
+        return {"outdir": str(out), "mode": "off", "pass": None, "failed": [], "checks": {},
+                "skipped": "outputs.check: off", "seconds": 0.0}
+    if mode == "full":
+        return dict(check_outputs(out, tol=tol), mode="full")
+    if mode != "fast":
+        raise ValueError(f"check mode {mode!r}: expected 'full', 'fast' or 'off'")
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="fabricate-check-") as tmp:
+        view = Path(tmp)
+        for path in out.iterdir():  # every file but the STEP, linked, not copied
+            if path.name != STEP_FILE and path.is_file():
+                _link(path, view / path.name)
+        result = check_outputs(view, tol=tol)
+    from .export.bom import read_bom
+
+    bom = read_bom(out / "bom.csv")
+    checks = dict(result["checks"])
+    for name, fname, light in (("step", STEP_FILE, scan_step), ("dxf", DXF_FILE, dxf_against_bom)):
+        if (out / fname).exists():
+            t1 = time.perf_counter()
+            checks[name] = dict(light(out / fname, bom), seconds=round(time.perf_counter() - t1, 3))
+    failed = [k for k, v in checks.items() if v.get("pass") is False]
+    return {"outdir": str(out), "mode": "fast", "pass": not failed, "failed": failed, "checks": checks,
+            "note": FAST_NOTE, "seconds": round(time.perf_counter() - t0, 3)}
+
+
+def _link(src: Path, dst: Path) -> None:
+    try:
+        dst.symlink_to(src.resolve())
+    except OSError:  # no symlinks here (some Windows accounts): a copy does the same job
+        shutil.copyfile(src, dst)
+
+
+def scan_step(path, bom: list[dict]) -> dict:
+    """The STEP file's text against the BOM: complete, unit mm, solids and product names."""
+    data = Path(path).read_bytes()
+    names = [m.decode("ascii", "replace") for m in re.findall(rb"PRODUCT\('([^']*)'", data)]
+    expected = {r["id"] for r in bom}
+    found = set(names)
+    missing = sorted(expected - found)
+    extra = sorted(found - expected - {"model"})  # the assembly root is not a part
+    solids = len(re.findall(rb"MANIFOLD_SOLID_BREP\(", data))
+    unit_mm = b"SI_UNIT(.MILLI.,.METRE.)" in data[: 1 << 16].replace(b" ", b"")
+    complete = data.rstrip().endswith(b"END-ISO-10303-21;")
+    ok = complete and unit_mm and not missing and not extra and solids == len(expected)
+    return {"pass": ok, "read_back": False, "complete": complete, "unit_mm": unit_mm, "solids": solids,
+            "bom_rows": len(expected), "missing": missing[:20], "unexpected": extra[:20], "note": FAST_NOTE}
+
+
+def dxf_against_bom(path, bom: list[dict]) -> dict:
+    """Flat outlines against the BOM: audit, units, one outline and one id per part, areas."""
+    from .export.dxf import read_outlines
+    from .export.verify import polygon_measures
+
+    outlines, facts = read_outlines(path)
+    area = {r["id"]: float(r["area_m2"]) * 1e6 for r in bom if r["kind"] in ("panel", "beam")}
+    missing = sorted(set(area) - set(outlines))
+    failures, worst, worst_id = [], 0.0, None
+    for pid, Q in outlines.items():  # one outline per part
+        if pid not in area:
+            failures.append({"id": pid, "error": "no BOM row of that id"})
+            continue
+        a, _ = polygon_measures(np.asarray(Q, dtype=float))
+        err = abs(a - area[pid])
+        if err > worst:
+            worst, worst_id = err, pid
+        if err > BOM_AREA_TOL_MM2 + 1e-9 * area[pid]:
+            failures.append({"id": pid, "area_mm2": a, "bom_area_mm2": area[pid]})
+    ok = (facts["audit_errors"] == 0 and facts["units"] == 4 and not missing and not failures
+          and facts["texts"] >= len(area))
+    return {"pass": ok, "against": "bom", "outlines": len(outlines), "expected": len(area),
+            "missing": missing[:20], "area_error_mm2_max": worst, "worst": worst_id,
+            "tolerance_mm2": BOM_AREA_TOL_MM2, "failures": failures[:20], "failed": len(failures), **facts}
