@@ -276,7 +276,6 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             mu_floor = MU_MIN
         wf *= decay
         wc *= decay
-        mu_floor = max(MU_MIN, STAY * wf)
     timings["total"] = time.perf_counter() - t_start
     timings["factorizations"] = solver.factorizations
     timings["cg_iterations"] = solver.cg_iterations

@@ -121,7 +121,7 @@ def test_neighbouring_axes_are_coplanar_so_beams_are_planar(conical):
         # a closed boundary loop without symmetry: the free boundary axes have no exact
         # planar-beam solution nearby; the compromise leaves a small twist, reported
         info = s.report["free_axes"]
-        assert info["regularization"] > 0 and info["residual_after"] < info["residual_before"] / 100
+        assert info["regularization"] > 0 and info["residual_after"] < info["residual_before"] / 50
         bmax = s.report["beams"]["boundary_max_twist_mm"]
         assert bmax == pytest.approx(s.beam_twist_mm.max()) and 0 < bmax < 1e-2
         b = s.report["beams"]
