@@ -7,17 +7,24 @@ Cases:
 - a perturbed surface of revolution (the tests' input; targets pq, conical,
   circular), where the default optimizer runs too.
 
-For each method: best-of-``--repeat`` wall time, iterations, final defects,
-distance to the input (relative to its bbox diagonal), and the ratio of the
-paper's figure to ours (goal: >= 10).  ``--sweep`` also counts how often SQP
-and hybrid converge, per Hessian, from the tests' inputs and 12 trefoil bands.
+For each method: best-of-``--repeat`` wall time (and CPU time of that
+process, less disturbed by other jobs on a shared machine), iterations, final
+defects, distance to the input (relative to its bbox diagonal), and the ratio
+of the paper's figure to ours (goal: >= 10).  ``--baseline`` also times the
+strip case with the fast paths switched off in the same run (sparse
+``J^T J`` / KKT matrices factored by SuperLU or rebuilt for the banded solver
+every iteration, closest points by ``Reference.closest`` every call: the
+implementation before the banded layouts) and prints our speed-up over it.
+``--sweep`` also counts how often SQP and hybrid converge, per Hessian, from
+the tests' inputs and 12 trefoil bands.
 
-Run: ``python benchmarks/bench_paper.py [--repeat 3] [--sweep]``.  Timings on
-a shared machine are noisy; BLAS is limited to one thread here.
+Run: ``python benchmarks/bench_paper.py [--repeat 3] [--baseline] [--sweep]``.
+Timings on a shared machine are noisy; BLAS is limited to one thread here.
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
@@ -58,40 +65,75 @@ def default_method(mesh, target, **kw):
 
 
 def timed(fn, repeat):
-    best, out = np.inf, None
+    """Best wall time, best CPU time (seconds) over ``repeat`` runs, and the last result."""
+    best, cpu, out = np.inf, np.inf, None
     for _ in range(repeat):
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         out = fn()
-        best = min(best, time.perf_counter() - t)
+        best, cpu = min(best, time.perf_counter() - t), min(cpu, time.process_time() - c)
+    TIMES["cpu"] = cpu
     return best, out
+
+
+TIMES = {}
+
+
+@contextlib.contextmanager
+def slow_paths():
+    """The implementation without banded layouts and cached footpoints (for ``--baseline``).
+
+    Every ``Problem.band`` is None, so the penalty method assembles a sparse
+    ``J^T J`` each iteration for :class:`optimize.paper.linalg.SPDSolver` and
+    SQP factors its KKT matrix by SuperLU; footpoints come from
+    ``Reference.closest`` directly.
+    """
+    from optimize.paper.problem import Problem
+
+    band, foot = Problem.band, Problem.footpoints
+    Problem.band = lambda self, name, factory: None
+    Problem.footpoints = lambda self, x: self.ref.closest(self.positions(x))
+    try:
+        yield
+    finally:
+        Problem.band, Problem.footpoints = band, foot
 
 
 def row(name, seconds, res, paper=None, note=""):
     m = res.mesh
     det = np.abs(det_local(m.V[m.F[m.face_sizes == 4, :4]])[0]).max(initial=0.0)
-    cells = [f"{name:<9}", f"{seconds:8.3f}", f"{res.nit:5d}", f"{'yes' if res.success else 'NO':>4}",
-             f"{measures.planarity(m).max():9.2e}", f"{det:9.2e}",
+    cells = [f"{name:<9}", f"{seconds:8.3f}", f"{TIMES.get('cpu', np.nan):7.3f}", f"{res.nit:5d}",
+             f"{'yes' if res.success else 'NO':>4}", f"{measures.planarity(m).max():9.2e}", f"{det:9.2e}",
              f"{measures.conical_defect(m).max(initial=0.0):9.2e}",
              f"{measures.circular_defect(m).max(initial=0.0):9.2e}", f"{res.max_distance:9.2e}"]
     if paper is not None:
-        cells.append(f"{paper:7.2f}  {paper / seconds:6.1f}x {'(goal 10x met)' if paper / seconds >= 10 else '(goal 10x NOT met)'}")
+        goal = "(goal 10x met)" if paper / seconds >= 10 else "(goal 10x NOT met)"
+        cells.append(f"{paper:7.2f}  {paper / seconds:6.1f}x {goal}")
     print("  ".join(cells) + (f"  {note}" if note else ""))
 
 
-HEADER = ("method       seconds  iters  ok   planarity        det    conical   circular   distance"
+HEADER = ("method       seconds  cpu s  iters  ok   planarity        det    conical   circular   distance"
           "  paper s   paper/ours")
 
 
-def bench_strip(repeat):
+def bench_strip(repeat, baseline=False):
     mesh = trefoil_band(336, 0.3)
     print(f"\n== trefoil Moebius band: {mesh.n_faces} quads, target strip "
           f"(input planarity {measures.planarity(mesh).max():.2e}) ==")
     print("paper (Liu et al. 2006, 2 GHz PC): penalty 0.08 s, SQP 0.75 s; 20-50 SQP iterations with closeness")
     print(HEADER)
+    ours = {}
     for method in ("penalty", "sqp", "hybrid"):
         sec, res = timed(lambda: run_paper_method(mesh, "strip", method), repeat)
+        ours[method] = (sec, TIMES["cpu"])
         paper = PAPER_SECONDS.get(method, PAPER_SECONDS["sqp"] if method == "hybrid" else None)
         row(method, sec, res, paper, "" if method != "hybrid" else "(compared with the paper's SQP)")
+    if baseline:
+        print("-- the same without banded layouts and cached footpoints (baseline, this run)")
+        with slow_paths():
+            for method in ("penalty", "sqp", "hybrid"):
+                sec, res = timed(lambda: run_paper_method(mesh, "strip", method), repeat)
+                row(method, sec, res, None, f"baseline/ours: wall {sec / ours[method][0]:.1f}x, "
+                    f"cpu {TIMES['cpu'] / ours[method][1]:.1f}x")
     sec, (res, tgt) = timed(lambda: default_method(mesh, "strip"), repeat)
     row("default", sec, res, None, f"(target {tgt}: the default optimizer has no determinant terms)")
 
@@ -138,11 +180,13 @@ def sweep():
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3, help="runs per case; the best time is shown")
+    ap.add_argument("--baseline", action="store_true",
+                    help="also time the strip without the fast paths (same run) and print the speed-up")
     ap.add_argument("--sweep", action="store_true", help="also count convergence over many inputs")
     args = ap.parse_args(argv)
     print(f"python {sys.version.split()[0]}, numpy {np.__version__}, cores {os.cpu_count()}, "
           f"load {os.getloadavg()[0]:.1f} (shared machine: timings are noisy)")
-    bench_strip(args.repeat)
+    bench_strip(args.repeat, args.baseline)
     bench_dome(args.repeat)
     if args.sweep:
         sweep()

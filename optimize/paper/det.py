@@ -53,23 +53,30 @@ def det_local(Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     Q : (q, 4, 3) float, the four vertices of each quad in order.
     Returns ``D (q, 4)`` (``D[:, j] = det(u_j, u_{j+1}, u_{j+2})``) and
     ``G (q, 4, 12)`` = ``d D[:, j] / d Q.reshape(q, 12)``.
+
+    With ``P_k = u_k x u_{k+1}`` and ``R_j = u_{j+2} x u_j``, the gradient of
+    ``D_j`` with respect to the unit edges ``u_j, u_{j+1}, u_{j+2}`` is
+    ``P_{j+1}, R_j, P_j`` (cyclic triple product), each with ``u . grad = D_j``;
+    through the normalization ``d u / d e = (I - u u^T) / |e|`` edge ``j + t``
+    gets ``(grad - D_j u_{j+t}) / |e_{j+t}|``, and edge ``k`` (from vertex ``k``
+    to ``k + 1``) passes it to its end minus its start.
     """
     q = len(Q)
     U, L = _unit_edges(Q)
-    U1, U2 = U[:, NEXT], U[:, NEXT2]  # u_{j+1}, u_{j+2}
-    c12 = cross(U1, U2)
-    D = np.einsum("qjk,qjk->qj", U, c12)  # (q, 4)
-    gU = np.zeros((q, 4, 4, 3))  # (quad, det j, edge k, xyz)
-    j = np.arange(4)
-    gU[:, j, j] = c12
-    gU[:, j, NEXT] = cross(U2, U)
-    gU[:, j, NEXT2] = cross(U, U1)
-    # through the normalization: d u / d e = (I - u u^T) / |e|
-    dot = np.einsum("qjkx,qkx->qjk", gU, U)
-    gE = (gU - dot[..., None] * U[:, None, :, :]) / L[:, None, :, None]
-    # edge k runs from vertex k to k + 1: vertex v collects gE[v - 1] - gE[v]
-    gV = gE[:, :, PREV] - gE  # (q, 4 dets, 4 vertices, 3)
+    P = cross(U, U[:, NEXT])  # (q, 4, 3): P_k = u_k x u_{k+1}
+    R = cross(U[:, NEXT2], U)  # R_j = u_{j+2} x u_j
+    D = np.einsum("qjk,qjk->qj", U, P[:, NEXT])  # (q, 4)
+    Dx = D[:, :, None]
+    A = (P[:, NEXT] - Dx * U) / L[:, :, None]  # edge j
+    B = (R - Dx * U[:, NEXT]) / L[:, NEXT, None]  # edge j + 1
+    C = (P - Dx * U[:, NEXT2]) / L[:, NEXT2, None]  # edge j + 2
+    rel = np.stack([-A, A - B, B - C, C], axis=2)  # (q, 4 dets, vertex j + t, 3)
+    gV = rel[:, _J, _T]  # (q, 4 dets, 4 vertices, 3)
     return D, gV.reshape(q, 4, 12)
+
+
+_J = np.arange(4)[:, None]  # det j ...
+_T = (np.arange(4)[None, :] - _J) % 4  # ... vertex v is vertex j + t
 
 
 ALTERNATING = np.array([1.0, -1.0, 1.0, -1.0]) / 4

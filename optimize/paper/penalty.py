@@ -12,13 +12,19 @@ normal equations
 
     (J^T J + lam D) s = -J^T R,      D = diag(J^T J) (floored),
 
-(``lam`` starts at ``1e-2``) with :class:`optimize.paper.linalg.SPDSolver`
-(banded Cholesky on strips, SuperLU otherwise),
-accepting the step when the gain ratio ``rho`` (actual / predicted decrease of
+(``lam`` starts at ``1e-2``), accepting the step when the gain ratio ``rho`` (actual / predicted decrease of
 ``E``) is positive (then ``lam`` shrinks by Nielsen's rule), otherwise ``lam``
 grows and the system is solved again.  After every iteration ``w1`` and ``w2``
 are halved, so the angle terms dominate more and more and the constraints
-become exact.  Near-singular systems: see :mod:`optimize.paper.linalg`.
+become exact.
+
+Linear algebra: where a reverse Cuthill-McKee ordering makes ``J^T J`` a
+narrow band (strips, small meshes; :func:`optimize.paper.assembly.gram_band`)
+it is assembled directly into band storage on a pattern fixed for the run and
+factored by LAPACK's banded Cholesky; otherwise (or if that factorization
+finds the matrix not positive definite) by :class:`optimize.paper.linalg.SPDSolver`
+(SuperLU, then the LSQR fallback for near-singular systems: see
+:mod:`optimize.paper.linalg`).
 
 Stops on tests: every tested defect within tolerance (``converged``), no step
 lowering ``E`` or no progress of the worst defect/tolerance ratio for
@@ -37,6 +43,10 @@ import scipy.sparse as sp
 from ..mesh import Mesh
 from ..result import OptimizeResult
 from ..tolerances import DEFAULT, Tolerances
+from scipy.linalg.blas import dsbmv
+
+from .assembly import gram_band
+from .banded import cholesky_solve
 from .linalg import SPDSolver
 from .problem import Problem
 
@@ -59,27 +69,68 @@ class Run:
     weights: tuple[float, float] = (0.0, 0.0)  # (w1, w2) the next iteration would use
 
 
-def _rows(p: Problem, x: np.ndarray, w1: float, w2: float, foot=None, jac: bool = True):
-    """Stacked weighted residual ``R`` (and Jacobian ``J`` on the free coordinates).
+class Linearized:
+    """The damped normal equations ``(J^T J + lam D) s = -J^T R`` of one penalty iterate.
 
-    foot : closeness footpoints ``(Y, N)``, fixed during one iteration.
+    p : Problem.  x : (3 n,) scaled positions.  w1, w2 : current weights.
+    foot : closeness footpoints ``(Y (n, 3), N (n, 3))`` or None (``w2 = 0``).
+    band : the run's :class:`optimize.paper.assembly.GramBand`, or None for the
+    sparse path, which solves with ``solver`` (:class:`optimize.paper.linalg.SPDSolver`).
+
+    ``J`` and ``R`` stack the weighted constraint rows, ``sqrt(w1) K`` and
+    ``sqrt(w2) C``; attributes ``E = |R|^2``, ``g = J^T R (k,)``, ``D (k,)``
+    the floored diagonal of ``J^T J`` (in the band's order on the banded path).
     """
-    if jac:
-        c, A, _ = p.constraints(x, weighted=True)
-        rs, Js = [c], [A]
-    else:
-        rs, Js = [p.constraints(x, weighted=True, jac=False)], []
-    if w1 > 0:
-        f, K = p.fairness(x)
-        rs.append(np.sqrt(w1) * f)
-        Js.append(np.sqrt(w1) * K)
-    if w2 > 0:
-        r = p.closeness(x, foot, jac=jac)
-        rs.append(np.sqrt(w2) * (r[0] if jac else r))
-        if jac:
-            Js.append(np.sqrt(w2) * r[1])
-    R = np.concatenate(rs)
-    return (R, sp.vstack(Js, format="csr")) if jac else R
+
+    def __init__(self, p: Problem, x: np.ndarray, w1: float, w2: float, foot, band, solver: SPDSolver):
+        self.p, self.band, self.solver = p, band, solver
+        P = p.system.pattern
+        c, self.a = p.system.evaluate_data(x.reshape(-1, 3), jac=True, weighted=True)
+        f, gh = p.least_squares(x, w1, w2, foot)
+        self.E = float(c @ c) + f
+        self.g = np.bincount(P.indices, weights=self.a * c[P.rows], minlength=P.shape[1]) + gh
+        self.h = p.hessian_data(w1, w2, None if foot is None else foot[1])
+        self._N = None
+        if band is not None:
+            self.ab = band.assemble(self.a, self.h)  # (bw + 1, k), ordered
+            d = self.ab[0]
+        else:
+            d = self.normal_matrix().diagonal()
+        self.D = np.maximum(d, 1e-9 * max(float(d.max(initial=0.0)), 1.0))  # ordered like d
+
+    def normal_matrix(self) -> sp.csr_matrix:
+        """(k, k) sparse ``J^T J``."""
+        if self._N is None:
+            A = self.p.system.pattern.csr(self.a)
+            self._N = (A.T @ A + self.p.hpat.csr(self.h)).tocsr()
+        return self._N
+
+    def solve(self, lam: float) -> tuple[np.ndarray, str]:
+        """The step ``s (k,)`` for damping ``lam`` and how it was solved ("banded", "lu", "lsqr")."""
+        if self.band is not None:
+            ab = self.ab.copy(order="F")  # LAPACK's layout: no copy inside dpbtrf
+            ab[0] += lam * self.D
+            s = cholesky_solve(ab, -self.g, self.band.order)
+            if s is not None:
+                return s, "banded"
+            D = np.empty_like(self.D)
+            D[self.band.order.perm] = self.D
+        else:
+            D = self.D
+        return self.solver.solve(self.normal_matrix() + lam * sp.diags(D), -self.g)
+
+    def curvature(self, s: np.ndarray) -> float:
+        """``s^T J^T J s``."""
+        if self.band is not None:
+            so = s[self.band.order.perm]
+            return float(so @ dsbmv(self.band.order.bw, 1.0, self.ab, so, lower=1))
+        return float(s @ (self.normal_matrix() @ s))
+
+
+def energy(p: Problem, x: np.ndarray, w1: float, w2: float, foot) -> float:
+    """The penalty energy ``E`` at ``x`` (footpoints ``foot`` fixed)."""
+    c = p.system.evaluate_data(x.reshape(-1, 3), jac=False, weighted=True)
+    return float(c @ c) + p.least_squares(x, w1, w2, foot, grad=False)
 
 
 def run_penalty(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, patience: int = 20,
@@ -99,30 +150,26 @@ def run_penalty(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, pati
     best = score = p.worst(m)
     since, lam, nu = 0, LAM_START, 2.0
     solver = SPDSolver()
+    band = p.band("gram", lambda q: gram_band(q, q.system))
     if score <= stop_at:
         run.status, run.message = "converged", f"the input already satisfies the tolerances ({p.describe(m)})"
     while run.status == "max_iter" and run.nit < max_iter:
         ti = time.perf_counter()
         foot = p.footpoints(x) if w2 > 0 else None
-        R, J = _rows(p, x, w1, w2, foot)
-        E = float(R @ R)
-        N = (J.T @ J).tocsr()
-        g = J.T @ R
-        d = N.diagonal()
-        D = sp.diags(np.maximum(d, 1e-9 * max(float(d.max(initial=0.0)), 1.0)))
+        lin = Linearized(p, x, w1, w2, foot, band, solver)
+        E = lin.E
         tm["assemble"] += time.perf_counter() - ti
         accepted, tries, how = False, 0, "lu"
         while not accepted and tries < TRIES and lam <= LAM_MAX:
             tries += 1
             ts = time.perf_counter()
-            s, how = solver.solve(N + lam * D, -g)
+            s, how = lin.solve(lam)
             tm["solve"] += time.perf_counter() - ts
             xn = p.step(x, s)
             ta = time.perf_counter()
-            Rn = _rows(p, xn, w1, w2, foot, jac=False)
+            En = energy(p, xn, w1, w2, foot)
             tm["assemble"] += time.perf_counter() - ta
-            En = float(Rn @ Rn)
-            pred = float(-2 * (g @ s) - s @ (N @ s))
+            pred = float(-2 * (lin.g @ s) - lin.curvature(s))
             rho = (E - En) / pred if pred > 0 else -1.0
             if np.isfinite(En) and rho > 1e-8:
                 accepted = True

@@ -6,11 +6,19 @@ length ``h``, so that every residual and step is scale-free (angles and
 determinants do not change, fairness is ``K x`` and closeness ``((v - y) . n) / h``).
 Fixed vertices are removed: Jacobians are restricted to the ``free``
 coordinates and steps are scattered back with :meth:`Problem.step`.
+
+Everything that does not change during a run is prepared once here: the
+constraint systems' sparsity patterns, the pattern :attr:`Problem.hpat` of
+the objective's Hessian ``w1 K^T K + w2 C^T C``, the banded layouts of the
+solvers (:meth:`Problem.band`), and the closest-point search, which keeps
+each vertex's candidate triangles between iterations
+(:class:`optimize.paper.footpoints.Footpoints`, exact).
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.sparse.csgraph import shortest_path
 
 from .. import measures
 from ..closeness import Reference
@@ -19,10 +27,13 @@ from ..fairness import fairness_matrix
 from ..mesh import Mesh
 from ..result import OptimizeResult
 from ..tolerances import DEFAULT, Tolerances
-from .angles import angle_values
+from .angles import angle_values, corner_vertices
 from .det import det_values
+from .footpoints import Footpoints
 from .system import ConstraintSystem, Pattern
 from .targets import sqp_terms, target_terms, tested_defects
+
+FOOT_MARGIN = 0.1  # footpoint candidates are renewed for vertices that moved this many mean edges
 
 
 class Problem:
@@ -59,15 +70,79 @@ class Problem:
         self._all_free = len(self.free) == 3 * n
         self.K_full = fairness_matrix(mesh)  # (3t, 3n)
         self.K = self._cols(self.K_full)  # (3t, k) on the free coordinates
-        free = None if self._all_free else self.free
-        self.system = ConstraintSystem(mesh, self.terms, free)
         self.sqp_terms = sqp_terms(mesh, self.terms)
-        self.sqp_system = ConstraintSystem(mesh, self.sqp_terms, free)
-        self._close = Pattern(np.repeat(np.arange(n), 3), np.arange(3 * n), (n, 3 * n),
-                              None if self._all_free else self.free)
+        self._systems = {}
+        self.vid = corner_vertices(mesh.topology)  # (c, 3) corner, next, previous vertex
+        self.quads = mesh.F[mesh.face_sizes == 4, :4]  # (q, 4)
+        self._close = None  # the closeness Jacobian's pattern, built when asked for
+        self._hessian_pattern()
         self.reference = mesh if reference is None else reference
-        self._ref = None
+        self._ref = self._foot = None
         self.has_quads = bool(np.any(mesh.face_sizes == 4))
+        self._bands = {}
+
+    def _hessian_pattern(self) -> None:
+        """The fixed pattern ``hpat`` of ``w1 K^T K + w2 C^T C`` (and the diagonal) on the free coordinates."""
+        k = len(self.free)
+        colmap = np.full(3 * self.mesh.n_vertices, -1, dtype=np.int64)
+        colmap[self.free] = np.arange(k)
+        cc = colmap.reshape(-1, 3)
+        self._cv = np.nonzero(cc[:, 0] >= 0)[0]  # vertices with free coordinates (all three)
+        cc = cc[self._cv]  # (f, 3)
+        KtK = (self.K.T @ self.K).tocoo()
+        self.Kt = self.K.T.tocsr()  # (k, 3t)
+        rows = np.concatenate([KtK.row, np.repeat(cc, 3, axis=1).ravel(), np.arange(k)])
+        cols = np.concatenate([KtK.col, np.tile(cc, (1, 3)).ravel(), np.arange(k)])
+        self.hpat = Pattern(rows, cols, (k, k))
+        nk, nc = len(KtK.data), 9 * len(cc)
+        self._h_fair = self.hpat.data(np.concatenate([KtK.data, np.zeros(nc + k)]))
+        self._h_close = self.hpat.inv[nk:nk + nc]  # distinct positions
+
+    def hessian_data(self, w1: float, w2: float, N: np.ndarray | None) -> np.ndarray:
+        """Values on :attr:`hpat` of ``w1 K^T K + w2 C^T C`` (closeness rows with unit normals ``N (n, 3)``)."""
+        out = w1 * self._h_fair
+        if w2 > 0:
+            Nf = N[self._cv]
+            out[self._h_close] += w2 * np.einsum("ia,ib->iab", Nf, Nf).ravel()
+        return out
+
+    def unknown_levels(self) -> np.ndarray:
+        """(k,) float: for every free coordinate, its vertex's distance (in edges) from a
+        peripheral vertex of the mesh: ordering by it lays a strip out along its length
+        (folded where it closes), a candidate for the banded solvers' ordering."""
+        if "levels" in self._bands:
+            return self._bands["levels"]
+        e = self.mesh.topology.edges
+        n = self.mesh.n_vertices
+        G = sp.csr_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+        G = G + G.T
+        d = shortest_path(G, unweighted=True, indices=0)
+        far = int(np.argmax(np.where(np.isfinite(d), d, -1.0)))
+        d = shortest_path(G, unweighted=True, indices=far)
+        d = np.where(np.isfinite(d), d, n)  # other components after this one
+        self._bands["levels"] = d[self.free // 3]
+        return self._bands["levels"]
+
+    def band(self, name: str, factory):
+        """A banded layout kept for the run (``factory(problem)`` on first use; None = not banded)."""
+        if name not in self._bands:
+            self._bands[name] = factory(self)
+        return self._bands[name]
+
+    @property
+    def system(self) -> ConstraintSystem:
+        """The penalty method's constraint rows (:attr:`terms`), built on first use."""
+        return self._system("penalty", self.terms)
+
+    @property
+    def sqp_system(self) -> ConstraintSystem:
+        """SQP's constraint rows (:attr:`sqp_terms`), built on first use."""
+        return self._system("sqp", self.sqp_terms)
+
+    def _system(self, name: str, terms: list) -> ConstraintSystem:
+        if name not in self._systems:
+            self._systems[name] = ConstraintSystem(self.mesh, terms, None if self._all_free else self.free)
+        return self._systems[name]
 
     # -- variables ----------------------------------------------------------
     @property
@@ -118,9 +193,16 @@ class Problem:
         """Unweighted fairness rows ``(K x (3t,), K (3t, k))`` in mean-edge units."""
         return self.K_full @ x, self.K
 
+    @property
+    def foot_search(self) -> Footpoints:
+        """Exact closest points with candidates kept between iterations (built on first use)."""
+        if self._foot is None:
+            self._foot = Footpoints(self.ref, FOOT_MARGIN * self.h)
+        return self._foot
+
     def footpoints(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Closest points ``Y (n, 3)`` (model units) and unit normals ``N (n, 3)`` on the reference."""
-        return self.ref.closest(self.positions(x))
+        return self.foot_search.closest(self.positions(x))
 
     def closeness(self, x: np.ndarray, foot=None, jac: bool = True):
         """Unweighted tangent-plane closeness rows ``(r (n,), J (n, k))`` at footpoints ``foot``.
@@ -129,14 +211,42 @@ class Problem:
         """
         Y, N = self.footpoints(x) if foot is None else foot
         r = np.einsum("ij,ij->i", self.positions(x) - Y, N) / self.h
-        return (r, self._close.matrix(N)) if jac else r
+        if not jac:
+            return r
+        if self._close is None:
+            n = self.mesh.n_vertices
+            self._close = Pattern(np.repeat(np.arange(n), 3), np.arange(3 * n), (n, 3 * n),
+                                  None if self._all_free else self.free)
+        return r, self._close.matrix(N)
+
+    def least_squares(self, x: np.ndarray, w1: float, w2: float, foot=None, grad: bool = True):
+        """``w1 |K x|^2 + w2 |r_close|^2`` at ``x`` and, with ``grad``, half its gradient ``(k,)``
+        ``w1 K^T K x + w2 C^T r_close`` (footpoints ``foot`` fixed; weights 0 leave a term out)."""
+        f = 0.0
+        g = np.zeros(len(self.free)) if grad else None
+        if w1 > 0:
+            r = self.K_full @ x
+            f += w1 * float(r @ r)
+            if grad:
+                g += w1 * (self.Kt @ r)
+        if w2 > 0:
+            Y, N = self.footpoints(x) if foot is None else foot
+            r = np.einsum("ij,ij->i", self.positions(x) - Y, N) / self.h
+            f += w2 * float(r @ r)
+            if grad:
+                G = N * r[:, None]
+                g += w2 * (G.ravel() if self._all_free else G.ravel()[self.free])
+        return (f, g) if grad else f
 
     # -- measures and result ------------------------------------------------
     def measure(self, x: np.ndarray) -> dict:
         """Max defects at ``x``: planarity, conical, circular, det (quads), fairness energy."""
         Vs = x.reshape(-1, 3)  # every measure is scale-free: the scaled positions will do
         t = self.mesh.topology
-        phi = angle_values(Vs[self.system.vid])  # the definitions of optimize.measures, angles once
+        known = {}  # values a system computed at this x (the last trial step), if any
+        for system in self._systems.values():
+            known = {**system.cached(Vs), **known}
+        phi = known["phi"] if "phi" in known else angle_values(Vs[self.vid])
         w = phi[t.star_corners[t.interior_valence4, :4]]
         quads = np.nonzero(self.mesh.face_sizes == 4)[0]
         q = phi[t.offsets[quads][:, None] + np.arange(4)]
@@ -145,7 +255,8 @@ class Problem:
                "circular": float(np.maximum(np.abs(q[:, 0] + q[:, 2] - np.pi),
                                             np.abs(q[:, 1] + q[:, 3] - np.pi)).max(initial=0.0))}
         if self.has_quads:
-            out["det"] = float(np.abs(det_values(Vs[self.system.quads])).max())
+            D = known["D"] if "D" in known else det_values(Vs[self.quads])
+            out["det"] = float(np.abs(D).max())
         out["fairness"] = float(np.sum(self.fairness(x)[0] ** 2))
         return out
 
@@ -165,6 +276,11 @@ class Problem:
         """'planarity 3.1e-07 <= 1e-06, det ...' for messages."""
         return ", ".join(f"{k} {m[k]:.3g} {'<=' if m[k] <= self.tolerance(k) else '>'} "
                          f"{self.tolerance(k):.3g}" for k in self.tests)
+
+    def max_distance(self, V: np.ndarray) -> float:
+        """Largest distance of ``V (n, 3)`` to the reference, relative to its bbox diagonal."""
+        Y, _ = self.foot_search.closest(V)
+        return float(np.linalg.norm(V - Y, axis=1).max(initial=0.0) / self.ref.bbox_diagonal)
 
     def result(self, x: np.ndarray, *, status: str, nit: int, history: list, timings: dict,
                method: str, message: str, multipliers: np.ndarray | None = None) -> OptimizeResult:
@@ -186,7 +302,7 @@ class Problem:
             axes, cones = node_axes(out)
         return OptimizeResult(
             mesh=out, success=success, status=status, message=message, nit=nit, history=history,
-            defects=defects, max_distance=float(self.ref.distance(V).max() / self.ref.bbox_diagonal),
+            defects=defects, max_distance=self.max_distance(V),
             normals=measures.face_normals(out), axes=axes, cone_angles=cones,
             multipliers=multipliers, timings=timings, method=method, target=self.target)
 

@@ -31,8 +31,12 @@ Near-singular systems (the paper falls back to an SVD):
   the surface), so without it the steps would be unbounded along the
   constraint set.  It starts at ``1e-3``, is divided by 3 after a full step
   and multiplied by 2 (``alpha >= 1/4``) or 8 after a shortened one.
-- SuperLU factors the matrix; a failed or inaccurate solve falls back to
-  LSQR (:func:`optimize.paper.linalg.solve`).
+- Where a reverse Cuthill-McKee ordering makes the KKT matrix a narrow band
+  (strips, small meshes; :func:`optimize.paper.assembly.kkt_band`) LAPACK's
+  banded LU with partial pivoting factors it, refilled on a layout fixed for
+  the run; otherwise, or when a banded solution fails the checks (not finite,
+  relative residual above 1e-8, near-singular), SuperLU does; a failed or
+  inaccurate SuperLU solve falls back to LSQR (:func:`optimize.paper.linalg.solve`).
 
 Soft line search: the full step, then the full step with a second-order
 correction (a minimum-norm step back onto the linearized constraints, same
@@ -66,8 +70,9 @@ import scipy.sparse as sp
 from ..mesh import Mesh
 from ..result import OptimizeResult
 from ..tolerances import DEFAULT, Tolerances
+from .assembly import kkt_band
 from .hessian import constraint_curvature
-from .linalg import Factor
+from .linalg import COND_LIMIT, RESIDUAL_TOL, Factor
 from .penalty import Run
 from .problem import Problem
 from .targets import default_mu
@@ -83,27 +88,15 @@ def objective(p: Problem, x: np.ndarray, w1: float, w2: float, derivatives: bool
     """``f`` at ``x`` (and ``g (k,)``, ``H (k, k)`` on the free coordinates).
 
     foot : closeness footpoints ``(Y, N)`` (recomputed at ``x`` when None).
+    ``H`` is stored on the fixed pattern :attr:`optimize.paper.problem.Problem.hpat`.
     """
-    f, fr, Js = 0.0, [], []
-    if w1 > 0:
-        r, K = p.fairness(x)
-        f += w1 * float(r @ r)
-        fr.append(np.sqrt(w1) * r)
-        Js.append(np.sqrt(w1) * K)
-    if w2 > 0:
-        out = p.closeness(x, foot, jac=derivatives)
-        r = out[0] if derivatives else out
-        f += w2 * float(r @ r)
-        if derivatives:
-            fr.append(np.sqrt(w2) * r)
-            Js.append(np.sqrt(w2) * out[1])
     if not derivatives:
-        return f
-    k = len(p.free)
-    if not Js:
-        return f, np.zeros(k), sp.csr_matrix((k, k))
-    R, J = np.concatenate(fr), sp.vstack(Js, format="csr")
-    return f, 2 * (J.T @ R), (2 * (J.T @ J)).tocsr()
+        return p.least_squares(x, w1, w2, foot, grad=False)
+    if w2 > 0 and foot is None:
+        foot = p.footpoints(x)
+    f, gh = p.least_squares(x, w1, w2, foot)
+    H = p.hpat.csr(2 * p.hessian_data(w1, w2, None if foot is None else foot[1]))
+    return f, 2 * gh, H
 
 
 def kkt_matrix(H: sp.spmatrix, A: sp.spmatrix, delta: float, eps: float = EPS) -> sp.csc_matrix:
@@ -112,14 +105,54 @@ def kkt_matrix(H: sp.spmatrix, A: sp.spmatrix, delta: float, eps: float = EPS) -
     return sp.bmat([[H + delta * sp.identity(k), A.T], [A, -eps * sp.identity(r)]], format="csc")
 
 
+class KKTFactor:
+    """Solves with the KKT matrix :func:`kkt_matrix` ``(H, A, delta, eps)``, factored once.
+
+    band : an :class:`optimize.paper.assembly.KKTBand` (then ``h_data``, the values
+    of ``H`` on ``Problem.hpat``, ``a_data``, those of ``A`` on its pattern, and
+    ``extra``, a sparse addition to ``H``, fill it) or None.  The banded LU's
+    solutions pass the checks of :class:`optimize.paper.linalg.Factor` (finite,
+    relative residual <= 1e-8, not near-singular); if one does not, the sparse
+    path (SuperLU, then LSQR) is used, as without a band.
+    """
+
+    def __init__(self, H, A, delta: float, eps: float = EPS, band=None, h_data=None, a_data=None,
+                 extra=None):
+        self.H, self.A, self.delta, self.eps = H, A, delta, eps
+        self.lu = None if band is None else band.factor(h_data, a_data, delta, eps, extra)
+        self._sparse = None
+
+    def _residual(self, x: np.ndarray, b: np.ndarray) -> float:
+        k = self.H.shape[0]
+        s, dy = x[:k], x[k:]
+        top = self.H @ s + self.delta * s + self.A.T @ dy - b[:k]
+        bottom = self.A @ s - self.eps * dy - b[k:]
+        return float(np.sqrt(top @ top + bottom @ bottom))
+
+    def solve(self, b: np.ndarray) -> tuple[np.ndarray, str]:
+        """``x (k + r,)`` and how it was solved: "banded", "lu" or "lsqr"."""
+        if self.lu is not None and self.lu.ok:
+            bn = float(np.linalg.norm(b))
+            if bn == 0.0:
+                return np.zeros_like(b), "banded"
+            x = self.lu.solve(b)
+            if (np.all(np.isfinite(x)) and self._residual(x, b) <= RESIDUAL_TOL * bn
+                    and np.linalg.norm(x) * self.lu.norm1 <= COND_LIMIT * bn):
+                return x, "banded"
+        if self._sparse is None:
+            self._sparse = Factor(kkt_matrix(self.H, self.A, self.delta, self.eps), symmetric=False)
+        return self._sparse.solve(b)
+
+
 def kkt_step(H: sp.spmatrix, A: sp.spmatrix, g: np.ndarray, c: np.ndarray, y: np.ndarray,
-             delta: float, eps: float = EPS, factor: Factor | None = None):
+             delta: float, eps: float = EPS, factor=None):
     """Step ``s (k,)`` and multiplier change ``dy (r,)`` from the KKT system; and how it was solved.
 
-    factor : a :class:`optimize.paper.linalg.Factor` of :func:`kkt_matrix` to reuse.
+    factor : a :class:`KKTFactor` (or :class:`optimize.paper.linalg.Factor`) of
+    :func:`kkt_matrix` to reuse.
     """
     k = H.shape[0]
-    factor = Factor(kkt_matrix(H, A, delta, eps), symmetric=False) if factor is None else factor
+    factor = KKTFactor(H, A, delta, eps) if factor is None else factor
     sol, how = factor.solve(-np.concatenate([g + A.T @ y, c]))
     return sol[:k], sol[k:], how
 
@@ -213,17 +246,21 @@ def run_sqp(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, kkt_tol:
     last_ok = None  # (x, measures, stationarity, multipliers, iteration, history length) within tolerance
     m = p.measure(x)
     it = 0
+    band = p.band(f"kkt_{hessian}", lambda q: kkt_band(q, q.sqp_system, exact=hessian == "exact"))
     while it < max_iter:
         ti = time.perf_counter()
         foot = p.footpoints(x) if w2 > 0 else None
         f, g, H = objective(p, x, w1, w2, foot=foot)
-        c, A, blocks = p.constraints(x, sqp=True)
+        c, a = p.sqp_system.evaluate_data(x.reshape(-1, 3))
+        A, blocks = p.sqp_system.pattern.csr(a), p.sqp_system.blocks
         y = np.zeros(len(c)) if y is None else y
+        h_data, curvature = H.data, None
         if hessian == "exact" and np.any(y):
-            H = H + p.cols2(constraint_curvature(p.mesh, p.sqp_terms, x.reshape(-1, 3), y, blocks))
+            curvature = p.cols2(constraint_curvature(p.mesh, p.sqp_terms, x.reshape(-1, 3), y, blocks))
+            H = H + curvature
         tm["assemble"] += time.perf_counter() - ti
         ts = time.perf_counter()
-        factor = Factor(kkt_matrix(H, A, delta), symmetric=False)
+        factor = KKTFactor(H, A, delta, band=band, h_data=h_data, a_data=a, extra=curvature)
         s, dy, how = kkt_step(H, A, g, c, y, delta, factor=factor)
         tm["solve"] += time.perf_counter() - ts
         if not (np.all(np.isfinite(s)) and np.all(np.isfinite(dy))):

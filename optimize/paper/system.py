@@ -43,11 +43,27 @@ class Pattern:
         self.shape = (shape[0], ncols)
         self._all = bool(self.keep.all())
 
+    def data(self, vals: np.ndarray) -> np.ndarray:
+        """(nnz,) CSR values: the triplet values ``vals (t,)`` summed into place."""
+        v = vals.ravel() if self._all else vals.ravel()[self.keep]
+        return np.bincount(self.inv, weights=v, minlength=self.nnz)
+
+    def csr(self, data: np.ndarray) -> sp.csr_matrix:
+        """(r, k) CSR of the pattern with values ``data (nnz,)`` (no copy, no checks)."""
+        M = sp.csr_matrix(self.shape)
+        M.data, M.indices, M.indptr = data, self.indices, self.indptr
+        return M
+
     def matrix(self, vals: np.ndarray) -> sp.csr_matrix:
         """(r, k) CSR with the triplet values ``vals (t,)`` summed into place."""
-        v = vals.ravel() if self._all else vals.ravel()[self.keep]
-        data = np.bincount(self.inv, weights=v, minlength=self.nnz)
-        return sp.csr_matrix((data, self.indices, self.indptr), shape=self.shape)
+        return self.csr(self.data(vals))
+
+    @property
+    def rows(self) -> np.ndarray:
+        """(nnz,) int: the row of every stored entry."""
+        if getattr(self, "_rows", None) is None:
+            self._rows = np.repeat(np.arange(self.shape[0]), np.diff(self.indptr))
+        return self._rows
 
 
 class ConstraintSystem:
@@ -82,42 +98,74 @@ class ConstraintSystem:
             self.blocks[term.name] = slice(at, at + r)
             at += r
         self.n_rows = at
+        self._kinds = {term.kind for term in terms}
+        self._last = None
         self.pattern = Pattern(np.concatenate(rows), np.concatenate(cols), (at, 3 * n), free)
+
+    def local(self, V: np.ndarray, jac: bool) -> dict:
+        """The local quantities the terms need at ``V (n, 3)``: corner angles ``phi (c,)``,
+        determinants ``D (q, 4)``, alternating means ``D1 (q,)`` and, with ``jac``, their
+        gradients ``G (c, 9)``, ``GD (q, 4, 12)``, ``G1 (q, 12)``.
+
+        Values without gradients are kept for the last ``V`` (a copy is compared), so
+        that :meth:`optimize.paper.problem.Problem.measure` after a trial step reuses them.
+        """
+        kinds = self._kinds
+        last = self._last
+        if not jac and last is not None and np.array_equal(last[0], V):
+            return last[1]
+        out = {}
+        if "angle" in kinds:
+            if jac:
+                out["phi"], out["G"] = angle_local(V[self.vid])
+            else:
+                out["phi"] = angle_values(V[self.vid])
+        if "det" in kinds or "det1" in kinds:
+            if jac:
+                if "det" in kinds:
+                    out["D"], out["GD"] = det_local(V[self.quads])
+                if "det1" in kinds:
+                    out["D1"], out["G1"] = det_combined_local(V[self.quads])
+            else:
+                out["D"] = det_values(V[self.quads])
+                out["D1"] = out["D"] @ ALTERNATING
+        if not jac:
+            self._last = (V.copy(), out)
+        return out
+
+    def cached(self, V: np.ndarray) -> dict:
+        """The values :meth:`local` last computed, if they were computed at ``V`` (else ``{}``)."""
+        last = self._last
+        return last[1] if last is not None and np.array_equal(last[0], V) else {}
+
+    def evaluate_data(self, V: np.ndarray, jac: bool = True, weighted: bool = False):
+        """``c (r,)`` and, with ``jac``, the Jacobian's CSR values ``(nnz,)`` on :attr:`pattern`."""
+        loc = self.local(V, jac)
+        cs, vals = [], []
+        for term, ent in zip(self.terms, self._entries):
+            w = np.sqrt(term.weight) if weighted and term.weight != 1.0 else 1.0
+            if term.kind == "det":
+                cs.append(w * loc["D"].ravel())
+                if jac:
+                    vals.append(w * loc["GD"].reshape(-1, 12))
+            elif term.kind == "det1":
+                cs.append(w * loc["D1"])
+                if jac:
+                    vals.append(w * loc["G1"])
+            else:
+                corner, sign, S = ent
+                cs.append(w * (S @ loc["phi"] + term.const))
+                if jac:
+                    vals.append((w * sign)[:, None] * loc["G"][corner])
+        c = np.concatenate(cs)
+        if not jac:
+            return c
+        return c, self.pattern.data(np.concatenate([v.ravel() for v in vals]))
 
     def evaluate(self, V: np.ndarray, jac: bool = True, weighted: bool = False):
         """``c (r,)`` and, with ``jac``, ``A (r, k)`` csr at ``V (n, 3)``.
 
         weighted : multiply each block by ``sqrt(term.weight)`` (penalty rows).
         """
-        kinds = {term.kind for term in self.terms}
-        if jac:
-            phi, G = angle_local(V[self.vid])
-            if "det" in kinds:
-                D, GD = det_local(V[self.quads])
-            if "det1" in kinds:
-                D1, G1 = det_combined_local(V[self.quads])
-        else:
-            phi = angle_values(V[self.vid])
-            if kinds & {"det", "det1"}:
-                D = det_values(V[self.quads])
-                D1 = D @ ALTERNATING
-        cs, vals = [], []
-        for term, ent in zip(self.terms, self._entries):
-            w = np.sqrt(term.weight) if weighted and term.weight != 1.0 else 1.0
-            if term.kind == "det":
-                cs.append(w * D.ravel())
-                if jac:
-                    vals.append(w * GD.reshape(-1, 12))
-            elif term.kind == "det1":
-                cs.append(w * D1)
-                if jac:
-                    vals.append(w * G1)
-            else:
-                corner, sign, S = ent
-                cs.append(w * (S @ phi + term.const))
-                if jac:
-                    vals.append((w * sign)[:, None] * G[corner])
-        c = np.concatenate(cs)
-        if not jac:
-            return c
-        return c, self.pattern.matrix(np.concatenate([v.ravel() for v in vals]))
+        out = self.evaluate_data(V, jac, weighted)
+        return (out[0], self.pattern.csr(out[1])) if jac else out
