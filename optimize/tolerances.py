@@ -27,7 +27,7 @@ class Tolerances:
     planarity: float = 1e-6
     conical: float = 1e-6
     circular: float = 1e-6
-    offset: float = 1e-9
+    offset: float = 1e-6
     beam_planarity: float = 1e-6
     cad_linear_mm: float = 1e-3
     closeness: float = 5e-3
