@@ -46,12 +46,14 @@ AREA_REL_TOL = 1e-9
 EDGE_TOL_MM = 1e-6
 
 
-def check_outputs(outdir, tol: Tolerances = DEFAULT) -> dict:
+def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset()) -> dict:
     """Run every check on ``outdir``; returns ``{"outdir", "pass", "checks": {name: {...}}, "seconds"}``.
 
     ``pass`` is False when any check failed (``pass: False``); skipped checks
     (file not written) carry ``pass: None`` and ``skipped``.  Raises
     ExportError only when the folder or the bill of materials is unusable.
+    ``skip`` names files (keys of ``FILES``, e.g. ``{"step"}``) not to read:
+    their checks, and the checks that need them, carry ``pass: None``.
     """
     from .export.bom import read_bom
 
@@ -74,6 +76,9 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT) -> dict:
             ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"]), None)),
             ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None))):
         t1 = time.perf_counter()
+        if key in skip:
+            checks[name] = {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
+            continue
         if not paths[key].exists():
             checks[name] = {"pass": None, "skipped": f"{FILES[key]} was not written"}
             continue
