@@ -139,6 +139,8 @@ class SubdivisionSection(Section):
 class OptimizeSection(Section):
     target: Literal["pq", "conical", "circular", "strip", "none"] | None = None
     method: Literal["default", "penalty", "sqp", "hybrid"] = "default"
+    formulation: Literal["auto", "auxiliary", "vertices"] = "auto"
+    linear_solver: Literal["auto", "pardiso", "superlu", "cholespy", "eliminate"] = "auto"
     fairness: float = Field(default=1e-3, ge=0)
     closeness: float = Field(default=1e-2, ge=0)
     max_iter: int = Field(default=200, ge=1, le=100000)

@@ -89,6 +89,8 @@ def stage_optimize(ctx) -> str:
     kwargs = dict(method=opt.method, fixed=_fixed(opt.fixed), glide_boundary=opt.glide_boundary,
                   fairness=opt.fairness, closeness=opt.closeness, tol=cfg.tolerances.to_tolerances(),
                   max_iter=opt.max_iter, callback=callback)
+    if opt.method == "default":
+        kwargs.update(formulation=opt.formulation, linear_solver=opt.linear_solver)
     hier = subdivide_and_perturb(mesh, levels, scheme=plan["scheme"], target=target, **kwargs)
     ctx.values["levels"] = [_plain(_level_facts(lv)) for lv in hier.levels]
     ctx.values["level_results"] = [lv.result for lv in hier.levels]

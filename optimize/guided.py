@@ -108,9 +108,9 @@ def _embed(M: sp.spmatrix, n_cols: int) -> sp.csr_matrix:
 
 def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np.ndarray,
           glide: Glide | None, fairness: float, closeness: float, tol: Tolerances,
-          max_iter: int, callback=None, backend: str = "superlu", patience: int = 10,
+          max_iter: int, callback=None, backend: str = "auto", patience: int = 10,
           decay: float = 0.5, finish: float = 2.0,
-          soft_iters: int = 10) -> RunState:
+          soft_iters: int = 10, shrink: float = 3.0) -> RunState:
     """Run the iteration from ``x0 (layout.size,)`` (normalized coordinates).
 
     fixed : (k,) int vertices whose coordinates are not unknowns.
@@ -226,7 +226,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             merit1 = float(rn @ rn)
             if np.isfinite(merit1) and merit1 < merit0:
                 accepted = True
-                mu = max(mu / 3, mu_floor)
+                mu = max(mu / shrink, mu_floor)
             else:
                 broken += not np.isfinite(merit1)
                 mu *= 10

@@ -3,7 +3,13 @@
 Each iteration solves ``(J^T J + D + mu I) dx = -g``: a symmetric positive
 definite matrix with the same sparsity pattern every iteration.  Backends:
 
-- ``"superlu"`` (default): SciPy's SuperLU in symmetric mode
+- ``"auto"`` (default): ``"pardiso"`` where MKL is installed (x86-64),
+  otherwise ``"superlu"``.
+- ``"pardiso"``: sparse Cholesky by Intel MKL PARDISO (``optimize.pardiso``):
+  METIS ordering and symbolic analysis done once per sparsity pattern and
+  reused, only the numeric factorization repeats; 6-10x faster than SuperLU
+  on these systems (10k-face conical system 0.63 s against 5.7 s).
+- ``"superlu"``: SciPy's SuperLU in symmetric mode
   (``diag_pivot_thresh=0``, ``MMD_AT_PLUS_A`` ordering).
 - ``"cholespy"``: sparse Cholesky (CHOLMOD inside cholespy, which ships a
   reference BLAS, so its supernodal kernels are slow: measured 1-3x slower
@@ -39,7 +45,16 @@ import scipy.sparse.linalg as spla
 
 log = logging.getLogger(__name__)
 
-BACKENDS = ("cholespy", "superlu", "eliminate")
+BACKENDS = ("auto", "pardiso", "cholespy", "superlu", "eliminate")
+
+
+def resolve_backend(backend: str) -> str:
+    """The backend ``"auto"`` stands for here: ``"pardiso"`` when MKL loads, else ``"superlu"``."""
+    if backend != "auto":
+        return backend
+    from . import pardiso
+
+    return "pardiso" if pardiso.available() else "superlu"
 
 
 class SolveError(RuntimeError):
@@ -87,13 +102,17 @@ class NormalSolver:
     cg_maxiter : CG step budget; None = about half the last factorization time.
     """
 
-    def __init__(self, backend: str = "superlu", blocks: np.ndarray | None = None,
+    def __init__(self, backend: str = "auto", blocks: np.ndarray | None = None,
                  reuse: bool = True, cg_rtol: float = 1e-6, cg_maxiter: int | None = None):
         if backend not in BACKENDS:
             raise ValueError(f"linear solver backend {backend!r}, expected one of {BACKENDS}")
+        backend = resolve_backend(backend)
         if backend == "eliminate" and blocks is None:
             backend = "superlu"
         self.backend = backend
+        self._pardiso = None
+        if backend == "pardiso":  # a numeric refactorization costs only ~15 solves: CG rarely pays
+            reuse = False
         self.blocks = blocks
         self._factor = None
         self.reuse = reuse
@@ -111,7 +130,13 @@ class NormalSolver:
         self.factorizations += 1
         t0 = time.perf_counter()
         try:
-            if self.backend == "cholespy":
+            if self.backend == "pardiso":
+                if self._pardiso is None:
+                    from .pardiso import PardisoCholesky
+
+                    self._pardiso = PardisoCholesky()
+                self._factor = self._pardiso.update(A)
+            elif self.backend == "cholespy":
                 self._factor = _cholespy_factor(A)
             elif self.backend == "superlu":
                 self._factor = _superlu_factor(A)

@@ -31,6 +31,16 @@ def test_optimize_conical_writes_mesh_and_report(tmp_path, capsys):
     assert "converged" in text and "conical" in text
 
 
+def test_optimize_formulation_and_solver_flags(tmp_path, capsys):
+    mesh, path = _noisy(tmp_path)
+    out = tmp_path / "out.obj"
+    code = main(["optimize", str(path), "-o", str(out), "--target", "conical",
+                 "--formulation", "auxiliary", "--linear-solver", "superlu"])
+    assert code == 0
+    assert measures.conical_defect(read_mesh(out)).max() <= 1e-6
+    assert "converged" in capsys.readouterr().out
+
+
 def test_optimize_exit_3_when_budget_too_small(tmp_path, capsys):
     _, path = _noisy(tmp_path)
     out, rep = tmp_path / "out.obj", tmp_path / "r.json"

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from optimize import shapes
-from optimize.constraints import anglebalance, anglesum, circular, conical, glide, planarity, unit
+from optimize.constraints import anglebalance, anglesum, circular, conical, diagonals, glide, planarity, unit
 from optimize.errors import ConfigError
 from optimize.constraints import fixed as fixed_mod
 from optimize.formulation import Formulation
@@ -42,11 +42,43 @@ def _random_x(form, seed=1):
     return x + 0.1 * rng.standard_normal(x.size)
 
 
+@pytest.mark.parametrize("unknowns", ["auxiliary", "vertices"])
 @pytest.mark.parametrize("target", ["pq", "conical", "circular"])
-def test_formulation_jacobian_finite_differences(target):
-    form = Formulation(shapes.perturbed(_revolution(), 0.1, seed=2), target)
+def test_formulation_jacobian_finite_differences(target, unknowns):
+    form = Formulation(shapes.perturbed(_revolution(), 0.1, seed=2), target, unknowns)
     x = _random_x(form)
     assert _fd_check(form.terms, x) < 1e-7
+
+
+def test_diagonal_distance_is_the_planarity_measure_times_mean_diagonal():
+    from optimize import measures
+
+    mesh = shapes.perturbed(_revolution(), 0.1, seed=9)
+    form = Formulation(mesh, "pq", "vertices")
+    r, J = diagonals.terms(form.start(mesh.V), form.layout, mesh)
+    P = mesh.V[mesh.F[:, :4]]
+    mean_diag = 0.5 * (np.linalg.norm(P[:, 2] - P[:, 0], axis=1) + np.linalg.norm(P[:, 3] - P[:, 1], axis=1))
+    np.testing.assert_allclose(np.abs(r) / mean_diag, measures.planarity(mesh), rtol=1e-9)
+    assert _fd_check(lambda y: diagonals.terms(y, form.layout, mesh), _random_x(form, 10)) < 1e-7
+
+
+def test_diagonal_rows_of_an_ngon_vanish_only_when_it_is_planar():
+    from optimize import Mesh
+
+    t = np.linspace(0, 2 * np.pi, 7)[:-1]
+    hexagon = np.stack([np.cos(t), np.sin(t), np.zeros(6)], axis=1)
+    flat = Mesh(hexagon, [list(range(6))])
+    assert diagonals.quadruples(flat).shape == (3, 4)
+    form = Formulation(flat, "pq", "vertices")
+    r, _ = form.terms(form.start(flat.V))
+    assert r.shape == (3,) and np.abs(r).max() < 1e-15
+    bent = flat.with_vertices(flat.V + np.array([0, 0, 0, 0, 0, 0.1])[:, None] * [0, 0, 1])
+    assert np.abs(Formulation(bent, "pq", "vertices").terms(bent.V.ravel())[0]).max() > 1e-3
+
+
+def test_unknown_formulation_raises_config_error():
+    with pytest.raises(ConfigError, match="formulation.*'normals'"):
+        Formulation(_revolution(), "pq", "normals")
 
 
 @pytest.mark.parametrize("module,target", [(planarity, "pq"), (conical, "conical"), (anglesum, "circular"),
@@ -87,22 +119,25 @@ def test_glide_jacobian_and_footpoints():
     np.testing.assert_allclose(np.linalg.norm(Y - P, axis=1), best, atol=1e-14)
 
 
-def test_zero_residual_on_translational_surface_pq():
-    form = Formulation(_translational(), "pq")
+@pytest.mark.parametrize("unknowns", ["auxiliary", "vertices"])
+def test_zero_residual_on_translational_surface_pq(unknowns):
+    form = Formulation(_translational(), "pq", unknowns)
     r, _ = form.terms(form.start(form.mesh.V))
     assert np.abs(r).max() < 1e-12
 
 
+@pytest.mark.parametrize("unknowns", ["auxiliary", "vertices"])
 @pytest.mark.parametrize("target", ["conical", "circular"])
-def test_zero_residual_on_surface_of_revolution(target):
-    form = Formulation(_revolution(), target)
+def test_zero_residual_on_surface_of_revolution(target, unknowns):
+    form = Formulation(_revolution(), target, unknowns)
     r, _ = form.terms(form.start(form.mesh.V))
     assert np.abs(r).max() < 1e-10
 
 
-def test_nonzero_residual_on_noise():
+@pytest.mark.parametrize("unknowns", ["auxiliary", "vertices"])
+def test_nonzero_residual_on_noise(unknowns):
     for target in ("pq", "conical", "circular"):
-        form = Formulation(shapes.perturbed(_revolution(), 0.1, seed=8), target)
+        form = Formulation(shapes.perturbed(_revolution(), 0.1, seed=8), target, unknowns)
         r, _ = form.terms(form.start(form.mesh.V))
         assert np.abs(r).max() > 1e-3
 

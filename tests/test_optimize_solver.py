@@ -16,10 +16,11 @@ def noisy_dome():
     return shapes.perturbed(base, 0.04, seed=11)
 
 
+@pytest.mark.parametrize("formulation", ["auxiliary", "vertices"])
 @pytest.mark.parametrize("target,key", [("pq", None), ("conical", "conical"), ("circular", "circular")])
-def test_each_target_reaches_tolerance_on_perturbed_revolution(noisy_dome, target, key):
+def test_each_target_reaches_tolerance_on_perturbed_revolution(noisy_dome, target, key, formulation):
     V0 = noisy_dome.V.copy()
-    res = optimize_mesh(noisy_dome, target)
+    res = optimize_mesh(noisy_dome, target, formulation=formulation)
     assert res.success and res.status == "converged", res.message
     np.testing.assert_array_equal(noisy_dome.V, V0)  # pure: the input is untouched
     np.testing.assert_array_equal(res.mesh.F, noisy_dome.F)
@@ -42,10 +43,11 @@ def test_each_target_reaches_tolerance_on_perturbed_revolution(noisy_dome, targe
     assert res.history[-1]["planarity"] <= tol.planarity
 
 
-@pytest.mark.parametrize("target", ["pq", "conical", "circular"])
-def test_data_halftunnel(target):
+@pytest.mark.parametrize("target,formulation", [("pq", "auto"), ("conical", "auto"), ("circular", "auto"),
+                                                ("conical", "auxiliary")])
+def test_data_halftunnel(target, formulation):
     mesh = read_mesh(f"{DATA}/halftunnel.off")
-    res = optimize_mesh(mesh, target)
+    res = optimize_mesh(mesh, target, formulation=formulation)
     assert res.success, res.message
     assert res.max_distance < 0.005  # goal: under 0.5% of the bounding-box diagonal
     ref = Reference(mesh)
@@ -141,13 +143,16 @@ def test_impossible_constraints_stall():
 
 @pytest.mark.parametrize("kwargs,match", [({"target": "flat"}, "target"), ({"method": "newton"}, "method"),
                                           ({"fairness": -1.0}, "fairness"), ({"fixed": "edges"}, "fixed"),
-                                          ({"linear_solver": "magic"}, "linear_solver")])
+                                          ({"linear_solver": "magic"}, "linear_solver"),
+                                          ({"formulation": "normals"}, "formulation"),
+                                          ({"method": "penalty", "formulation": "vertices"},
+                                           "settings of the default method")])
 def test_bad_settings_raise_config_error(kwargs, match):
     with pytest.raises(ConfigError, match=match):
         optimize_mesh(shapes.grid(3, 3), **kwargs)
 
 
-@pytest.mark.parametrize("backend", ["superlu", "eliminate"])
+@pytest.mark.parametrize("backend", ["superlu", "eliminate", "pardiso"])
 def test_linear_solver_backends_agree(noisy_dome, backend):
     a = optimize_mesh(noisy_dome, "circular")
     b = optimize_mesh(noisy_dome, "circular", linear_solver=backend)

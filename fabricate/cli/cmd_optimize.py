@@ -21,6 +21,12 @@ def register(sub) -> None:
                         "circular quads; strip: developable strip (paper methods only). Default pq.")
     p.add_argument("--method", choices=METHODS, default="default",
                    help="default: regularized Gauss-Newton; penalty/sqp/hybrid: the paper's methods")
+    p.add_argument("--formulation", choices=("auto", "auxiliary", "vertices"), default="auto",
+                   help="default method's unknowns: auxiliary (positions + normals, axes, centres; "
+                        "quadratic rows), vertices (positions only), auto (vertices for conical)")
+    p.add_argument("--linear-solver", choices=("auto", "pardiso", "superlu", "cholespy", "eliminate"),
+                   default="auto", help="sparse solver of the default method (auto: MKL PARDISO "
+                                        "where installed, else SuperLU)")
     p.add_argument("--fix", default="none", metavar="{boundary,corners,none}",
                    help="vertices that must not move (default none)")
     p.add_argument("--glide", action="store_true", help="boundary vertices glide on the boundary curve")
@@ -51,7 +57,9 @@ def run(args) -> int:
     res = optimize_mesh(mesh, args.target, method=args.method, reference=reference,
                         fixed=None if args.fix == "none" else args.fix, glide_boundary=args.glide,
                         fairness=args.fairness, closeness=args.closeness, tol=tol,
-                        max_iter=args.max_iter)
+                        max_iter=args.max_iter,
+                        **({} if args.method != "default" else
+                           dict(formulation=args.formulation, linear_solver=args.linear_solver)))
     write_mesh(args.output, res.mesh)
     d = res.defects
     print(f"{mesh.name} -> {args.output}: {res.status} after {res.nit} iterations "
