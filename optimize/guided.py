@@ -21,7 +21,8 @@ or converge only linearly, so it stays exact: ``split_terms(exact_angles=True)``
 (constraints ``phi``; fairness ``K``; tangent-plane closeness ``r_c`` with
 footpoints recomputed at ``x``; boundary gliding ``r_g``; Levenberg-Marquardt
 damping ``mu``) as one sparse SPD system.  A step is accepted when it lowers
-that objective (otherwise ``mu`` grows and the system is solved again); the
+that objective (otherwise ``mu`` grows and the system is solved again; an accepted
+step's gain ratio sets the next ``mu``, see ``solve``); the
 soft weights ``w_f, w_c`` are halved every iteration, as in the paper's
 penalty method, so that the constraints become exact while the first steps
 stay fair and close; within a factor 100 of the tolerances (or after ten
@@ -110,13 +111,23 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
           glide: Glide | None, fairness: float, closeness: float, tol: Tolerances,
           max_iter: int, callback=None, backend: str = "auto", patience: int = 10,
           decay: float = 0.5, finish: float = 2.0,
-          soft_iters: int = 10, shrink: float = 3.0) -> RunState:
+          soft_iters: int = 10, shrink: float = 10.0, gain: bool = True) -> RunState:
     """Run the iteration from ``x0 (layout.size,)`` (normalized coordinates).
 
     fixed : (k,) int vertices whose coordinates are not unknowns.
     decay : factor applied to the soft weights after each iteration; they are
         dropped once the worst defect is within ``10**finish`` of its tolerance
         or after ``soft_iters`` iterations (then ``0.5**10`` of their start).
+    gain, shrink : damping update.  With ``gain`` (default) an accepted step's
+        gain ratio ``rho`` (actual decrease of the objective over the decrease
+        the linearized, majorized model predicts) sets the damping: ``mu / shrink``
+        when ``rho > 0.75``, ``2 mu`` when ``rho < 0.25`` (the model was poor: a
+        shorter next step), else unchanged.  Without it every accepted step
+        divides ``mu`` by ``shrink``.  Measured (benchmarks/bench_optimize.py):
+        the old rule (``mu / 3`` on every acceptance) took 10 iterations on a
+        10k-face conical dome and stalled on a 10k-face wave height field whose
+        planarity barely moved in long, accepted but poorly predicted steps; the
+        gain rule takes 8 and converges on the wave in 49.
     callback : called with each iteration's history dict (observes only).
     """
     t_start = time.perf_counter()
@@ -226,7 +237,16 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             merit1 = float(rn @ rn)
             if np.isfinite(merit1) and merit1 < merit0:
                 accepted = True
-                mu = max(mu / shrink, mu_floor)
+                if gain:
+                    # gain ratio: actual decrease over the decrease the (majorized) model predicts
+                    pred = -(2.0 * float(g @ dx) + float(dx @ (JtJ @ dx)))
+                    rho = (merit0 - merit1) / pred if pred > 0 else 0.0
+                    if rho > 0.75:
+                        mu = max(mu / shrink, mu_floor)
+                    elif rho < 0.25:
+                        mu = mu * 2.0
+                else:
+                    mu = max(mu / shrink, mu_floor)
             else:
                 broken += not np.isfinite(merit1)
                 mu *= 10

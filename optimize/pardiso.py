@@ -23,6 +23,7 @@ import ctypes
 import glob
 import os
 import sys
+import time
 from ctypes.util import find_library
 
 import numpy as np
@@ -95,6 +96,7 @@ class PardisoCholesky:
         p[34] = 1   # zero-based indices
         self.n = 0
         self.analyses = 0
+        self.seconds = {"analysis": 0.0, "numeric": 0.0, "solve": 0.0}
         self._pattern = None
         self._arrays = None
         self._factored = False
@@ -141,14 +143,18 @@ class PardisoCholesky:
         same = (self._pattern is not None and self.n == n and np.array_equal(self._pattern[0], indptr)
                 and np.array_equal(self._pattern[1], indices))
         self.n = n
+        t0 = time.perf_counter()
         if not same:
             if self._factored:
                 self._release()
             self._call(11)
             self.analyses += 1
             self._pattern = (indptr, indices)
+        t1 = time.perf_counter()
         self._call(22)
         self._factored = True
+        self.seconds["analysis"] += t1 - t0
+        self.seconds["numeric"] += time.perf_counter() - t1
         return self
 
     def solve(self, b: np.ndarray) -> np.ndarray:
@@ -158,7 +164,10 @@ class PardisoCholesky:
         b = np.asarray(b, dtype=np.float64)
         if b.shape != (self.n,):
             raise ValueError(f"PARDISO solve: right-hand side of shape {b.shape}, expected ({self.n},)")
-        return self._call(33, b)
+        t0 = time.perf_counter()
+        x = self._call(33, b)
+        self.seconds["solve"] += time.perf_counter() - t0
+        return x
 
     __call__ = solve
 
