@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import json
 import resource
 import subprocess
@@ -165,7 +166,22 @@ def comparison(args):
     for mesh, target in cases:
         r = ours(mesh, target)
         rows.append(r)
+        # in-run baselines of our own: the previous defaults (SciPy SuperLU; for conical the
+        # auxiliary-variable formulation) on the same mesh
+        base = [("ours-aux", dict(formulation="auxiliary"))] if target == "conical" else []
+        if not (target == "conical" and mesh.n_faces > 3000):  # SuperLU on aux conical 10k: ~270 s
+            base.append(("ours-slu", dict(linear_solver="superlu",
+                                          formulation="auxiliary" if target == "conical" else "auto")))
+        own = []
+        for label, kw in base:
+            b = ours(mesh, target, **kw)
+            b["method"] = label
+            b["ratio"] = f"ours x{b['seconds'] / r['seconds']:.1f} faster"
+            rows.append(b)
+            own.append(b)
         if target != "pq":
+            print_table([r] + own)
+            print(flush=True)
             continue
         ratios = []
         for name, lib, fn in (("libigl", igl, run_libigl), ("mpfp", mpfp, run_mpfp)):
@@ -177,7 +193,7 @@ def comparison(args):
             rows.append(p)
             ratios.append(f"{name} x{p['seconds'] / r['seconds']:.1f}" + ("" if reached else " (peer unconverged)"))
         r["ratio"] = ", ".join(ratios)
-        print_table(rows[-1 - len(ratios):])
+        print_table([r] + own + rows[len(rows) - len(ratios):])
         print(flush=True)
     print("\nAll rows (peer time / our time; 'max' is the target's defect):")
     print_table(rows)
@@ -205,16 +221,21 @@ def one(target, faces):
 
 def scaling(args):
     sizes = [1000, 3000, 10000, 30000] + ([100000] if args.large else [])
-    print("\nPQ scaling curve (perturbed dome of revolution, one fresh process per size):")
-    print(f"{'faces':>8s} {'seconds':>9s} {'s/1k faces':>10s} {'max planarity':>14s} {'nit':>4s} {'peak MiB':>9s}")
-    for n in sizes:
-        p = subprocess.run([sys.executable, __file__, "--one", "pq", str(n)], capture_output=True, text=True)
-        if p.returncode:
-            print(f"{n:8d} failed: {p.stderr.strip().splitlines()[-1:]}", flush=True)
-            continue
-        r = json.loads(p.stdout.strip().splitlines()[-1])
-        print(f"{r['faces']:8d} {r['seconds']:9.2f} {1000 * r['seconds'] / r['faces']:10.3f} "
-              f"{r['max']:14.2e} {r['nit']:4d} {r['peak_rss_mib']:9.0f}", flush=True)
+    for target, sizes in (("pq", sizes), ("conical", [1000, 3000, 10000] + ([30000] if args.large else []))):
+        print(f"\n{target} scaling curve (perturbed dome of revolution, one fresh process per size; "
+              f"'max' is the {'planarity' if target == 'pq' else 'conical defect'}):")
+        print(f"{'faces':>8s} {'seconds':>9s} {'s/1k faces':>10s} {'max':>10s} {'planarity':>10s} "
+              f"{'nit':>4s} {'peak MiB':>9s}")
+        for n in sizes:
+            p = subprocess.run([sys.executable, __file__, "--one", target, str(n)], capture_output=True,
+                               text=True)
+            if p.returncode:
+                print(f"{n:8d} failed: {p.stderr.strip().splitlines()[-1:]}", flush=True)
+                continue
+            r = json.loads(p.stdout.strip().splitlines()[-1])
+            print(f"{r['faces']:8d} {r['seconds']:9.2f} {1000 * r['seconds'] / r['faces']:10.3f} "
+                  f"{r['max']:10.2e} {r['planarity']:10.2e} {r['nit']:4d} {r['peak_rss_mib']:9.0f}",
+                  flush=True)
 
 
 def linalg(args):
@@ -226,26 +247,34 @@ def linalg(args):
     from optimize.guided import _embed
     from optimize.linalg import BACKENDS, NormalSolver
 
-    print("\nOne regularized Gauss-Newton system (first iteration), each backend, fresh factorization:")
-    for mesh, target in ((height_field(10000), "pq"), (revolution(10000), "circular"),
-                         (revolution(10000), "conical")):
+    print("\nOne regularized Gauss-Newton system (first iteration), each backend, fresh factorization")
+    print("(pardiso: analysis + numeric factorization + solve; the analysis is reused by later iterations):")
+    for mesh, target, unknowns in ((height_field(10000), "pq", "auxiliary"),
+                                   (revolution(10000), "circular", "auxiliary"),
+                                   (revolution(10000), "conical", "auxiliary"),
+                                   (revolution(10000), "conical", "vertices")):
         c, h = normalization(mesh)
         nm = mesh.with_vertices((mesh.V - c) / h)
-        form = Formulation(nm, target)
+        form = Formulation(nm, target, unknowns)
         x = form.start(nm.V)
         r, J = form.terms(x)
         K1, K2 = (_embed(k, J.shape[1]) for k in fairness_matrix_parts(nm))
         A = (J.T @ J + 2e-3 * (K1.T @ K1 + K2.T @ K2) + 1e-3 * sp.eye(J.shape[1])).tocsr()
         b = -(J.T @ r)
-        line = f"{mesh.name:14s} {target:8s} unknowns {A.shape[0]:7d} nnz {A.nnz:8d}:"
+        line = f"{mesh.name:14s} {target:8s} {unknowns:9s} unknowns {A.shape[0]:7d} nnz {A.nnz:8d}:"
         ref = None
         for be in BACKENDS:
-            if be == "eliminate" and form.face_blocks() is None:
+            if be == "auto" or (be == "eliminate" and form.face_blocks() is None):
+                continue
+            if be == "cholespy" and importlib.util.find_spec("cholespy") is None:
                 continue
             s = NormalSolver(be, form.face_blocks(), reuse=False)
             t = time.perf_counter()
             xs = s.solve(A, b)
             line += f"  {be} {time.perf_counter() - t:6.2f} s"
+            if be == "pardiso":
+                sec = s._pardiso.seconds
+                line += f" [{sec['analysis']:.2f}+{sec['numeric']:.2f}+{sec['solve']:.2f}, L {s._pardiso.factor_nnz / 1e6:.1f}M]"
             ref = xs if ref is None else ref
             line += f" (diff {np.abs(xs - ref).max():.0e})"
         print(line)
