@@ -134,11 +134,18 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         axes, cone_angles = _node_axes(form, run.x, normals)
     max_distance = float(ref.distance(Xn).max() / ref.bbox_diagonal)
     defects = measures.summary(out, tol)
+    status, message = run.status, run.message
+    folded = np.nonzero(measures.folded_faces(mesh, V))[0]
+    defects["folded"] = {"count": int(len(folded)), "faces": folded[:20].tolist()}
+    if len(folded) and status == "converged":
+        status = "folded"
+        message = (f"{run.message}, but {len(folded)} face(s) that were convex became dented or flipped "
+                   f"(first: {folded[:5].tolist()}); raise the fairness weight or fix the boundary")
     timings = dict(run.timings, setup=t_setup, report=time.perf_counter() - t1,
                    total=time.perf_counter() - t0)
-    success = run.status == "converged"
-    log.info("optimize_mesh(%s, %s): %s", mesh.name, target, run.message)
-    return OptimizeResult(mesh=out, success=success, status=run.status, message=run.message,
+    success = status == "converged"
+    log.info("optimize_mesh(%s, %s): %s", mesh.name, target, message)
+    return OptimizeResult(mesh=out, success=success, status=status, message=message,
                           nit=run.nit, history=run.history, defects=defects, max_distance=max_distance,
                           normals=normals, axes=axes, cone_angles=cone_angles, timings=timings,
                           method=method, target=target)

@@ -224,7 +224,7 @@ def _merge(mesh: Mesh, results: list, blocks: list, target: str, tol: Tolerances
     for r, idx in zip(results, blocks):
         V[idx] = r.mesh.V
     out = mesh.with_vertices(V)
-    order = ("converged", "stalled", "max_iter", "diverged")
+    order = ("converged", "folded", "stalled", "max_iter", "diverged")
     status = max((r.status for r in results), key=order.index)
     timings: dict = {}
     for r in results:

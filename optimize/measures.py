@@ -111,6 +111,32 @@ def _vector_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     return n
 
 
+def corner_turns(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+    """(c,) float: signed sine of each corner angle about its face's normal (Newell):
+    positive at a convex corner, negative at a reflex one (topology corner order)."""
+    V = mesh.V if V is None else V
+    t = mesh.topology
+    P = V[t.corner_vertex]
+    u, w = V[t.corner_next_vertex] - P, V[t.corner_prev_vertex] - P
+    N = face_normals(mesh, V)[t.corner_face]
+    lengths = np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1), 1e-300)
+    return np.einsum("ij,ij->i", np.cross(u, w), N) / lengths
+
+
+def folded_faces(mesh: Mesh, V: np.ndarray, V0: np.ndarray | None = None, tol: float = 1e-6) -> np.ndarray:
+    """(m,) bool: faces that folded going from positions ``V0 (n, 3)`` (default ``mesh.V``)
+    to ``V (n, 3)``: a corner convex at ``V0`` turned reflex (signed sine below ``-tol``),
+    or the face normal turned by more than 90 degrees.  A planar bow-tie or a dented
+    panel is planar but cannot be cut from glass, so the optimizer reports it."""
+    V0 = mesh.V if V0 is None else V0
+    t = mesh.topology
+    before, after = corner_turns(mesh, V0), corner_turns(mesh, V)
+    dented = np.zeros(mesh.n_faces, dtype=bool)
+    np.logical_or.at(dented, t.corner_face, (before > -tol) & (after < -tol))
+    flipped = np.einsum("ij,ij->i", face_normals(mesh, V0), face_normals(mesh, V)) < 0
+    return dented | flipped
+
+
 def face_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(m,) float: vector area of each face (exact for planar faces)."""
     return 0.5 * np.linalg.norm(_vector_areas(mesh, V), axis=1)

@@ -14,7 +14,7 @@ import numpy as np
 
 from .mesh import Mesh
 
-STATUSES = ("converged", "stalled", "max_iter", "diverged")
+STATUSES = ("converged", "folded", "stalled", "max_iter", "diverged")
 
 
 @dataclass
@@ -26,8 +26,10 @@ class OptimizeResult:
     success : bool
         True exactly when every tolerance of the target was reached.
     status : str
-        ``"converged"`` | ``"stalled"`` (no progress) | ``"max_iter"`` |
-        ``"diverged"`` (the last good iterate is returned).
+        ``"converged"`` | ``"folded"`` (every tolerance reached, but faces that
+        were convex became dented or flipped: ``defects["folded"]`` lists them) |
+        ``"stalled"`` (no progress) | ``"max_iter"`` | ``"diverged"`` (the last
+        good iterate is returned).
     message : str
         One sentence saying why the run stopped, with the figures.
     nit : int

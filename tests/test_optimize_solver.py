@@ -98,7 +98,8 @@ def test_invariance_under_rigid_motion_and_scale(noisy_dome, target):
 
 
 def test_fixed_vertices_do_not_move():
-    mesh = shapes.perturbed(shapes.grid(8, 7, height=lambda x, y: 0.5 * x * y), 0.05, seed=14)
+    # z = f(x) + g(y): the grid is a conjugate net, so a fold-free PQ mesh exists
+    mesh = shapes.perturbed(shapes.grid(8, 7, height=lambda x, y: 0.3 * x ** 2 + 0.2 * y ** 2), 0.05, seed=14)
     for fixed in ("boundary", "corners", [5, 17, 30]):
         res = optimize_mesh(mesh, "pq", fixed=fixed)
         assert res.success, (fixed, res.message)
@@ -106,6 +107,31 @@ def test_fixed_vertices_do_not_move():
                "corners": np.array([0, 6, 49, 55])}.get(fixed, np.array(fixed)) if isinstance(fixed, str) else np.array(fixed)
         np.testing.assert_array_equal(res.mesh.V[idx], mesh.V[idx])
         assert np.abs(res.mesh.V - mesh.V).max() > 1e-6  # others did move
+
+
+def test_folded_faces_are_not_a_success():
+    # z = x y meshed along its rulings (asymptotic lines, no conjugate net): with the noisy
+    # boundary fixed, planarity is reached only by denting quads (reflex corners of 30-65 deg)
+    mesh = shapes.perturbed(shapes.grid(8, 7, height=lambda x, y: 0.5 * x * y), 0.05, seed=14)
+    res = optimize_mesh(mesh, "pq", fixed="boundary")
+    assert res.defects["planarity"]["ok"]  # every tolerance is met ...
+    assert res.status == "folded" and not res.success  # ... but the panels are not cuttable
+    assert res.defects["folded"]["count"] > 0 and "dented or flipped" in res.message
+    folded = measures.folded_faces(mesh, res.mesh.V)
+    assert folded.sum() == res.defects["folded"]["count"]
+
+
+def test_folded_faces_measure_on_hand_made_quads():
+    from optimize import Mesh
+
+    square = Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2, 3]])
+    dented = square.V.copy()
+    dented[2] = [0.3, 0.3, 0.0]  # corner 2 pushed inside: a reflex corner at vertex 2
+    flipped = square.V[:, [1, 0, 2]]  # mirrored: the normal turns by 180 degrees
+    assert not measures.folded_faces(square, square.V).any()
+    assert measures.folded_faces(square, dented).all()
+    assert measures.folded_faces(square, flipped).all()
+    assert measures.corner_turns(square).min() == pytest.approx(1.0)
 
 
 def test_boundary_glides_on_reference_boundary():

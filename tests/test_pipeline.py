@@ -231,6 +231,24 @@ def test_input_mesh_is_not_changed_and_units_convert(tmp_path, monkeypatch):
     assert read_mesh(tmp_path / "dome_m.obj").V.tolist() == mesh.V.tolist()
 
 
+def test_folded_panels_stop_the_run_before_any_cut_file(tmp_path, capsys):
+    """Planar to tolerance but dented: z = x y meshed along its rulings, noisy boundary fixed.
+    The optimizer says "folded"; the CAD stage refuses to cut such panels and names them."""
+    from fabricate.cli import main
+    from optimize import optimize_mesh, shapes
+    from optimize.io import write_mesh
+
+    mesh = shapes.perturbed(shapes.grid(8, 7, size=(7000.0, 6000.0),
+                                        height=lambda x, y: 0.5e-3 * x * y), 50.0, seed=14)
+    assert optimize_mesh(mesh, "pq", fixed="boundary").status == "folded"
+    write_mesh(tmp_path / "hypar.obj", mesh)
+    (tmp_path / "f.yaml").write_text("input: {mesh: hypar.obj}\noptimize: {target: pq, fixed: boundary}\n")
+    code = main(["run", str(tmp_path / "f.yaml"), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and "folded" in err and "panel P" in err
+    assert not (tmp_path / "out" / "f").exists()  # nothing that looks complete
+
+
 def test_design_parameter_error_from_the_config(tmp_path):
     (tmp_path / "d.yaml").write_text("input:\n  shape: {name: dome, params: {rings: 1}}\n")
     with pytest.raises(ConfigError, match=r"d.yaml:2: input.shape: .*rings=1"):

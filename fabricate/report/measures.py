@@ -6,7 +6,8 @@ measure makes the run "tolerance not reached", exit 3), ``worst`` (the five
 worst elements with their index and value) and, where it means something,
 the same figures in mm or degrees (``max_mm``, ``max_deg``).
 
-Enforced: planarity always (glass panels are flat); the conical defect and
+Enforced: planarity always (glass panels are flat), and no folded panel (a
+face the optimizer dented or flipped, ``optimize.measures.folded_faces``); the conical defect and
 the planarity of the beams between interior nodes (torsion-free beams, the
 paper's Geometry Fact 2) for a conical target; the circular defect for a
 circular target.  Beams at boundary nodes are reported apart: there the faces
@@ -95,6 +96,16 @@ def collect_measures(ctx) -> dict[str, dict]:
             "unit": "relative", "count": mesh.n_vertices, "tolerance": tol.closeness, "enforced": False,
             "max": float(result.max_distance), "mean": None, "max_mm": float(result.max_distance * diag),
             "worst": [], "pass": bool(result.max_distance <= tol.closeness)}
+        folded = (result.defects or {}).get("folded")
+        if folded is not None:
+            count = int(folded["count"])
+            out["folded"] = {
+                "what": "faces convex before the optimization that came out dented (a reflex corner) "
+                        "or flipped: planar, but not a panel anyone can cut",
+                "unit": "faces", "count": mesh.n_faces, "tolerance": 0, "enforced": True,
+                "max": float(count), "mean": None,
+                "worst": [{"face": int(f), "value": 1.0} for f in folded["faces"][:N_WORST]],
+                "pass": count == 0}
     out.update(_offset_measures(ctx, tol, enforce=target == "conical"))
     return out
 
