@@ -1,5 +1,6 @@
 """``fabricate check OUTDIR``: every file read back and compared with the bill of materials."""
 import dataclasses
+import json
 import shutil
 
 import pytest
@@ -48,6 +49,9 @@ def test_cli_check_exit_codes(run_dir, tmp_path, capsys):
     assert main(["check", str(run_dir)]) == 0
     assert "all checks passed" in capsys.readouterr().out
     assert main(["check", str(tmp_path / "nothing")]) == 4
+    assert main(["check", str(run_dir), "--fast", "--json"]) == 0
+    fast = json.loads(capsys.readouterr().out)
+    assert fast["mode"] == "fast" and fast["pass"] is True and "scanned" in json.dumps(fast["checks"]["step"])
 
 
 def test_missing_files_are_reported_as_skipped_not_passed(run_dir, tmp_path):

@@ -13,13 +13,16 @@ def register(sub) -> None:
                                    "3D faces. Exit 0 when every check passes, 4 otherwise.")
     p.add_argument("outdir", help="a run's output folder (with bom.csv, model.step, ...)")
     p.add_argument("--json", action="store_true", help="print the full result as JSON")
+    p.add_argument("--fast", action="store_true",
+                   help="do not read the STEP back with OpenCASCADE (nearly all of the time on big "
+                        "models): scan its text instead, and check the DXF areas against the BOM")
     p.set_defaults(handler=run)
 
 
 def run(args) -> int:
-    from fabricate.check import check_outputs
+    from fabricate.check_fast import run_check
 
-    result = check_outputs(args.outdir)
+    result = run_check(args.outdir, "fast" if args.fast else "full")
     if args.json:
         print(json.dumps(result, indent=2, default=str))
     else:
