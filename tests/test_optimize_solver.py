@@ -61,12 +61,15 @@ def test_data_cylinder_with_ngons_is_already_done():
     np.testing.assert_array_equal(res.mesh.V, mesh.V)
 
 
-def test_ngon_caps_become_planar():
+@pytest.mark.parametrize("target,formulation", [("pq", "auxiliary"), ("pq", "vertices"), ("conical", "auto")])
+def test_ngon_caps_become_planar(target, formulation):
     mesh = shapes.perturbed(read_mesh(f"{DATA}/cylinder.obj"), 0.05, seed=12)
     assert measures.planarity(mesh).max() > 1e-2
-    res = optimize_mesh(mesh, "pq")
+    res = optimize_mesh(mesh, target, formulation=formulation)
     assert res.success, res.message
     assert measures.planarity(res.mesh)[mesh.face_sizes > 4].max() <= 1e-6
+    if target == "conical":
+        assert measures.conical_defect(res.mesh).max() <= 1e-6
 
 
 def test_zero_motion_on_exact_meshes():
