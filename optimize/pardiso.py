@@ -32,7 +32,9 @@ import scipy.sparse as sp
 _LIB = None
 _LIB_ERROR = ""
 SMALL = 20000
-"""Systems with fewer unknowns are factored on one thread."""
+"""Systems with fewer unknowns are analysed on one thread."""
+SMALL_FACTOR = 1_000_000
+"""Factors with fewer nonzeros (known after the analysis) are computed on one thread."""
 
 ERRORS = {-1: "input inconsistent", -2: "not enough memory", -3: "reordering problem",
           -4: "zero pivot (matrix not positive definite)", -5: "unclassified internal error",
@@ -102,7 +104,7 @@ class PardisoCholesky:
         p[17] = -1  # report nonzeros of the factor
         p[34] = 1   # zero-based indices
         self.n = 0
-        self.threads = 0  # 0: MKL's default (every core); 1 for small systems, see update
+        self.threads = 0  # 0: MKL's default (every core); 1 for small factors, see update
         self.analyses = 0
         self.seconds = {"analysis": 0.0, "numeric": 0.0, "solve": 0.0}
         self._pattern = None
@@ -160,18 +162,19 @@ class PardisoCholesky:
         same = (self._pattern is not None and self.n == n and np.array_equal(self._pattern[0], indptr)
                 and np.array_equal(self._pattern[1], indices))
         self.n = n
-        # Small systems factor in a few ms, where the OpenMP threads' start-up and (on a
-        # shared machine) waiting for a busy core cost more than they save: measured on a
-        # 900-face PQ run (5,400 unknowns) with the other core loaded, 1 thread 0.18 s of
-        # solving against 0.58 s with 2; at 10k faces 2 threads win (1.5 s against 2.3 s).
-        self.threads = 1 if n < SMALL else 0
         t0 = time.perf_counter()
         if not same:
             if self._factored:
                 self._release()
+            self.threads = 1 if n < SMALL else 0
             self._call(11)
             self.analyses += 1
             self._pattern = (indptr, indices)
+            # Small factors take a few ms, where the OpenMP threads' start-up and (on a
+            # shared machine) waiting for a busy core cost more than they save: on a 900-face
+            # PQ run (factor 0.3M nonzeros) with the other core loaded, 1 thread spent 0.18 s
+            # solving against 0.58 s with 2; at 10k faces (3.6M and more) 2 threads win.
+            self.threads = 1 if self.factor_nnz < SMALL_FACTOR else 0
         t1 = time.perf_counter()
         self._call(22)
         self._factored = True
