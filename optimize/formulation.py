@@ -11,10 +11,10 @@ Targets (all with auxiliary variables so every constraint is at most quadratic):
   which exclude crossed quads).
 
 With ``unknowns="vertices"`` the same targets are written on the vertex
-positions alone (no auxiliary unknowns): planarity as the signed distance
-between the diagonals of each quad (``constraints.diagonals``; runs of four
-vertices for n-gons), the conical angle balance, the circular opposite-angle
-sums.  These rows are not quadratic, but the system is 3x smaller: for the
+positions (auxiliary unknowns only for the few n-gons): planarity as the
+signed distance between the diagonals of each quad (``constraints.diagonals``;
+an n-gon keeps a unit normal, ``constraints.planarity`` on its corners), the
+conical angle balance, the circular opposite-angle sums.  These rows are not quadratic, but the system is 3x smaller: for the
 conical target the sparse factor of a 10,000-face mesh has 8.2 million
 nonzeros instead of 23 million (the per-vertex cone axes and the angle rows
 both couple whole vertex stars), and the optimizer converges in fewer
@@ -97,7 +97,10 @@ class Formulation:
         self.angle_mask = np.ones(len(self.cone_vertices), dtype=bool)
         if unknowns == "vertices":
             self.layout = Layout().add("vertices", mesh.n_vertices, 3)
-            self.quadruples = diagonals.quadruples(mesh)
+            self.quadruples = diagonals.quadruples(mesh, max_size=4)
+            self.ngons = np.nonzero(mesh.face_sizes > 4)[0]
+            if len(self.ngons):  # a unit normal per n-gon (see constraints.diagonals)
+                self.layout.add("ngon_normals", len(self.ngons), 3)
             return
         self.layout = L = Layout().add("vertices", mesh.n_vertices, 3).add("normals", mesh.n_faces, 3)
         if target == "conical":
@@ -111,7 +114,10 @@ class Formulation:
     def start(self, V: np.ndarray) -> np.ndarray:
         """The starting unknown vector for positions ``V (n, 3)``."""
         if self.unknowns == "vertices":
-            return self.layout.pack(vertices=V)
+            blocks = {"vertices": V}
+            if len(self.ngons):
+                blocks["ngon_normals"] = face_normals(self.mesh, V)[self.ngons]
+            return self.layout.pack(**blocks)
         N = face_normals(self.mesh, V)
         blocks = {"vertices": V, "normals": N}
         if self.target == "conical":
@@ -152,6 +158,9 @@ class Formulation:
     def _vertex_terms(self, x: np.ndarray):
         """``split_terms`` of the vertex-only formulation (every row compact)."""
         parts = [diagonals.terms(x, self.layout, self.mesh, self.quadruples)]
+        if len(self.ngons):
+            parts += [planarity.terms(x, self.layout, self.mesh, faces=self.ngons, block="ngon_normals"),
+                      unit.terms(x, self.layout, "ngon_normals")]
         if self.target == "conical" and len(self.cone_vertices):
             parts.append(anglebalance.terms(x, self.layout, self.mesh))
         if self.target == "circular" and len(self.quads):

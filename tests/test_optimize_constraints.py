@@ -50,6 +50,16 @@ def test_formulation_jacobian_finite_differences(target, unknowns):
     assert _fd_check(form.terms, x) < 1e-7
 
 
+def test_vertex_formulation_jacobian_with_ngons():
+    cap = shapes.revolution(np.array([[1.0, 0.0], [1.0, 1.0], [0.8, 1.5]]), 8)
+    from optimize import Mesh
+
+    mesh = shapes.perturbed(Mesh(cap.V, cap.faces_list() + [list(range(0, 24, 3))]), 0.05, seed=3)
+    form = Formulation(mesh, "conical", "vertices")
+    assert len(form.ngons) == 1
+    assert _fd_check(form.terms, _random_x(form, 11)) < 1e-7
+
+
 def test_diagonal_distance_is_the_planarity_measure_times_mean_diagonal():
     from optimize import measures
 
@@ -62,18 +72,20 @@ def test_diagonal_distance_is_the_planarity_measure_times_mean_diagonal():
     assert _fd_check(lambda y: diagonals.terms(y, form.layout, mesh), _random_x(form, 10)) < 1e-7
 
 
-def test_diagonal_rows_of_an_ngon_vanish_only_when_it_is_planar():
+def test_ngon_rows_of_the_vertex_formulation_vanish_only_when_it_is_planar():
     from optimize import Mesh
 
     t = np.linspace(0, 2 * np.pi, 7)[:-1]
     hexagon = np.stack([np.cos(t), np.sin(t), np.zeros(6)], axis=1)
     flat = Mesh(hexagon, [list(range(6))])
-    assert diagonals.quadruples(flat).shape == (3, 4)
+    assert diagonals.quadruples(flat).shape == (3, 4)  # runs of four vertices (not used for n-gons)
     form = Formulation(flat, "pq", "vertices")
+    assert form.layout.blocks["ngon_normals"] == (1, 3)  # an n-gon keeps a unit normal
     r, _ = form.terms(form.start(flat.V))
-    assert r.shape == (3,) and np.abs(r).max() < 1e-15
+    assert r.shape == (7,) and np.abs(r).max() < 1e-15  # 6 corner rows + the unit row
     bent = flat.with_vertices(flat.V + np.array([0, 0, 0, 0, 0, 0.1])[:, None] * [0, 0, 1])
-    assert np.abs(Formulation(bent, "pq", "vertices").terms(bent.V.ravel())[0]).max() > 1e-3
+    bform = Formulation(bent, "pq", "vertices")
+    assert np.abs(bform.terms(bform.start(bent.V))[0]).max() > 1e-3
 
 
 def test_unknown_formulation_raises_config_error():

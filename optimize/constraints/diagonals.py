@@ -4,10 +4,12 @@ For four points ``p0..p3`` with diagonals ``d1 = p2 - p0``, ``d2 = p3 - p1``
 and ``e = p1 - p0``, the residual is ``t / s`` with the triple product
 ``t = e . (d1 x d2)`` and ``s = |d1 x d2|``: the signed distance between the
 diagonal lines, zero exactly when the four points are coplanar (the quad
-planarity measure times the mean diagonal length).  A quad gives one row; an
-n-gon gives ``n - 3`` rows, one per run of four consecutive vertices (they
-are coplanar together when no three consecutive vertices are collinear);
-triangles give none.
+planarity measure times the mean diagonal length).  A quad gives one row;
+triangles give none.  ``quadruples`` also lists runs of four consecutive
+vertices of n-gons, but their rows miss a face that hinges about three
+nearly collinear vertices (the straight corner of a T-junction pentagon):
+the vertex formulation keeps a unit normal per n-gon instead
+(``formulation``; ``constraints.planarity`` with ``faces``).
 
 Unlike ``constraints.planarity`` this needs no auxiliary normals: the
 conical target then has only the vertices as unknowns and the sparse factor
@@ -26,12 +28,14 @@ from ..mesh import Mesh
 from ..variables import Layout
 
 
-def quadruples(mesh: Mesh) -> np.ndarray:
-    """(q, 4) int: the runs of four consecutive vertices, ``n - 3`` per n-gon (quads: the face)."""
+def quadruples(mesh: Mesh, max_size: int | None = None) -> np.ndarray:
+    """(q, 4) int: the runs of four consecutive vertices, ``n - 3`` per n-gon (quads: the
+    face), for faces of at most ``max_size`` vertices (default all)."""
     F = mesh.F
     sizes = (F >= 0).sum(axis=1)
     out = []
-    for k in range(4, int(sizes.max(initial=0)) + 1):  # loop over face sizes, not faces
+    top = int(sizes.max(initial=0)) if max_size is None else int(max_size)
+    for k in range(4, top + 1):  # loop over face sizes, not faces
         G = F[sizes == k, :k]
         if len(G):
             out.append(np.concatenate([G[:, i:i + 4] for i in range(k - 3)], axis=0))

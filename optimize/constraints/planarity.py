@@ -15,15 +15,27 @@ from ..mesh import Mesh
 from ..variables import Layout
 
 
-def terms(x: np.ndarray, layout: Layout, mesh: Mesh) -> tuple[np.ndarray, sp.csr_matrix]:
-    """Residual ``(c,)`` and Jacobian ``(c, layout.size)``; ``c`` = number of corners."""
+def terms(x: np.ndarray, layout: Layout, mesh: Mesh, faces: np.ndarray | None = None,
+          block: str = "normals") -> tuple[np.ndarray, sp.csr_matrix]:
+    """Residual ``(c,)`` and Jacobian ``(c, layout.size)``; ``c`` = number of corners.
+
+    faces : (q,) int, only the corners of these faces; then row ``i`` of block
+        ``block`` (``(q, 3)``) is the normal of ``faces[i]`` (default: every face,
+        block ``normals (m, 3)``).
+    """
     t = mesh.topology
-    V, N = layout.view(x, "vertices"), layout.view(x, "normals")
-    vi, vj, f = t.corner_vertex, t.corner_next_vertex, t.corner_face
+    V, N = layout.view(x, "vertices"), layout.view(x, block)
+    if faces is None:
+        corners, slot = np.arange(len(t.corner_face)), t.corner_face
+    else:
+        size = t.face_sizes[faces]
+        slot = np.repeat(np.arange(len(faces)), size)
+        corners = t.offsets[faces][slot] + (np.arange(len(slot)) - np.repeat(np.cumsum(size) - size, size))
+    vi, vj, f = t.corner_vertex[corners], t.corner_next_vertex[corners], slot
     e = V[vj] - V[vi]  # (c, 3)
     n = N[f]  # (c, 3)
     r = np.einsum("ij,ij->i", n, e)
-    iv, inn = layout.index("vertices"), layout.index("normals")
+    iv, inn = layout.index("vertices"), layout.index(block)
     nc = len(r)
     cols = np.concatenate([iv[vj], iv[vi], inn[f]], axis=1)  # (c, 9)
     vals = np.concatenate([n, -n, e], axis=1)
