@@ -1,6 +1,7 @@
 """Quad-dominant mesh from two scalar functions: the arrangement of their integer iso-lines.
 
-Given ``UV (n, 2)`` on the vertices of a disk-like triangle mesh (the map is
+Given ``UV (n, 2)`` on the vertices of a triangle mesh with one or more
+boundary loops (a disk or a disk with holes; the map is
 assumed locally injective: :func:`optimize.remesh.integrate` reports folds),
 the lines ``u = i`` and ``v = j`` (integers, after a shift chosen to keep
 lattice nodes away from the boundary) cut the parameter image of the surface
@@ -23,6 +24,12 @@ in the triangle that contains them).
   across their longest inner edge, and a boundary node left with only two
   boundary edges is dropped.  A merge leaves a node of degree 3 on the side
   of the merged face: the paper's T-junction turned into a pentagon.
+
+Holes: the outer loop (largest parameter area) is counter-clockwise, holes
+clockwise, the domain on the left of each; lattice nodes inside a hole are
+dropped, the hole's boundary nodes form their own ring, and the faces inside a
+hole (those running along its ring against its direction) are dropped.  A hole
+not crossed by the lines raises MeshError.
 
 No T-junctions arise otherwise: every crossing of two lines is a node of both.
 """
@@ -99,30 +106,65 @@ def planar_faces(P: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return F, area[keep]
 
 
-def _boundary_loop(surface: Mesh, UV: np.ndarray) -> np.ndarray:
+def _boundary_loops(surface: Mesh, UV: np.ndarray) -> list[np.ndarray]:
+    """Boundary loops of ``surface``, the outer one first and counter-clockwise in ``UV``, holes clockwise.
+
+    The outer loop is the one of largest parameter area.  Raises MeshError for a
+    closed surface or several components.
+    """
     loops = surface.topology.boundary_loops
-    if len(loops) != 1 or surface.topology.n_components != 1:
+    if not loops or surface.topology.n_components != 1:
         raise MeshError(f"{surface.name}: {len(loops)} boundary loop(s), {surface.topology.n_components} "
-                        "component(s); remeshing supports disk-like surfaces (one component, one boundary "
-                        "loop) only")
-    loop = loops[0]
-    B = UV[loop]
-    if 0.5 * np.sum(B[:, 0] * np.roll(B[:, 1], -1) - np.roll(B[:, 0], -1) * B[:, 1]) < 0:
-        loop = loop[::-1]
-    return loop
+                        "component(s); remeshing supports one component with at least one boundary loop")
+
+    def area(loop):
+        B = UV[loop]
+        return 0.5 * np.sum(B[:, 0] * np.roll(B[:, 1], -1) - np.roll(B[:, 0], -1) * B[:, 1])
+
+    a = np.array([area(lp) for lp in loops])  # one value per loop (a handful)
+    outer = int(np.argmax(np.abs(a)))
+    out = [loops[outer] if a[outer] > 0 else loops[outer][::-1]]
+    out += [lp if a[k] < 0 else lp[::-1] for k, lp in enumerate(loops) if k != outer]
+    return out
 
 
-def _corners(X: np.ndarray, angle_deg: float) -> np.ndarray:
-    """(b,) bool: boundary polygon ``X (b, 3)`` vertices where it turns by more than ``angle_deg``."""
-    a = X - np.roll(X, 1, axis=0)
-    b = np.roll(X, -1, axis=0) - X
+class _Boundary:
+    """All boundary loops as one polygon soup: ``B (b, 2)`` parameters, ``X (b, 3)`` points,
+    ``nxt, prv (b,)`` neighbours within the loop, ``lab (b,)`` loop index (0 = outer)."""
+
+    def __init__(self, loops: list[np.ndarray], UV: np.ndarray, V: np.ndarray):
+        sizes = np.array([len(lp) for lp in loops])
+        first = np.cumsum(sizes) - sizes
+        idx = np.concatenate(loops)
+        self.lab = np.repeat(np.arange(len(loops)), sizes)
+        k = np.arange(len(idx))
+        last = k == (first + sizes - 1)[self.lab]
+        self.nxt = np.where(last, first[self.lab], k + 1)
+        self.prv = np.empty_like(self.nxt)
+        self.prv[self.nxt] = k
+        self.B, self.X = UV[idx], V[idx]
+        self.paths = [Path(np.vstack([self.B[self.lab == i], self.B[self.lab == i][:1]]), closed=True)
+                      for i in range(len(loops))]
+
+    def inside(self, Q: np.ndarray) -> np.ndarray:
+        """(q,) bool: points ``Q (q, 2)`` inside the outer loop and outside every hole."""
+        ok = self.paths[0].contains_points(Q)
+        for hole in self.paths[1:]:  # one test per hole
+            ok &= ~hole.contains_points(Q)
+        return ok
+
+
+def _corners(X: np.ndarray, prv: np.ndarray, nxt: np.ndarray, angle_deg: float) -> np.ndarray:
+    """(b,) bool: boundary polygon vertices ``X (b, 3)`` where it turns by more than ``angle_deg``."""
+    a = X - X[prv]
+    b = X[nxt] - X
     c = np.einsum("ij,ij->i", a, b) / np.maximum(np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1), 1e-300)
     return c < np.cos(np.radians(angle_deg))
 
 
-def _best_shift(B: np.ndarray, trials: int = 5, near: float = 0.25) -> np.ndarray:
-    """(2,) lattice shift that leaves the fewest lattice nodes within ``near`` of the boundary polygon ``B``."""
-    seg = np.roll(B, -1, axis=0) - B
+def _best_shift(B: np.ndarray, nxt: np.ndarray, trials: int = 5, near: float = 0.25) -> np.ndarray:
+    """(2,) lattice shift that leaves the fewest lattice nodes within ``near`` of the boundary segments ``B -> B[nxt]``."""
+    seg = B[nxt] - B
     L = np.linalg.norm(seg, axis=1)
     m = np.maximum(np.ceil(L / 0.05).astype(np.int64), 1)
     k = np.repeat(np.arange(len(B)), m)
@@ -145,24 +187,28 @@ def extract(surface: Mesh, UV: np.ndarray, *, corner_angle: float = 35.0, merge:
             min_area: float = 0.25, name: str = "remeshed") -> tuple[Mesh, np.ndarray]:
     """Quad-dominant mesh of the integer iso-lines of ``UV (n, 2)`` on the triangle mesh ``surface``.
 
+    ``surface`` is one component with one or more boundary loops (a disk, or a
+    disk with holes); the parameter image must be one-to-one.
     Returns ``(mesh, corners)``: a Mesh whose vertices lie on ``surface`` (see
-    the module docstring) and the ``(c,)`` indices of its vertices at corners
-    of the input boundary.
-    Raises ConfigError when no lattice node falls inside (edge length too large).
+    the module docstring), with one boundary loop per input loop, and the
+    ``(c,)`` indices of its vertices at corners of the input boundary.
+    Raises ConfigError when no lattice node falls inside (edge length too
+    large) and MeshError when a hole is too small to be crossed by the lines.
     """
-    loop = _boundary_loop(surface, UV)
-    UV = UV - _best_shift(UV[loop])
-    B, X = UV[loop], surface.V[loop]
-    inside = Path(np.vstack([B, B[:1]]), closed=True)
+    loops = _boundary_loops(surface, UV)
+    bd = _Boundary(loops, UV, surface.V)
+    UV = UV - _best_shift(bd.B, bd.nxt)
+    bd = _Boundary(loops, UV, surface.V)
+    B, X, nxt = bd.B, bd.X, bd.nxt
     lo, hi = np.floor(B.min(0)), np.ceil(B.max(0))
     I, J = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1), indexing="ij")
     G = np.stack([I.ravel(), J.ravel()], 1)
-    G = G[inside.contains_points(G)]
+    G = G[bd.inside(G)]
     if len(G) < 4:
         raise ConfigError(f"{surface.name}: only {len(G)} grid node(s) inside the surface; expected a "
                           "smaller edge length")
     # boundary nodes: crossings with the lines u = i, v = j, and corners
-    B1, X1 = np.roll(B, -1, axis=0), np.roll(X, -1, axis=0)
+    B1, X1 = B[nxt], X[nxt]
     seg_k, seg_s, seg_axis = [], [], []
     for ax in (0, 1):
         a, b = B[:, ax], B1[:, ax]
@@ -172,27 +218,30 @@ def extract(surface: Mesh, UV: np.ndarray, *, corner_angle: float = 35.0, merge:
         seg_k.append(k)
         seg_s.append((c - a[k]) / (b[k] - a[k]))
         seg_axis.append(np.full(len(k), ax))
-    corner = np.nonzero(_corners(X, corner_angle))[0]
+    corner = np.nonzero(_corners(X, bd.prv, nxt, corner_angle))[0]
     seg_k.append(corner)
     seg_s.append(np.zeros(len(corner)))
     seg_axis.append(np.full(len(corner), 2))
     bk, bs, bax = (np.concatenate(x) for x in (seg_k, seg_s, seg_axis))
-    order = np.lexsort((bs, bk))
+    order = np.lexsort((bs, bk))  # loop by loop (loops are contiguous in bk), along each loop
     bk, bs, bax = bk[order], bs[order], bax[order]
+    blab = bd.lab[bk]
     bP = B[bk] + bs[:, None] * (B1[bk] - B[bk])
     bX = X[bk] + bs[:, None] * (X1[bk] - X[bk])
     snap = bax < 2
     bP[snap, bax[snap]] = np.round(bP[snap, bax[snap]])  # exactly on its line
-    # merge boundary nodes closer than `merge` (parameter units) along the boundary; corners win
+    # merge boundary nodes closer than `merge` (parameter units) along the same loop; corners win
     gap = np.linalg.norm(np.roll(bP, -1, axis=0) - bP, axis=1)
     rep = np.arange(len(bP))
-    for i in np.nonzero(gap[:-1] < merge)[0].tolist():  # the few close pairs along the boundary
+    close = (gap[:-1] < merge) & (blab[1:] == blab[:-1])
+    for i in np.nonzero(close)[0].tolist():  # the few close pairs along the boundary
         a, b = int(rep[i]), i + 1
         keep, drop = (b, a) if bax[b] == 2 and bax[a] != 2 else (a, b)
         rep[rep == drop] = keep
     nG = len(G)
     P = np.vstack([G, bP])
     bnode = nG + np.arange(len(bP))
+    node_loop = np.concatenate([np.full(nG, -1), blab])
     # line edges: consecutive nodes along u = i (axis 0) and v = j (axis 1)
     edges = []
     for ax in (0, 1):
@@ -203,23 +252,24 @@ def extract(surface: Mesh, UV: np.ndarray, *, corner_angle: float = 35.0, merge:
         same = line[1:] == line[:-1]
         a, b = on[:-1][same], on[1:][same]
         mid = 0.5 * (P[a] + P[b])
-        ok = inside.contains_points(mid)
+        ok = bd.inside(mid)
         edges.append(np.stack([a[ok], b[ok]], 1))
     nodemap = np.arange(len(P))
     nodemap[bnode] = bnode[rep]
-    uniq_b = np.unique(bnode[rep])
-    ring = uniq_b[np.argsort(uniq_b)]  # boundary order is index order
-    edges.append(np.stack([ring, np.roll(ring, -1)], 1))
+    ring = np.unique(bnode[rep])  # boundary order is index order, loop after loop
+    edges.append(_ring_edges(ring, node_loop))
     E = nodemap[np.concatenate(edges)]
     E = E[E[:, 0] != E[:, 1]]
     E = np.unique(np.sort(E, axis=1), axis=0)
     is_corner = np.zeros(len(P), dtype=bool)
     is_corner[bnode[bax == 2]] = True
-    F, _ = _cleanup(P, E, ring, is_corner, min_area, merge)
+    E, ring = _cleanup(P, E, ring, node_loop, is_corner, min_area, merge)
+    F, _ = _domain_faces(P, E, ring, node_loop)
+    used = np.unique(F[F >= 0])
+    _check_connected(surface, E, used, ring, node_loop, len(loops))
     # 3D positions: lattice nodes by point location, boundary nodes on the boundary polyline
     tri, bary = locate(UV, surface.F, P[:nG])
     X3 = np.vstack([np.einsum("qk,qkj->qj", bary, surface.V[surface.F[tri]]), bX])
-    used = np.unique(F[F >= 0])
     remap = np.full(len(P), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
     out = Mesh(X3[used], np.where(F >= 0, remap[np.maximum(F, 0)], -1), name=name)
@@ -229,10 +279,30 @@ def extract(surface: Mesh, UV: np.ndarray, *, corner_angle: float = 35.0, merge:
     return out, np.sort(corners[corners >= 0])
 
 
-def _collapse_short(P, E, ring, is_corner, merge):
-    """Collapse edges shorter than ``merge``: each cluster becomes one node (a corner, else a boundary node)."""
+def _check_connected(surface, E, used, ring, node_loop, n_loops):
+    """Raise MeshError when a boundary loop lost its nodes or the line graph falls apart (a hole inside one cell)."""
+    N = len(node_loop)
+    have = np.bincount(node_loop[ring], minlength=n_loops)
+    if np.any(have < 3):
+        bad = int(np.argmin(have))
+        raise MeshError(f"{surface.name}: boundary loop {bad} keeps only {int(have[bad])} node(s) after "
+                        "extraction (a hole smaller than one cell); expected a smaller edge length")
+    ncomp, lab = connected_components(coo_matrix((np.ones(len(E)), (E[:, 0], E[:, 1])), shape=(N, N)),
+                                      directed=False)
+    if len(np.unique(lab[used])) > 1:
+        raise MeshError(f"{surface.name}: the iso-lines fall into {len(np.unique(lab[used]))} separate pieces "
+                        "(a hole inside one cell); expected a smaller edge length")
+
+
+def _collapse_short(P, E, ring, node_loop, is_corner, merge):
+    """Collapse edges shorter than ``merge``: each cluster becomes one node (a corner, else a boundary node).
+
+    Edges joining two different boundary loops are never collapsed (that would merge a hole into its neighbour).
+    """
     N = len(P)
     short = np.linalg.norm(P[E[:, 0]] - P[E[:, 1]], axis=1) < merge
+    la, lb = node_loop[E[:, 0]], node_loop[E[:, 1]]
+    short &= ~((la >= 0) & (lb >= 0) & (la != lb))
     if not short.any():
         return E, ring
     S = E[short]
@@ -249,18 +319,46 @@ def _collapse_short(P, E, ring, is_corner, merge):
     E = rep[E]
     E = np.unique(np.sort(E[E[:, 0] != E[:, 1]], axis=1), axis=0)
     ring = rep[ring]
-    ring = ring[np.append(ring[1:] != ring[:-1], ring[-1] != ring[0])]
-    return E, ring
+    return E, ring[ring != ring[_ring_next(ring, node_loop)]]
 
 
-def _ring_edges(ring: np.ndarray) -> np.ndarray:
-    return np.sort(np.stack([ring, np.roll(ring, -1)], 1), axis=1)
+def _ring_next(ring: np.ndarray, node_loop: np.ndarray) -> np.ndarray:
+    """(b,) position in ``ring`` of the next node along the same loop (rings are stored loop after loop)."""
+    lab = node_loop[ring]
+    k = np.arange(len(ring))
+    start = np.insert(lab[1:] != lab[:-1], 0, True)
+    first = np.maximum.accumulate(np.where(start, k, 0))
+    last = np.append(lab[1:] != lab[:-1], True)
+    return np.where(last, first, k + 1)
 
 
-def _cleanup(P, E, ring, is_corner, min_area, merge, rounds: int = 6):
-    """Prune, merge small cells, drop lone boundary nodes.  Returns ``(F (f, k), area (f,))``.
+def _ring_edges(ring: np.ndarray, node_loop: np.ndarray) -> np.ndarray:
+    """(b, 2) sorted edges between consecutive boundary nodes of every loop."""
+    E = np.sort(np.stack([ring, ring[_ring_next(ring, node_loop)]], 1), axis=1)
+    return E[E[:, 0] != E[:, 1]]
 
-    P : (N, 2) nodes, E : (e, 2) sorted edges, ring : (b,) boundary nodes in order.
+
+def _domain_faces(P, E, ring, node_loop):
+    """Bounded faces of the graph that lie in the domain (not the inside of a hole): ``(F (f, k), area (f,))``.
+
+    Faces are counter-clockwise, the domain is on the left of every loop, so a
+    face that runs along a loop against its direction is a hole.
+    """
+    F, area = planar_faces(P, E)
+    N = len(P)
+    a, b = F, np.roll(F, -1, axis=1)
+    last = (F >= 0).sum(1) - 1
+    b[np.arange(len(F)), last] = F[:, 0]
+    against = ring[_ring_next(ring, node_loop)] * N + ring  # directed (next -> node)
+    hole = (np.isin(a * N + b, against) & (a >= 0)).any(1)
+    return F[~hole], area[~hole]
+
+
+def _cleanup(P, E, ring, node_loop, is_corner, min_area, merge, rounds: int = 6):
+    """Prune, merge small cells, drop lone boundary nodes.  Returns ``(E (e, 2), ring (b,))``.
+
+    P : (N, 2) nodes, E : (e, 2) sorted edges, ring : (b,) boundary nodes in
+    order, loop after loop; node_loop : (N,) loop of each boundary node (-1 inside).
     """
     N = len(P)
     for _ in range(rounds):  # each round is vectorized; a few rounds settle everything
@@ -277,9 +375,9 @@ def _cleanup(P, E, ring, is_corner, min_area, merge, rounds: int = 6):
                 ring = ring[~lone[ring]]
                 on_ring[:] = False
                 on_ring[ring] = True
-                E = np.unique(np.vstack([E, _ring_edges(ring)]), axis=0)
-        E, ring = _collapse_short(P, E, ring, is_corner, merge)
-        F, area = planar_faces(P, E)
+                E = np.unique(np.vstack([E, _ring_edges(ring, node_loop)]), axis=0)
+        E, ring = _collapse_short(P, E, ring, node_loop, is_corner, merge)
+        F, area = _domain_faces(P, E, ring, node_loop)
         small = np.nonzero(area < min_area)[0]
         if not len(small):
             break
@@ -290,7 +388,7 @@ def _cleanup(P, E, ring, is_corner, min_area, merge, rounds: int = 6):
         ok = a >= 0
         fa, ea, eb = np.nonzero(ok)[0], a[ok], b[ok]
         key = np.minimum(ea, eb) * N + np.maximum(ea, eb)
-        rk = _ring_edges(ring)
+        rk = _ring_edges(ring, node_loop)
         inner = ~np.isin(key, rk[:, 0] * N + rk[:, 1])
         fa, key = fa[inner], key[inner]
         if not len(key):
@@ -299,4 +397,4 @@ def _cleanup(P, E, ring, is_corner, min_area, merge, rounds: int = 6):
         o = np.lexsort((-length, fa))
         first = np.insert(fa[o][1:] != fa[o][:-1], 0, True)
         E = E[~np.isin(E[:, 0] * N + E[:, 1], key[o][first])]
-    return planar_faces(P, E)
+    return E, ring

@@ -16,14 +16,32 @@ The chain (paper section 5, with a practical integration step):
    cells (:mod:`optimize.isolines`): quads inside, clipped polygons (mostly
    triangles, quads, pentagons) along the boundary.
 
-Supported: disk-like surfaces (one component, one boundary loop: roofs,
-facades, canopies) whose principal field has no singularity inside, or
-singularities that the smoothing removes.  Not supported: closed surfaces,
-holes, and true umbilics inside the patch: integration does not place
-irregular vertices there; the least-squares ``u, v`` absorb the mismatch of
-the combed field, the cells around a singularity get distorted (triangles
-where ``u, v`` fold are counted in ``RemeshReport.folded``), and the result
-says so in ``mesh.notes``.  Edge length is ``h`` where the principal field is
+Singularities (umbilics) that survive the smoothing are kept (``singularities=
+"auto"``, the default; ``"place"`` keeps every singularity of the unsmoothed
+field): steps 3-4 are replaced by :mod:`optimize.seamless` (cut from each
+singular vertex to the boundary, integration with the rotation + integer
+translation across the cut) and :mod:`optimize.tracing` (iso-lines traced on
+the surface): an index ``+-1/4`` singularity becomes a valence-3/5 vertex or
+a 3-/5-gon (``RemeshReport.method == "seamless"``, ``singularities`` lists
+them).  ``singularities="smooth"`` is the old behaviour.
+
+Supported: one connected surface with one or more boundary loops (disks and
+disks with holes: roofs, facades, canopies, a roof with an opening), whose
+parameter image is one-to-one after the cuts.  Measured (tests): a roof with a
+circular hole gives two boundary loops, 138 quads + 9 pentagons at h = 0.3,
+conical and planar to 1e-6 after optimization (free boundary); a monkey saddle
+gives two index -1/4 singularities near the umbilic, each a 5-gon or a
+valence-5 vertex, conical after optimization.
+Not supported: closed surfaces; holes around which the field turns (holes are
+not cut, a translational period is absorbed by the least squares); index
+other than +-1/4; surfaces whose least-squares parametrization folds (e.g.
+/work/shared/data/halftunnel.off, a pair of pants with ~10 singularities:
+the traced cells do not close, MeshError); the seamless branch does not merge
+tiny boundary cells (more 3- and 5-gons along the boundary than the planar
+branch).  Boundary gliding during the conical optimization does not reach the
+planarity tolerance on the holed and seamless examples (free boundary does).
+Folds of the planar branch are counted in ``RemeshReport.folded`` and noted
+in ``mesh.notes``.  Edge length is ``h`` where the principal field is
 integrable and varies elsewhere (principal lines spread and converge): see
 ``RemeshReport.edge_length``.
 """
@@ -57,6 +75,8 @@ class RemeshReport:
     folded: int = 0
     corners: list = field(default_factory=list)
     smoothing: float = 1.0
+    method: str = "planar"
+    singularities: list = field(default_factory=list)
     face_sizes: dict = field(default_factory=dict)
     edge_length: dict = field(default_factory=dict)
     timings: dict = field(default_factory=dict)
@@ -129,8 +149,9 @@ def default_radius(surface: Mesh, edge_length: float) -> float:
 
 
 def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, side=None,
-           smoothing: float = 1.0, with_report: bool = False, name: str | None = None):
-    """Quad-dominant mesh of a disk-like triangle surface along its principal curvature lines.
+           smoothing: float = 1.0, singularities: str = "auto", with_report: bool = False,
+           name: str | None = None):
+    """Quad-dominant mesh of a triangle surface (a disk, or a disk with holes) along its principal curvature lines.
 
     surface : triangle Mesh (or anything :func:`optimize.principal.oriented_surface` accepts).
     edge_length : target edge length ``h`` (model units).
@@ -138,9 +159,15 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
     side : (3,) vector toward the inside (default below: ``(0, 0, -1)``).
     smoothing : smoothing length of the cross field, in units of ``h``; doubled
         (up to 8 times) while the smoothed field still has singularities.
+    singularities : ``"auto"`` (smooth harder as above; singularities that
+        survive become irregular vertices / faces, :mod:`optimize.seamless`),
+        ``"place"`` (no extra smoothing: every singularity of the field at
+        ``smoothing`` becomes an irregular vertex / face) or ``"smooth"`` (the
+        old behaviour: never placed, the cells around them get distorted).
     Returns the Mesh (faces counter-clockwise about the outward normal; the
     notes say what was approximated), or ``(Mesh, RemeshReport)`` with ``with_report``.
-    Raises MeshError (not a disk-like triangle mesh) and ConfigError (bad lengths).
+    Raises MeshError (closed, several components, or a folded seamless
+    parametrization) and ConfigError (bad lengths, bad ``singularities``).
     """
     if not np.isfinite(edge_length) or edge_length <= 0:
         raise ConfigError(f"edge_length = {edge_length}, expected a positive length")
@@ -149,13 +176,15 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
     if closed:
         raise MeshError(f"{mesh.name}: closed surface; remeshing supports disk-like surfaces "
                         "(one boundary loop) only")
+    if singularities not in ("auto", "place", "smooth"):
+        raise ConfigError(f"singularities = {singularities!r}, expected 'auto', 'place' or 'smooth'")
     if edge_length >= 0.5 * mesh.bbox_diagonal():
         raise ConfigError(f"{mesh.name}: edge length {edge_length:g} is not below half the bounding-box "
                           f"diagonal {mesh.bbox_diagonal():.4g}; expected a smaller edge length")
-    loops, comps = len(mesh.topology.boundary_loops), mesh.topology.n_components
-    if loops != 1 or comps != 1:
-        raise MeshError(f"{mesh.name}: {loops} boundary loop(s), {comps} component(s); remeshing "
-                        "supports disk-like surfaces (one component, one boundary loop) only")
+    comps = mesh.topology.n_components
+    if comps != 1:
+        raise MeshError(f"{mesh.name}: {comps} components; remeshing supports one connected surface "
+                        "(a disk, or a disk with holes); remesh each component on its own")
     r = default_radius(mesh, edge_length) if radius is None else float(radius)
     rep = RemeshReport(radius=r, edge_length_target=float(edge_length))
     fr = principal_frames(mesh, None, r, side=side)
@@ -167,7 +196,11 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
         X1, index = face_crosses(mesh, arms)
         if not index.any():
             break
+        if singularities == "place":
+            break
     rep.smoothing = grow * smoothing
+    if index.any() and singularities != "smooth":
+        return _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report)
     X1, mismatch = comb(mesh, X1)
     nf = face_frames(mesh)[0]
     X2 = np.cross(nf, X1)
@@ -189,6 +222,35 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
                "distorted (no irregular vertices are placed)")
         log.warning(msg)
         out.notes.append(msg)
+    el = np.linalg.norm(out.V[out.topology.edges[:, 1]] - out.V[out.topology.edges[:, 0]], axis=1)
+    rep.edge_length = {"min": float(el.min()), "mean": float(el.mean()), "max": float(el.max())}
+    rep.face_sizes = {str(k): int(c) for k, c in enumerate(np.bincount(out.face_sizes)) if c}
+    rep.timings["total"] = time.perf_counter() - t0
+    log.info("remesh %s: %s", out.name, rep.as_dict())
+    return (out, rep) if with_report else out
+
+
+def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report):
+    """The seamless branch of :func:`remesh`: cut, integer-seamless ``u, v``, traced iso-lines."""
+    from .seamless import parametrize
+    from .tracing import trace_quads
+
+    rep.method = "seamless"
+    P = parametrize(mesh, X1, edge_length, gradient_operator)
+    rep.singular_triangles = int(len(P["singular"]))
+    rep.mismatched_edges = P["mismatch"]
+    rep.singularities = [{"vertex": int(v), "index_quarter_turns": int(k), "point": mesh.V[v].tolist()}
+                         for v, k in zip(P["singular"], P["index"])]
+    rep.timings["cross_field"] = time.perf_counter() - t1
+    t3 = time.perf_counter()
+    out, corners = trace_quads(mesh, P["UVc"], P["rot"], P["shift"], name=name or f"{mesh.name}-quads")
+    rep.corners = corners.tolist()
+    rep.timings["extract"] = time.perf_counter() - t3
+    msg = (f"{out.name}: {len(P['singular'])} cross-field singularit(ies) kept (indices "
+           f"{sorted(set(int(k) for k in P['index']))} quarter turns): placed as irregular vertices or faces "
+           "by a seamless parametrization cut to the boundary")
+    log.info(msg)
+    out.notes.append(msg)
     el = np.linalg.norm(out.V[out.topology.edges[:, 1]] - out.V[out.topology.edges[:, 0]], axis=1)
     rep.edge_length = {"min": float(el.min()), "mean": float(el.mean()), "max": float(el.max())}
     rep.face_sizes = {str(k): int(c) for k, c in enumerate(np.bincount(out.face_sizes)) if c}

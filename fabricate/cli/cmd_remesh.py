@@ -19,12 +19,13 @@ def _vector(text: str):
 def register(sub) -> None:
     p = sub.add_parser(
         "remesh", help="triangle surface -> quad mesh along principal curvature lines -> conical",
-        description="Estimate principal directions of a disk-like triangle surface (roof, facade, "
-                    "canopy) by volume PCA at kernel radius R, integrate them into a quad-dominant "
-                    "mesh with the given edge length, then optimize it to a conical (or circular) "
-                    "mesh close to the surface.  Exit 3 when the optimization misses a tolerance "
+        description="Estimate principal directions of a triangle surface (roof, facade, canopy; "
+                    "one piece, with one or more boundary loops) by volume PCA at kernel radius R, "
+                    "integrate them into a quad-dominant mesh with the given edge length (umbilics "
+                    "become valence-3/5 vertices or 3-/5-gons), then optimize it to a conical (or "
+                    "circular) mesh close to the surface.  Exit 3 when the optimization misses a tolerance "
                     "(the mesh is written all the same, and the report says so).")
-    p.add_argument("surface", help="triangle mesh (.obj, .off, .ply), one boundary loop")
+    p.add_argument("surface", help="triangle mesh (.obj, .off, .ply): one piece, open (holes allowed)")
     p.add_argument("--edge-length", type=float, required=True, help="target edge length (model units)")
     p.add_argument("-o", "--output", required=True, help="output quad mesh (.obj, .off, .ply)")
     p.add_argument("--radius", type=float, default=None,

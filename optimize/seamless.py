@@ -1,0 +1,274 @@
+"""Cross-field singularities kept: a cut surface and an integer-seamless parametrization.
+
+Instead of smoothing the cross field until its singularities leave the patch,
+each singularity (index ``+-1/4``) is kept at a vertex and becomes an
+irregular vertex (valence 3 / 5) or an irregular face (a 3- / 5-gon) of the
+quad mesh:
+
+1. :func:`vertex_indices`: the index (in quarter turns) of a per-triangle
+   cross field around every interior vertex (period jumps across the edges of
+   its star, with the angle defect of the vertex);
+2. :func:`cut_graph`: shortest paths (edge lengths) from every singular vertex
+   to the boundary; their union is the cut;
+3. :func:`cut_open`: the triangle mesh cut open along it (vertices on the cut
+   duplicated, one copy per wedge of faces between cut edges);
+4. :func:`seamless_uv`: the combed field on the cut mesh is consistent; across
+   each cut edge the two sides differ by a rotation ``M^r`` (``r`` quarter
+   turns) which the parameters must follow: ``uv_B = M^r uv_A + t``.  The
+   least-squares integration of :func:`optimize.remesh.integrate` runs with
+   these transitions as (heavily weighted) linear constraints; the
+   translations ``t`` are then rounded to integers one group (cut arc) at a
+   time, re-solving in between.  Integer ``t`` maps integer iso-lines to
+   integer iso-lines across the cut, and puts every singular vertex (a fixed
+   point of ``uv -> M^r uv + t``) on a lattice node or a cell centre: a
+   valence-3/5 vertex, or a 3-/5-gon.
+
+The iso-lines of such a parametrization are extracted on the surface by
+:func:`optimize.tracing.trace_quads` (a planar arrangement no longer exists:
+the parameter image around a ``-1/4`` singularity covers 450 degrees).
+
+Not supported: singularities of index other than ``+-1/4`` (they are cut to
+the boundary like the others, but give folded cells), holes whose field turns
+by a quarter turn around them (holes are not cut; the least-squares ``u, v``
+absorb a translational period around a hole), closed surfaces; the integer
+rounding is greedy (no branch and bound).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import connected_components, dijkstra
+
+from .crossfield import face_frames
+from .errors import MeshError
+from .mesh import Mesh
+
+#: quarter turn acting on parameters ``(u, v)``: ``(u, v) -> (v, -u)`` (``X1 -> n x X1 = X2``)
+M1 = np.array([[0, 1], [-1, 0]])
+
+
+def rotation(r) -> np.ndarray:
+    """(..., 2, 2) int matrices ``M1^r`` for integer ``r`` (any shape)."""
+    r = np.asarray(r) % 4
+    Ms = np.stack([np.linalg.matrix_power(M1, k) for k in range(4)])
+    return Ms[r]
+
+
+def _angle_to(e: np.ndarray, X: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """(k,) angle from ``e (k, 3)`` to ``X (k, 3)`` about the normals ``n (k, 3)``."""
+    return np.arctan2(np.einsum("ij,ij->i", np.cross(e, X), n), np.einsum("ij,ij->i", e, X))
+
+
+def vertex_indices(mesh: Mesh, X1: np.ndarray) -> np.ndarray:
+    """(n,) int index of the per-triangle cross field ``X1 (t, 3)`` at every vertex, in quarter turns.
+
+    ``+1`` (index ``+1/4``) becomes a valence-3 vertex, ``-1`` a valence-5
+    vertex; boundary vertices get 0.
+    """
+    t = mesh.topology
+    V, F = mesh.V, mesh.F
+    nf = face_frames(mesh)[0]
+    c = np.arange(3 * len(F))
+    f = c // 3
+    v, a, b = t.corner_vertex, t.corner_next_vertex, t.corner_prev_vertex
+    e_first, e_second = V[a] - V[v], V[b] - V[v]
+    theta = _angle_to(e_first, e_second, nf[f])  # corner angle (ccw, in (0, pi))
+    alpha_first = _angle_to(e_first, X1[f], nf[f])
+    alpha_second = alpha_first - theta
+    nxt = t.twin[t.corner_prev]  # the corner at v in the next face counter-clockwise (-1 on the boundary)
+    ok = nxt >= 0
+    d = alpha_first[np.maximum(nxt, 0)] - alpha_second
+    q = np.pi / 2
+    jump = d - q * np.round(d / q)  # wrapped into (-pi/4, pi/4]
+    s = np.bincount(v[ok], jump[ok], minlength=len(V))  # turn of the field across the star's edges
+    defect = 2 * np.pi - np.bincount(v, theta, minlength=len(V))  # angle defect (Gauss curvature)
+    index = np.rint((s + defect) / q).astype(np.int64)
+    index[t.is_boundary_vertex] = 0
+    return index
+
+
+def cut_graph(mesh: Mesh, singular: np.ndarray) -> np.ndarray:
+    """(c, 2) sorted vertex pairs: the edges of the shortest paths from ``singular (s,)`` vertices to the boundary."""
+    t = mesh.topology
+    E = t.edges
+    if len(singular) == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    n = len(mesh.V)
+    L = np.linalg.norm(mesh.V[E[:, 1]] - mesh.V[E[:, 0]], axis=1)
+    # boundary edges are not crossed: paths end at the first boundary vertex
+    inner = ~t.is_boundary_edge
+    G = sp.coo_matrix((L[inner], (E[inner, 0], E[inner, 1])), shape=(n, n)).tocsr()
+    bnd = np.nonzero(t.is_boundary_vertex)[0]
+    if not len(bnd):
+        raise MeshError(f"{mesh.name}: closed surface; singularities are cut to the boundary, expected one")
+    _, pred, _ = dijkstra(G, directed=False, indices=bnd, min_only=True, return_predecessors=True)
+    pairs = []
+    for s in np.asarray(singular).tolist():  # a handful of singular vertices, one path each
+        v = s
+        while pred[v] >= 0:
+            pairs.append((min(v, pred[v]), max(v, pred[v])))
+            v = pred[v]
+    return np.unique(np.array(pairs, dtype=np.int64).reshape(-1, 2), axis=0)
+
+
+def cut_open(mesh: Mesh, cut: np.ndarray) -> tuple[Mesh, np.ndarray, np.ndarray]:
+    """The triangle mesh cut open along the edges ``cut (c, 2)``.
+
+    Returns ``(cut_mesh, corner_copy (3t,), is_cut_he (3t,) bool)``: the cut
+    Mesh (same faces, in the same order, on duplicated vertices), the cut-mesh
+    vertex of every corner of ``mesh`` and which half-edges of ``mesh`` lie on the cut.
+    """
+    t = mesh.topology
+    n = len(mesh.V)
+    key = t.edges[:, 0] * n + t.edges[:, 1]
+    on_cut = np.isin(key, cut[:, 0] * n + cut[:, 1]) if len(cut) else np.zeros(len(key), dtype=bool)
+    is_cut_he = on_cut[t.corner_edge]
+    # corners at the same vertex across a non-cut edge belong to the same wedge
+    c = np.arange(len(t.corner_vertex))
+    tw = t.twin
+    join = (tw >= 0) & ~is_cut_he
+    other = t.corner_next[np.maximum(tw, 0)]  # corner at this half-edge's start vertex in the twin face
+    A = sp.coo_matrix((np.ones(join.sum()), (c[join], other[join])), shape=(len(c), len(c)))
+    nw, wedge = connected_components(A, directed=False)
+    # the half-edge leaving c starts at corner_vertex[c]; its twin leaves corner_next_vertex[c] and
+    # ends at corner_vertex[c], so the twin's next corner sits at corner_vertex[c]: same vertex
+    Vc = np.zeros((nw, 3))
+    Vc[wedge] = mesh.V[t.corner_vertex]
+    Fc = wedge.reshape(-1, 3)
+    return Mesh(Vc, Fc, name=f"{mesh.name}-cut", check=False), wedge, is_cut_he
+
+
+def transitions(mesh: Mesh, X1c: np.ndarray, is_cut_he: np.ndarray) -> np.ndarray:
+    """(3t,) int quarter turns ``r`` per half-edge: the combed field of the twin face is ``M^r`` of this one's.
+
+    0 off the cut and on the boundary.  X1c : (t, 3) combed field on the cut mesh.
+    """
+    t = mesh.topology
+    nf = face_frames(mesh)[0]
+    c = np.nonzero(is_cut_he & (t.twin >= 0))[0]
+    f, g = c // 3, t.twin[c] // 3
+    e = mesh.V[t.corner_next_vertex[c]] - mesh.V[t.corner_vertex[c]]
+    e /= np.linalg.norm(e, axis=1, keepdims=True)
+    af = _angle_to(e, X1c[f], nf[f])
+    ag = _angle_to(e, X1c[g], nf[g])
+    r = np.zeros(len(t.corner_vertex), dtype=np.int64)
+    # X1_g = rot(+90 r) X1_f  <=>  (u, v)_g = M1^r (u, v)_f + t   (X2 = n x X1)
+    r[c] = np.rint((ag - af) / (np.pi / 2)).astype(np.int64) % 4
+    return r
+
+
+def seamless_uv(cut_mesh: Mesh, G: sp.csr_matrix, area: np.ndarray, X1: np.ndarray, X2: np.ndarray,
+                h: float, pairs: np.ndarray, rot: np.ndarray, group: np.ndarray,
+                weight: float = 1e6) -> tuple[np.ndarray, np.ndarray]:
+    """Integer-seamless ``UV (n_c, 2)`` on the cut mesh, and the integer translations ``(g, 2)``.
+
+    G, area : gradient operator ``(3t, n_c)`` and areas of the cut mesh;
+    X1, X2 : (t, 3) combed fields; pairs : (k, 2) cut-mesh vertices ``(a, b)``
+    with ``uv[b] = M^rot uv[a] + t[group]``; rot : (k,) quarter turns;
+    group : (k,) translation group of each pair (one per cut arc).
+    """
+    nc = cut_mesh.n_vertices
+    W = sp.diags(np.repeat(area, 3))
+    K = G.T @ W @ G
+    eps = 1e-9 * K.diagonal().mean()
+    Kb = sp.block_diag([K, K]) + eps * sp.identity(2 * nc)
+    rhs_x = np.concatenate([G.T @ W @ X1.ravel(), G.T @ W @ X2.ravel()]) / h
+    ng = int(group.max()) + 1 if len(group) else 0
+    k = len(pairs)
+    Mr = rotation(rot)  # (k, 2, 2)
+    # rows 2 i + c: uv[b, c] - sum_d M[c, d] uv[a, d] - t[group, c]
+    rows, cols, vals = [], [], []
+    for cc in range(2):
+        rows.append(2 * np.arange(k) + cc)
+        cols.append(cc * nc + pairs[:, 1])
+        vals.append(np.ones(k))
+        for dd in range(2):
+            rows.append(2 * np.arange(k) + cc)
+            cols.append(dd * nc + pairs[:, 0])
+            vals.append(-Mr[:, cc, dd].astype(float))
+    Cx = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(2 * k, 2 * nc))
+    Ct = sp.csr_matrix((-np.ones(2 * k), (np.arange(2 * k), 2 * np.repeat(group, 2) + np.tile([0, 1], k))),
+                       shape=(2 * k, 2 * ng))
+    w = weight * K.diagonal().mean()
+
+    def solve(Ct, fixed, tval):
+        free = ~fixed
+        C = sp.hstack([Cx, Ct[:, free]]).tocsc()
+        A = sp.block_diag([Kb, 1e-9 * w * sp.identity(int(free.sum()))]) + w * (C.T @ C)
+        b = np.concatenate([rhs_x, np.zeros(int(free.sum()))]) - w * (C.T @ (Ct[:, fixed] @ tval[fixed]))
+        z = spla.spsolve(A.tocsc(), b)
+        return z[:2 * nc], z[2 * nc:]
+
+    x, tf = solve(Ct, np.zeros(2 * ng, dtype=bool), np.zeros(2 * ng))
+    # groups: translations that agree (one cut arc), then greedy rounding, one group per pass
+    key = np.round(np.concatenate([tf.reshape(-1, 2), rot_of_group(group, rot, ng)[:, None]], 1) * 1e3)
+    _, grp = np.unique(key, axis=0, return_inverse=True)
+    grp = grp.ravel()
+    ng2 = int(grp.max()) + 1 if len(grp) else 0
+    Ct = sp.csr_matrix((-np.ones(2 * k), (np.arange(2 * k), 2 * np.repeat(grp[group], 2) + np.tile([0, 1], k))),
+                       shape=(2 * k, 2 * ng2))
+    fixed = np.zeros(2 * ng2, dtype=bool)
+    tval = np.zeros(2 * ng2)
+    while not fixed.all():  # a handful of arcs: one rounding per pass
+        x, tf = solve(Ct, fixed, tval)
+        err = np.abs(tf - np.round(tf))
+        j = int(np.argmin(err))
+        idx = np.nonzero(~fixed)[0][j]
+        tval[idx] = np.round(tf[j])
+        fixed[idx] = True
+    x, _ = solve(Ct, fixed, tval)
+    UV = np.stack([x[:nc], x[nc:]], 1)
+    return UV, tval.reshape(-1, 2)
+
+
+def rot_of_group(group: np.ndarray, rot: np.ndarray, ng: int) -> np.ndarray:
+    """(ng,) quarter turns of every translation group (the rotation of its pairs)."""
+    out = np.zeros(ng)
+    out[group] = rot
+    return out
+
+
+def parametrize(mesh: Mesh, X1: np.ndarray, h: float, gradient) -> dict:
+    """The whole seamless chain on a triangle mesh with an uncombed per-triangle cross field ``X1 (t, 3)``.
+
+    gradient : ``mesh -> (G (3t, n), area (t,))`` (:func:`optimize.remesh.gradient_operator`).
+    Returns a dict: ``UVc (t, 3, 2)`` per-corner parameters, ``rot (3t,)`` and
+    ``shift (3t, 2)`` transitions into the twin face's chart, ``singular (s,)``
+    vertices and their ``index (s,)`` (quarter turns), ``cut (c, 2)`` edges,
+    ``mismatch`` (edges of the cut mesh where the combed field still jumps).
+    """
+    from .crossfield import comb  # the combing sweep lives with the cross fields
+
+    t = mesh.topology
+    vi = vertex_indices(mesh, X1)
+    singular = np.nonzero(vi)[0]
+    cut = cut_graph(mesh, singular)
+    cm, wedge, is_cut = cut_open(mesh, cut)
+    X1c, mismatch = comb(cm, X1)
+    nf = face_frames(mesh)[0]
+    X2c = np.cross(nf, X1c)
+    r = transitions(mesh, X1c, is_cut)
+    c = np.nonzero(is_cut & (t.twin >= 0) & (np.arange(len(t.twin)) < np.maximum(t.twin, 0)))[0]
+    tw = t.twin[c]
+    pairs = np.concatenate([np.stack([wedge[c], wedge[t.corner_next[tw]]], 1),
+                            np.stack([wedge[t.corner_next[c]], wedge[tw]], 1)])
+    rot = np.concatenate([r[c], r[c]])
+    group = np.concatenate([np.arange(len(c)), np.arange(len(c))])
+    G, area = gradient(cm)
+    UV, _ = seamless_uv(cm, G, area, X1c, X2c, h, pairs, rot, group)
+    UVc = UV[cm.F]
+    # transitions of every half-edge, from the solved parameters (integers by construction)
+    he = np.nonzero(t.twin >= 0)[0]
+    rot_he = np.zeros(len(t.twin), dtype=np.int64)
+    shift = np.zeros((len(t.twin), 2))
+    # half-edge c in f -> twin in g: r[c] for the side c < twin, the inverse turn for the other
+    lo = he[he < t.twin[he]]
+    rot_he[lo] = r[lo]
+    rot_he[t.twin[lo]] = (-r[lo]) % 4
+    M = rotation(rot_he[he]).astype(float)
+    here = UV[wedge[he]]  # start vertex of the half-edge, in this face's chart
+    there = UV[wedge[t.corner_next[t.twin[he]]]]  # the same vertex in the twin's chart
+    shift[he] = np.round(there - np.einsum("kij,kj->ki", M, here))
+    return {"UVc": UVc, "rot": rot_he, "shift": shift, "singular": singular, "index": vi[singular],
+            "cut": cut, "mismatch": int(mismatch.sum()), "cut_mesh": cm}
