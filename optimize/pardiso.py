@@ -169,12 +169,20 @@ class PardisoCholesky:
             self.threads = 1 if n < SMALL else 0
             self._call(11)
             self.analyses += 1
-            self._pattern = (indptr, indices)
             # Small factors take a few ms, where the OpenMP threads' start-up and (on a
             # shared machine) waiting for a busy core cost more than they save: on a 900-face
             # PQ run (factor 0.3M nonzeros) with the other core loaded, 1 thread spent 0.18 s
             # solving against 0.58 s with 2; at 10k faces (3.6M and more) 2 threads win.
-            self.threads = 1 if self.factor_nnz < SMALL_FACTOR else 0
+            # Every phase of one analysis must run on the same number of threads (a numeric
+            # phase on fewer threads than its analysis crashed MKL 2026.2), so a changed
+            # choice is analysed again.
+            wanted = 1 if self.factor_nnz < SMALL_FACTOR else 0
+            if wanted != self.threads:
+                self._release_handle()
+                self.threads = wanted
+                self._call(11)
+                self.analyses += 1
+            self._pattern = (indptr, indices)
         t1 = time.perf_counter()
         self._call(22)
         self._factored = True
@@ -197,14 +205,18 @@ class PardisoCholesky:
     __call__ = solve
 
     def _release(self):
+        self._release_handle()
+        self._factored = False
+        self._pattern = None
+
+    def _release_handle(self):
+        """Free PARDISO's memory for this handle (on the threads it was analysed with)."""
         if self._arrays is not None and np.any(self.pt):
             try:
                 self._call(-1)
             except RuntimeError:
                 pass
         self.pt[:] = 0
-        self._factored = False
-        self._pattern = None
 
     def close(self):
         """Free PARDISO's memory (the object can factor again afterwards)."""

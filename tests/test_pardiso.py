@@ -81,3 +81,17 @@ def test_normal_solver_auto_picks_pardiso_where_mkl_loads():
     A = spd(300, 5)
     b = np.arange(300, dtype=float)
     np.testing.assert_allclose(A @ s.solve(A, b), b, atol=1e-8)
+
+
+def test_large_system_with_a_small_factor_refactors_and_solves(mkl):
+    # more unknowns than pardiso.SMALL but a tiny factor: analysed once on every core, then again
+    # on one thread (a numeric phase on fewer threads than its analysis crashed MKL)
+    n = mkl.SMALL + 5000
+    A = sp.diags([np.full(n - 1, -1.0), np.full(n, 4.0), np.full(n - 1, -1.0)], [-1, 0, 1], format="csr")
+    f = mkl.PardisoCholesky().update(A)
+    assert f.factor_nnz < mkl.SMALL_FACTOR and f.threads == 1 and f.analyses == 2
+    b = np.sin(np.arange(n, dtype=float))
+    for scale in (1.0, 2.0):
+        x = f.update(A * scale).solve(b)
+        np.testing.assert_allclose((A * scale) @ x, b, atol=1e-10)
+    assert f.analyses == 2
