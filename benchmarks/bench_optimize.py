@@ -15,7 +15,9 @@ better for us).  Timings on a shared 2-core machine are noisy.
 
 Columns: mesh, faces, target, method, seconds, final max and mean defect
 (planarity, or the target's angle defect), max distance to the input surface
-relative to its bbox diagonal, iterations, and the ratio to each peer.
+relative to its bbox diagonal, iterations, faces folded (convex in the input,
+dented or flipped in the output: planar but not cuttable; our status then
+says ``folded``), and the ratio to each peer.
 The scaling curve runs every size in a fresh process and reports its peak
 resident memory.
 """
@@ -44,14 +46,24 @@ DATA = ROOT.parent / "shared" / "data"
 
 # -- meshes -------------------------------------------------------------------
 def height_field(faces: int, kind: str = "wave"):
-    """A square grid height field with about ``faces`` quads; not PQ."""
+    """A square grid height field with about ``faces`` quads; not PQ.
+
+    ``wave`` and ``hypar``: the grid lines are not a conjugate net of the surface (the
+    hypar's are its rulings), so no fold-free PQ mesh lies near them; ``conjugate``:
+    ``z = f(x) + g(y)`` (a translational surface, PQ as it is) with seeded noise of 10%
+    of the edge length, so a fold-free PQ mesh exists close by."""
     n = int(round(np.sqrt(faces))) + 1
     size = 10.0
     if kind == "hypar":
         height = lambda x, y: 0.08 * (x - 5) * (y - 5)  # noqa: E731
+    elif kind == "conjugate":
+        height = lambda x, y: 0.6 * np.sin(0.7 * x) + 0.04 * (y - 5) ** 2  # noqa: E731
     else:
         height = lambda x, y: 0.6 * np.sin(0.7 * x) * np.cos(0.5 * y) + 0.02 * x * y  # noqa: E731
-    return shapes.grid(n, n, size=(size, size), height=height, name=f"{kind}{(n - 1) ** 2}")
+    mesh = shapes.grid(n, n, size=(size, size), height=height, name=f"{kind}{(n - 1) ** 2}")
+    if kind == "conjugate":
+        mesh = shapes.perturbed(mesh, 0.1, seed=5, name=f"{kind}{(n - 1) ** 2}+noise")
+    return mesh
 
 
 def revolution(faces: int, noise: float = 0.005):
@@ -85,7 +97,8 @@ def row(mesh0, name, target, method, seconds, V, nit):
     dist = Reference(mesh0).distance(V).max() / mesh0.bbox_diagonal()
     return {"mesh": name, "faces": mesh0.n_faces, "target": target, "method": method,
             "seconds": seconds, "max": float(d.max()), "mean": float(d.mean()),
-            "planarity": float(p.max()), "distance": float(dist), "nit": nit}
+            "planarity": float(p.max()), "distance": float(dist), "nit": nit,
+            "folded": int(measures.folded_faces(mesh0, np.asarray(V, dtype=float)).sum())}
 
 
 def ours(mesh, target, **kw):
@@ -158,14 +171,14 @@ def run_mpfp(mpfp, mesh, budget):
 
 def print_table(rows):
     head = f"{'mesh':22s} {'faces':>7s} {'target':8s} {'method':7s} {'time s':>8s} {'max':>9s} " \
-           f"{'mean':>9s} {'planar':>9s} {'dist':>8s} {'nit':>5s}  ratio / note"
+           f"{'mean':>9s} {'planar':>9s} {'dist':>8s} {'nit':>5s} {'fold':>4s}  ratio / note"
     print(head)
     print("-" * len(head))
     for r in rows:
         extra = "; ".join(x for x in (r.get("status", ""), r.get("ratio", ""), r.get("note", "")) if x)
         print(f"{r['mesh'][:22]:22s} {r['faces']:7d} {r['target']:8s} {r['method']:7s} "
               f"{r['seconds']:8.2f} {r['max']:9.2e} {r['mean']:9.2e} {r['planarity']:9.2e} "
-              f"{r['distance']:8.2e} {r['nit']:5d}  {extra}")
+              f"{r['distance']:8.2e} {r['nit']:5d} {r.get('folded', 0):4d}  {extra}")
 
 
 def comparison(args):
@@ -173,12 +186,12 @@ def comparison(args):
     if not args.no_peers:
         igl = ensure("igl", "libigl", not args.no_install)
         mpfp = ensure("mpfp", "mpfp", not args.no_install)
-    cases = [(height_field(900), "pq"), (height_field(900, "hypar"), "pq"),
+    cases = [(height_field(900, "conjugate"), "pq"), (height_field(900), "pq"), (height_field(900, "hypar"), "pq"),
              (halftunnel(), "pq"), (halftunnel(), "conical"), (halftunnel(), "circular"),
              (revolution(10000), "pq"), (revolution(10000), "conical"), (revolution(2500), "circular"),
              (height_field(10000), "pq")]
     if args.quick:
-        cases = cases[:5]
+        cases = cases[:6]
     rows = []
     for mesh, target in cases:
         r = ours(mesh, target)
