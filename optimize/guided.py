@@ -127,7 +127,10 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         the old rule (``mu / 3`` on every acceptance) took 10 iterations on a
         10k-face conical dome and stalled on a 10k-face wave height field whose
         planarity barely moved in long, accepted but poorly predicted steps; the
-        gain rule takes 8 and converges on the wave in 49.
+        gain rule takes 8, and reaches planarity 1e-6 on the wave in 49 (with
+        dented quads: that grid has no fold-free PQ mesh nearby, the result says
+        ``folded``).  One case went the other way: a remeshed dome with gliding
+        boundary took 52 iterations against 32.
     callback : called with each iteration's history dict (observes only).
     """
     t_start = time.perf_counter()
