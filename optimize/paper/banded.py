@@ -18,6 +18,12 @@ with one ``np.bincount`` or fancy assignment.  ``A^T A`` of a Jacobian is
 formed per *row group* (rows with the same columns, e.g. a quad's angle sum
 and its four determinants) by one batched ``matmul``.
 
+With the compiled kernels (:mod:`optimize.paper.kernels`) both systems are
+factored instead by an ``L D L^T`` without pivoting that works only inside
+the band's envelope (:attr:`BandOrder.ext`: the columns' lengths below the
+diagonal; a third less work than the full band on the trefoil band), with
+LAPACK's LU as the fallback for the KKT system.
+
 :func:`band_order` decides whether a band pays off (``b <= 2 sqrt(n)``, or,
 for Cholesky, the factorization costs under ``BAND_FLOPS``); otherwise the
 callers keep their sparse (SuperLU) path.
@@ -29,17 +35,37 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
+from . import kernels
+
 BAND_FLOPS = 4e6  # n b^2 below this: a band is cheaper than a sparse factorization anyway
 
 
 class BandOrder:
-    """A symmetric permutation ``perm (n,)`` (``inv`` its inverse) and the half-bandwidth ``bw``."""
+    """A symmetric permutation ``perm (n,)`` (``inv`` its inverse) and the half-bandwidth ``bw``.
+
+    ``ext (n,)`` int: the envelope, column ``j`` (ordered) has no entry below row
+    ``j + ext[j]``, nor has its ``L D L^T`` or Cholesky factor (fill stays inside the
+    envelope: rows keep their first entry); ``bw`` for every column unless
+    :meth:`set_envelope` was given the pattern.
+    """
 
     def __init__(self, perm: np.ndarray, bw: int):
         self.perm = perm.astype(np.int64)
         self.inv = np.empty_like(self.perm)
         self.inv[self.perm] = np.arange(len(perm))
         self.n, self.bw = len(perm), int(bw)
+        self.ext = np.full(self.n, self.bw, dtype=np.int64)
+
+    def set_envelope(self, rows: np.ndarray, cols: np.ndarray) -> None:
+        """Compute :attr:`ext` from the symmetric pattern ``(rows, cols)`` (original indices)."""
+        i, j = self.inv[rows], self.inv[cols]
+        low = i >= j
+        first = np.arange(self.n)  # first column of every row, the diagonal at the latest
+        np.minimum.at(first, i[low], j[low])
+        last = np.arange(self.n)  # the last row whose first column is at or before column j
+        np.maximum.at(last, first, np.arange(self.n))
+        last = np.maximum.accumulate(last)
+        self.ext = np.minimum(last - np.arange(self.n), self.bw).astype(np.int64)
 
 
 def band_order(rows: np.ndarray, cols: np.ndarray, n: int, pivoting: bool = False,
@@ -70,6 +96,8 @@ def band_order(rows: np.ndarray, cols: np.ndarray, n: int, pivoting: bool = Fals
             best = order
     if best.bw > 2 * np.sqrt(n) and (pivoting or n * (best.bw + 1) ** 2 > BAND_FLOPS):
         return None
+    best.ext = np.full(n, best.bw, dtype=np.int64)
+    best.set_envelope(S.row, S.col)
     return best
 
 
@@ -104,7 +132,7 @@ class RowGram:
     """
 
     def __init__(self, indptr: np.ndarray, indices: np.ndarray, order: BandOrder):
-        self.order = order
+        self.order, self.indices = order, indices
         lengths = np.diff(indptr)
         self.classes = []  # (data positions (G, g, m), selected flat block entries) per (g, m)
         dest = []
@@ -125,6 +153,26 @@ class RowGram:
                 dest.append(flat)
         self.dest = np.concatenate(dest) if dest else np.zeros(0, dtype=np.int64)
 
+    def plans(self) -> list[tuple]:
+        """Per class of groups ``(starts (G, g), m, ii, jj (l,), dest (G, l))``: the pairs
+        ``(ii, jj)`` of the upper triangle of an ``(m, m)`` Gram block, and where pair ``t``
+        of group ``G_i`` lands in the flat band (its lower entry, whichever way round the
+        ordering puts it); the arguments of the compiled ``group_gram``.
+        Raises ValueError unless every row's values are contiguous in the data (CSR)."""
+        out = []
+        order, w = self.order, self.order.bw + 1
+        for P, _ in self.classes:
+            G, g, m = P.shape
+            if not np.array_equal(P, P[:, :, :1] + np.arange(m)):
+                raise ValueError("RowGram.plans: a row's values are not contiguous, expected CSR rows")
+            ii, jj = np.triu_indices(m)
+            cols = self.indices[P[:, 0, :]]  # (G, m)
+            oi, oj = order.inv[cols[:, ii]], order.inv[cols[:, jj]]
+            dest = np.minimum(oi, oj) * w + np.abs(oi - oj)  # (G, l): the lower entry
+            out.append((np.ascontiguousarray(P[:, :, 0], dtype=np.int64), int(m), ii.astype(np.int64),
+                        jj.astype(np.int64), np.ascontiguousarray(dest, dtype=np.int64)))
+        return out
+
     def values(self, data: np.ndarray) -> list[np.ndarray]:
         """Lower Gram entries of the rows with CSR values ``data (nnz,)``, in ``self.dest`` order."""
         out = []
@@ -139,7 +187,20 @@ def cholesky_solve(ab: np.ndarray, b: np.ndarray, order: BandOrder) -> np.ndarra
 
     ``ab`` is overwritten.  Returns ``x (n,)`` in the original order, or None when
     the matrix is not positive definite to working precision (the caller falls back).
+    With the compiled kernels (:mod:`optimize.paper.kernels`) the factorization is
+    their ``L D L^T``, which fails where ``dpbtrf`` does (a pivot ``<= 0``).
     """
+    k = kernels.get()
+    if k is not None:
+        L = ab.T  # (n, bw + 1), C order: L[j, d] = M[j + d, j]
+        if not L.flags.c_contiguous or not k.ldl_factor(L, True, order.ext):
+            return None
+        y = k.ldl_solve(L, np.ascontiguousarray(b[order.perm]), order.ext)
+        if not np.all(np.isfinite(y)):
+            return None
+        x = np.empty_like(y)
+        x[order.perm] = y
+        return x
     c, info = lapack.dpbtrf(ab, lower=1, overwrite_ab=1)
     if info != 0:
         return None

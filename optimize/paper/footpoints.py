@@ -14,8 +14,12 @@ only its few candidates, exactly (the Voronoi-region test of
 than ``M`` gets new candidates (a ball query on the triangle centroids with
 radius ``u + 2 M + R``, ``R`` the largest centroid-to-vertex radius, then the
 distance to each triangle's bounding box, a lower bound, then the exact
-distance).  ``T0`` is the point's last closest triangle, or the
-nearest centroid's at the first call.
+distance; with the compiled kernels of :mod:`optimize.paper.kernels` and up
+to ``SCAN_MAX`` point-triangle pairs, the box and exact tests run on every
+triangle instead, which finds the same candidates without the ball query).
+``T0`` is the point's last closest triangle, or the nearest centroid's at the
+first call; the compiled warm query tests it first and skips candidates whose
+bounding box is farther than the best distance found.
 
 The answers equal :meth:`optimize.closeness.Reference.closest`'s: the same
 distances and footpoints to rounding, normals by the reference's own
@@ -35,22 +39,25 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..closeness import Reference, closest_on_triangles
+from . import kernels
 
 MAX_CANDIDATES = 64  # mean candidates per point beyond which Reference.closest is used
+SCAN_MAX = 2_000_000  # (points x triangles) up to which renewals test every triangle (compiled)
 
 
 class Footpoints:
     """Closest points and normals on ``ref`` for query sets ``P (q, 3)`` that move little per call.
 
     ref : Reference.  margin : ``M`` above, in the units of the reference
-    (``optimize.paper.problem.Problem`` uses ``FOOT_MARGIN`` = 0.1 mean edge lengths).
+    (``optimize.paper.problem.Problem`` uses ``FOOT_MARGIN`` = 0.3 mean edge lengths).
     Counters ``queries`` and ``rebuilt`` (points given new candidates) for the record.
     """
 
     def __init__(self, ref: Reference, margin: float):
         self.ref, self.margin = ref, float(margin)
         X = ref.mesh.V[ref.triangles]  # (t, 3, 3)
-        self.A, self.B, self.C = X[:, 0], X[:, 1], X[:, 2]
+        self.A, self.B, self.C = (np.ascontiguousarray(X[:, i]) for i in range(3))
+        self.T = np.ascontiguousarray(ref.triangles, dtype=np.int64)
         self.lo, self.hi = X.min(axis=1), X.max(axis=1)  # bounding boxes: a cheap lower bound first
         self.rmax = float(np.linalg.norm(X - ref.centroids[:, None, :], axis=2).max(initial=0.0))
         self.tree = cKDTree(ref.centroids)
@@ -80,12 +87,22 @@ class Footpoints:
                 self.delegate = True
                 return self.ref.closest(P)
             Y[idx], tri[idx] = got
+        k = kernels.get()
         if not far.all():
-            sel = ~far[self.owner]
-            o, f = self.owner[sel], self.cand[sel]
-            pts, Y_, t_ = self._pick(o, f, *self._pairs(P, o, f))
-            Y[pts], tri[pts] = Y_, t_
+            if k is not None:  # the same search, compiled (optimize.paper.kernels)
+                prev = self.tri if self.tri is not None else np.full(len(P), -1, dtype=np.int64)
+                Yk, tk, found = k.closest_candidates(P, self.A, self.B, self.C, self.owner, self.cand, far,
+                                                     self.lo, self.hi, prev)
+                Y[found], tri[found] = Yk[found], tk[found]
+            else:
+                sel = ~far[self.owner]
+                o, f = self.owner[sel], self.cand[sel]
+                pts, Y_, t_ = self._pick(o, f, *self._pairs(P, o, f))
+                Y[pts], tri[pts] = Y_, t_
         self.tri = tri
+        if k is not None:
+            r = self.ref
+            return Y, k.interpolated_normals(Y, tri, r._A, r._B, r._C, self.T, r.vertex_normals, r.normals)
         return Y, self.ref._interpolated_normals(Y, tri)
 
     def _pairs(self, P: np.ndarray, o: np.ndarray, f: np.ndarray):
@@ -112,6 +129,14 @@ class Footpoints:
         there would be too many candidates."""
         Pi = P[idx]
         t0 = self.tree.query(Pi, k=1)[1] if self.tri is None else self.tri[idx]
+        k = kernels.get()
+        if k is not None and len(idx) * len(self.A) <= SCAN_MAX:  # every triangle, compiled
+            owner, f, Y, tri = k.scan_triangles(P, np.ascontiguousarray(idx, dtype=np.int64),
+                                                np.ascontiguousarray(t0, dtype=np.int64), self.margin,
+                                                self.slack, self.A, self.B, self.C, self.lo, self.hi)
+            if len(f) > MAX_CANDIDATES * len(P) or np.any(tri < 0):
+                return None
+            return self._store(P, idx, owner, f, Y, tri)
         u = np.linalg.norm(closest_on_triangles(Pi, self.A[t0], self.B[t0], self.C[t0]) - Pi, axis=1)
         reach = (u + 2 * self.margin) * (1 + 1e-9) + self.slack  # (k,)
         lists = self.tree.query_ball_point(Pi, reach + self.rmax, return_sorted=False)
@@ -128,11 +153,15 @@ class Footpoints:
         Yc, d2 = self._pairs(P, owner, f)
         _, Y, tri = self._pick(owner, f, Yc, d2)  # every triangle that can be closest is a candidate
         keep = np.sqrt(d2) <= r
+        return self._store(P, idx, owner[keep], f[keep], Y, tri)
+
+    def _store(self, P, idx, owner, f, Y, tri):
+        """Replace the candidates of the points ``idx`` by the pairs ``(owner, f)``; returns ``Y, tri``."""
         stay = ~np.isin(self.owner, idx)
-        owner = np.concatenate([self.owner[stay], owner[keep]])
-        f = np.concatenate([self.cand[stay], f[keep]])
+        owner = np.concatenate([self.owner[stay], owner])
+        f = np.concatenate([self.cand[stay], f])
         srt = np.argsort(owner, kind="stable")
         self.owner, self.cand = owner[srt], f[srt]
-        self.P0[idx] = Pi
+        self.P0[idx] = P[idx]
         self.rebuilt += len(idx)
         return Y, tri

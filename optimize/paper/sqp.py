@@ -30,11 +30,25 @@ Near-singular systems (the paper falls back to an SVD):
   closeness and the fairness leave ``H`` singular (vertices may slide along
   the surface), so without it the steps would be unbounded along the
   constraint set.  It starts at ``1e-3``, is divided by 3 after a full step
-  and multiplied by 2 (``alpha >= 1/4``) or 8 after a shortened one.
+  and multiplied by 2 (``alpha >= 1/4``) or 8 after a shortened one; it is
+  multiplied by 8 also after any step that leaves the constraints worse
+  than they were, ``|c(x + s)|_inf > max(|c(x)|_inf, tau)`` (``tau`` the
+  smallest tested tolerance): the step was longer than the region where the
+  linearized constraints hold, and ``delta`` shortens only the objective's
+  part of the step, not the restoring one.  Without that test the merit
+  function alone steers the proximal weight, and it prices
+  infeasibility by ``rho ~ |y|_inf``, which is tiny when the objective is
+  (small weights ``w1, w2``): on the trefoil bands full steps were accepted
+  while ``delta`` fell to ``1e-9``, the steps grew to a third of an edge,
+  the neglected constraint curvature made them lose feasibility faster than
+  the Newton steps restored it (``|c|_1`` from 2e-4 to 2e-2 while the merit
+  still decreased), and SQP stalled at planarity 1e-3.
 - Where a reverse Cuthill-McKee ordering makes the KKT matrix a narrow band
   (strips, small meshes; :func:`optimize.paper.assembly.kkt_band`) LAPACK's
   banded LU with partial pivoting factors it, refilled on a layout fixed for
-  the run; otherwise, or when a banded solution fails the checks (not finite,
+  the run (with the compiled kernels of :mod:`optimize.paper.kernels` an
+  ``L D L^T`` without pivoting is tried first: the matrix is quasi-definite);
+  otherwise, or when a banded solution fails the checks (not finite,
   relative residual above 1e-8, near-singular), SuperLU does; a failed or
   inaccurate SuperLU solve falls back to LSQR (:func:`optimize.paper.linalg.solve`).
 
@@ -74,6 +88,7 @@ from .assembly import kkt_band
 from .hessian import constraint_curvature
 from .linalg import COND_LIMIT, RESIDUAL_TOL, Factor
 from .penalty import Run
+from .cache import problem_for
 from .problem import Problem
 from .targets import default_mu
 
@@ -135,10 +150,11 @@ class KKTFactor:
             bn = float(np.linalg.norm(b))
             if bn == 0.0:
                 return np.zeros_like(b), "banded"
-            x = self.lu.solve(b)
-            if (np.all(np.isfinite(x)) and self._residual(x, b) <= RESIDUAL_TOL * bn
-                    and np.linalg.norm(x) * self.lu.norm1 <= COND_LIMIT * bn):
-                return x, "banded"
+            for solve in self.lu.solvers():
+                x = solve(b)
+                if (np.all(np.isfinite(x)) and self._residual(x, b) <= RESIDUAL_TOL * bn
+                        and np.linalg.norm(x) * self.lu.norm1 <= COND_LIMIT * bn):
+                    return x, "banded"
         if self._sparse is None:
             self._sparse = Factor(kkt_matrix(self.H, self.A, self.delta, self.eps), symmetric=False)
         return self._sparse.solve(b)
@@ -190,7 +206,8 @@ def _line_search(p: Problem, x, s, f, c, g, rho, w1, w2, foot, correction):
     The full step is tried first as it is, then with the second-order
     correction ``correction(c(x + s))`` (a minimum-norm step back onto the
     linearized constraints, the same factorization), then ``alpha = 1/2, 1/4, ...``.
-    Returns the accepted step vector and ``alpha`` (None when every merit is non-finite).
+    Returns the accepted step vector, ``alpha`` (None when every merit is non-finite)
+    and the constraint values at ``x`` plus that step.
     """
     def merit(xa):
         ca = p.constraints(xa, jac=False, sqp=True)
@@ -198,33 +215,36 @@ def _line_search(p: Problem, x, s, f, c, g, rho, w1, w2, foot, correction):
 
     phi0 = f + rho * float(np.abs(c).sum())
     slope = min(float(g @ s) - rho * float(np.abs(c).sum()), 0.0)
-    best = (np.inf, None, None)
+    best = (np.inf, None, None, None)
     phi1, c1 = merit(p.step(x, s))
     if np.isfinite(phi1) and phi1 <= phi0 + 1e-4 * slope:
-        return s, 1.0
-    best = min(best, (phi1, 1.0, s), key=lambda t: t[0]) if np.isfinite(phi1) else best
+        return s, 1.0, c1
+    best = min(best, (phi1, 1.0, s, c1), key=lambda t: t[0]) if np.isfinite(phi1) else best
     if np.all(np.isfinite(c1)):
         s2 = s + correction(c1)
-        phi2, _ = merit(p.step(x, s2))
+        phi2, c2 = merit(p.step(x, s2))
         if np.isfinite(phi2) and phi2 <= phi0 + 1e-4 * slope:
-            return s2, 1.0
+            return s2, 1.0, c2
     alpha = 0.5
     while alpha >= ALPHA_MIN:
-        phia, _ = merit(p.step(x, s, alpha))
+        phia, ca = merit(p.step(x, s, alpha))
         if np.isfinite(phia) and phia < best[0]:
-            best = (phia, alpha, alpha * s)
+            best = (phia, alpha, alpha * s, ca)
         if np.isfinite(phia) and phia <= phi0 + 1e-4 * alpha * slope:
-            return alpha * s, alpha
+            return alpha * s, alpha, ca
         alpha *= 0.5
-    return best[2], best[1]
+    return best[2], best[1], best[3]
 
 
 DELTA_RULE = (3.0, 2.0, 8.0)
 
 
-def _adapt(delta: float, alpha: float) -> float:
-    """The proximal weight after a step of length ``alpha``."""
+def _adapt(delta: float, alpha: float, trusted: bool = True) -> float:
+    """The proximal weight after a step of length ``alpha``; ``trusted``: the step did not
+    leave the constraints worse than they were (see the module docstring)."""
     down, mid, up = DELTA_RULE
+    if not trusted:
+        return min(delta * up, DELTA_MAX)
     if alpha == 1.0:
         return max(delta / down, DELTA_MIN)
     return min(delta * (mid if alpha >= 0.25 else up), DELTA_MAX)
@@ -247,6 +267,7 @@ def run_sqp(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, kkt_tol:
     m = p.measure(x)
     it = 0
     band = p.band(f"kkt_{hessian}", lambda q: kkt_band(q, q.sqp_system, exact=hessian == "exact"))
+    c_floor = min(p.tolerance(name) for name in p.tests)  # constraint values that count as met
     while it < max_iter:
         ti = time.perf_counter()
         foot = p.footpoints(x) if w2 > 0 else None
@@ -295,14 +316,16 @@ def run_sqp(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, kkt_tol:
         def correction(c1):
             return factor.solve(-np.concatenate([np.zeros(k), c1]))[0][:k]
 
-        step_vec, alpha = _line_search(p, x, s, f, c, g, rho, w1, w2, foot, correction)
+        step_vec, alpha, c_new = _line_search(p, x, s, f, c, g, rho, w1, w2, foot, correction)
         tm["line_search"] += time.perf_counter() - tl
         if alpha is None:
             run.status, run.message = "diverged", f"iteration {first_iteration + it + 1}: non-finite merit"
             break
         xn = p.step(x, step_vec)
         y = y + alpha * dy
-        delta = _adapt(delta, alpha)
+        # the step may not leave the constraints worse than they were (or than the tolerance)
+        trusted = float(np.abs(c_new).max(initial=0.0)) <= max(float(np.abs(c).max(initial=0.0)), c_floor)
+        delta = _adapt(delta, alpha, trusted)
         it += 1
         step = float(np.abs(xn - x).max())
         x = xn
@@ -311,7 +334,8 @@ def run_sqp(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, kkt_tol:
         tm["measure"] += time.perf_counter() - tq
         entry = {"iteration": first_iteration + it, "phase": "sqp", **m, "objective": f,
                  "feasibility": float(np.abs(c).max(initial=0.0)), "kkt": stat, "alpha": alpha,
-                 "step": step, "delta": delta, "rho": rho, "solve": how, "seconds": time.perf_counter() - ti,
+                 "step": step, "trusted": trusted, "delta": delta, "rho": rho, "solve": how,
+                 "seconds": time.perf_counter() - ti,
                  "multiplier_blocks": {n: [b.start, b.stop] for n, b in blocks.items()}}
         run.history.append(entry)
         log.debug("sqp %d: %s", it, entry)
@@ -360,10 +384,11 @@ def sqp(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=
         curvature ``sum y_i Hess c_i``, :mod:`optimize.paper.hessian`).
     """
     t0 = time.perf_counter()
-    p = Problem(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
-                closeness=closeness, tol=tol, mu=default_mu(mesh, target, "sqp") if mu is None else mu)
-    run = run_sqp(p, p.x0(), max_iter=max_iter, callback=callback, kkt_tol=kkt_tol,
-                  kkt_patience=kkt_patience, hessian=check_hessian(hessian))
-    run.timings["total"] = time.perf_counter() - t0
-    return p.result(run.x, status=run.status, nit=run.nit, history=run.history, timings=run.timings,
-                    method="sqp", message=run.message, multipliers=run.multipliers)
+    with problem_for(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
+                     closeness=closeness, tol=tol,
+                     mu=default_mu(mesh, target, "sqp") if mu is None else mu) as p:
+        run = run_sqp(p, p.x0(), max_iter=max_iter, callback=callback, kkt_tol=kkt_tol,
+                      kkt_patience=kkt_patience, hessian=check_hessian(hessian))
+        run.timings["total"] = time.perf_counter() - t0
+        return p.result(run.x, status=run.status, nit=run.nit, history=run.history, timings=run.timings,
+                        method="sqp", message=run.message, multipliers=run.multipliers)

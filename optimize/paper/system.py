@@ -14,6 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
+from . import kernels
 from .angles import angle_local, angle_values, corner_vertices
 from .det import ALTERNATING, det_combined_local, det_local, det_quads, det_values
 
@@ -76,10 +77,10 @@ class ConstraintSystem:
     def __init__(self, mesh: Mesh, terms: list, free: np.ndarray | None = None):
         self.mesh, self.terms = mesh, terms
         t = mesh.topology
-        self.vid = corner_vertices(t)  # (c, 3)
+        self.vid = corner_vertices(t).astype(np.int64)  # (c, 3)
         nc, n = len(self.vid), mesh.n_vertices
         ccols = (3 * self.vid[:, :, None] + np.arange(3)).reshape(nc, 9)
-        self.quads = mesh.F[det_quads(mesh), :4]
+        self.quads = np.ascontiguousarray(mesh.F[det_quads(mesh), :4], dtype=np.int64)
         qcols = (3 * self.quads[:, :, None] + np.arange(3)).reshape(-1, 12)
         self.blocks, self._entries, rows, cols, at = {}, [], [], [], 0
         for term in terms:
@@ -101,6 +102,14 @@ class ConstraintSystem:
         self._kinds = {term.kind for term in terms}
         self._last = None
         self.pattern = Pattern(np.concatenate(rows), np.concatenate(cols), (at, 3 * n), free)
+        # where each term's triplets land in the CSR data (-1: a fixed coordinate), for the kernels
+        dest = np.full(sum(len(r_) for r_ in rows), -1, dtype=np.int64)
+        dest[self.pattern.keep] = self.pattern.inv
+        self._dest, start = [], 0
+        for r_, term in zip(rows, terms):
+            width = 9 if term.kind == "angle" else 12
+            self._dest.append(dest[start:start + len(r_)].reshape(-1, width))
+            start += len(r_)
 
     def local(self, V: np.ndarray, jac: bool) -> dict:
         """The local quantities the terms need at ``V (n, 3)``: corner angles ``phi (c,)``,
@@ -115,6 +124,32 @@ class ConstraintSystem:
         if not jac and last is not None and np.array_equal(last[0], V):
             return last[1]
         out = {}
+        k = kernels.get()
+        if k is not None:  # the same quantities, compiled (optimize.paper.kernels)
+            V = np.ascontiguousarray(V, dtype=np.float64)
+            if "angle" in kinds:
+                out["phi"], G = k.angles(V, self.vid, jac)
+                if jac:
+                    out["G"] = G
+            if "det" in kinds or "det1" in kinds:
+                D, GD = k.dets(V, self.quads, jac)
+                out["D"] = D
+                if "det1" in kinds:
+                    out["D1"] = D @ ALTERNATING
+                if jac:
+                    if "det" in kinds:
+                        out["GD"] = GD
+                    if "det1" in kinds:
+                        out["G1"] = np.einsum("j,qja->qa", ALTERNATING, GD)
+        else:
+            self._local_numpy(V, jac, out)
+        if not jac:
+            self._last = (V.copy(), out)
+        return out
+
+    def _local_numpy(self, V: np.ndarray, jac: bool, out: dict) -> None:
+        """:meth:`local` by the NumPy functions of ``angles`` and ``det`` (no compiled kernels)."""
+        kinds = self._kinds
         if "angle" in kinds:
             if jac:
                 out["phi"], out["G"] = angle_local(V[self.vid])
@@ -129,9 +164,6 @@ class ConstraintSystem:
             else:
                 out["D"] = det_values(V[self.quads])
                 out["D1"] = out["D"] @ ALTERNATING
-        if not jac:
-            self._last = (V.copy(), out)
-        return out
 
     def cached(self, V: np.ndarray) -> dict:
         """The values :meth:`local` last computed, if they were computed at ``V`` (else ``{}``)."""
@@ -142,25 +174,38 @@ class ConstraintSystem:
         """``c (r,)`` and, with ``jac``, the Jacobian's CSR values ``(nnz,)`` on :attr:`pattern`."""
         loc = self.local(V, jac)
         cs, vals = [], []
+        fused = jac and kernels.get() is not None  # then the values are scattered below
         for term, ent in zip(self.terms, self._entries):
             w = np.sqrt(term.weight) if weighted and term.weight != 1.0 else 1.0
             if term.kind == "det":
                 cs.append(w * loc["D"].ravel())
-                if jac:
+                if jac and not fused:
                     vals.append(w * loc["GD"].reshape(-1, 12))
             elif term.kind == "det1":
                 cs.append(w * loc["D1"])
-                if jac:
+                if jac and not fused:
                     vals.append(w * loc["G1"])
             else:
                 corner, sign, S = ent
-                cs.append(w * (S @ loc["phi"] + term.const))
-                if jac:
+                cs.append(w * (kernels.matvec(S, loc["phi"]) + term.const))
+                if jac and not fused:
                     vals.append((w * sign)[:, None] * loc["G"][corner])
         c = np.concatenate(cs)
         if not jac:
             return c
-        return c, self.pattern.data(np.concatenate([v.ravel() for v in vals]))
+        k = kernels.get()
+        if k is None:
+            return c, self.pattern.data(np.concatenate([v.ravel() for v in vals]))
+        data = np.zeros(self.pattern.nnz)  # the same sums in the same order, without the copies
+        for term, ent, dest in zip(self.terms, self._entries, self._dest):
+            w = np.sqrt(term.weight) if weighted and term.weight != 1.0 else 1.0
+            if term.kind in ("det", "det1"):
+                src = loc["GD"].reshape(-1, 12) if term.kind == "det" else loc["G1"]
+                k.scatter_rows(data, dest, np.full(len(src), w), src, np.arange(len(src)))
+            else:
+                corner, sign, _ = ent
+                k.scatter_rows(data, dest, np.ascontiguousarray(w * sign, dtype=np.float64), loc["G"], corner)
+        return c, data
 
     def evaluate(self, V: np.ndarray, jac: bool = True, weighted: bool = False):
         """``c (r,)`` and, with ``jac``, ``A (r, k)`` csr at ``V (n, 3)``.
