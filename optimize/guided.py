@@ -156,10 +156,11 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
     finder = None
     if use_close:
         # exact closest points, candidate triangles kept between iterations (vertices move
-        # little): 10k-face conical dome 0.93 s of closest-point queries -> 0.15 s
+        # little): 10k-face conical dome 0.93 s of closest-point queries -> 0.26 s.  The NumPy
+        # path: the compiled one (0.14 s) costs 0.4-0.9 s of numba load in a fresh process.
         from .paper.footpoints import Footpoints
 
-        finder = Footpoints(ref, FOOT_MARGIN)
+        finder = Footpoints(ref, FOOT_MARGIN, compiled=False)
 
     def residuals(x, foot, gfoot):
         """Stacked weighted residual, Jacobian of the exact rows, Jacobian of the

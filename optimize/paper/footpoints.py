@@ -48,13 +48,15 @@ SCAN_MAX = 2_000_000  # (points x triangles) up to which renewals test every tri
 class Footpoints:
     """Closest points and normals on ``ref`` for query sets ``P (q, 3)`` that move little per call.
 
-    ref : Reference.  margin : ``M`` above, in the units of the reference
+    ref : Reference.  compiled : use the numba kernels where available (False: the
+    NumPy path, which needs no compile/load time).  margin : ``M`` above, in the units of the reference
     (``optimize.paper.problem.Problem`` uses ``FOOT_MARGIN`` = 0.3 mean edge lengths).
     Counters ``queries`` and ``rebuilt`` (points given new candidates) for the record.
     """
 
-    def __init__(self, ref: Reference, margin: float):
+    def __init__(self, ref: Reference, margin: float, compiled: bool = True):
         self.ref, self.margin = ref, float(margin)
+        self.compiled = bool(compiled)
         X = ref.mesh.V[ref.triangles]  # (t, 3, 3)
         self.A, self.B, self.C = (np.ascontiguousarray(X[:, i]) for i in range(3))
         self.T = np.ascontiguousarray(ref.triangles, dtype=np.int64)
@@ -87,7 +89,7 @@ class Footpoints:
                 self.delegate = True
                 return self.ref.closest(P)
             Y[idx], tri[idx] = got
-        k = kernels.get()
+        k = kernels.get() if self.compiled else None
         if not far.all():
             if k is not None:  # the same search, compiled (optimize.paper.kernels)
                 prev = self.tri if self.tri is not None else np.full(len(P), -1, dtype=np.int64)
@@ -129,7 +131,7 @@ class Footpoints:
         there would be too many candidates."""
         Pi = P[idx]
         t0 = self.tree.query(Pi, k=1)[1] if self.tri is None else self.tri[idx]
-        k = kernels.get()
+        k = kernels.get() if self.compiled else None
         if k is not None and len(idx) * len(self.A) <= SCAN_MAX:  # every triangle, compiled
             owner, f, Y, tri = k.scan_triangles(P, np.ascontiguousarray(idx, dtype=np.int64),
                                                 np.ascontiguousarray(t0, dtype=np.int64), self.margin,
