@@ -16,9 +16,11 @@ from pathlib import Path
 
 import numpy as np
 
-from optimize import shapes
-from optimize.io import read_mesh, write_mesh
-from optimize.io.ply import format_ply
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout, not an installed copy
+
+from optimize import shapes  # noqa: E402
+from optimize.io import read_mesh, write_mesh  # noqa: E402
+from optimize.io.ply import format_ply  # noqa: E402
 
 
 def _best(fn, repeat: int = 3) -> float:

@@ -22,12 +22,16 @@ from __future__ import annotations
 
 import argparse
 import logging
+import sys
 import time
+from pathlib import Path
 
-from optimize.api import optimize_mesh
-from optimize.designs import DESIGNS
-from optimize.hierarchy import subdivide_and_perturb
-from optimize.subdivision import subdivide
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout, not an installed copy
+
+from optimize.api import optimize_mesh  # noqa: E402
+from optimize.designs import DESIGNS  # noqa: E402
+from optimize.hierarchy import subdivide_and_perturb  # noqa: E402
+from optimize.subdivision import subdivide  # noqa: E402
 
 PAPER = {"trefoil penalty": 0.08, "trefoil sqp": 0.75, "conical level": 10.0, "conical total": 13.0}
 

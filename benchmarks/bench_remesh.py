@@ -20,16 +20,20 @@ Run: ``python benchmarks/bench_remesh.py [--target conical|circular] [--h 0.3]
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from optimize import surfaces
-from optimize.api import optimize_mesh
-from optimize.measures import conical_defect, fairness
-from optimize.principal import principal_frames
-from optimize.principal_quadric import quadric_frames
-from optimize.remesh import isoparametric_remesh, remesh
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout, not an installed copy
+
+from optimize import surfaces  # noqa: E402
+from optimize.api import optimize_mesh  # noqa: E402
+from optimize.measures import conical_defect, fairness  # noqa: E402
+from optimize.principal import principal_frames  # noqa: E402
+from optimize.principal_quadric import quadric_frames  # noqa: E402
+from optimize.remesh import isoparametric_remesh, remesh  # noqa: E402
 
 
 def turned_quadric(a: float, b: float, deg: float):
