@@ -152,8 +152,16 @@ def make_executor(workers: int, scheduler: str | None = None, *,
             raise ConfigError(f"--scheduler {scheduler}: cannot connect to the Dask scheduler ({exc})") from None
         executor = client.get_executor(pure=False)
         return executor, client.close
-    executor = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    executor = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                                      initializer=_share_cores, initargs=(workers,))
     return executor, lambda: executor.shutdown(wait=True, cancel_futures=True)
+
+
+def _share_cores(workers: int) -> None:
+    """In a worker process: let MKL (the optimizer's sparse Cholesky) use this worker's share of
+    the cores, so that ``workers`` processes do not each start a thread per core."""
+    share = max(1, (os.cpu_count() or 1) // max(1, workers))
+    os.environ.setdefault("MKL_NUM_THREADS", str(share))
 
 
 def run_batch(jobs: list[Job], out_root: str | Path, *, workers: int | None = None, scheduler: str | None = None,
