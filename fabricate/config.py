@@ -141,6 +141,7 @@ class OptimizeSection(Section):
     method: Literal["default", "penalty", "sqp", "hybrid"] = "default"
     formulation: Literal["auto", "auxiliary", "vertices"] = "auto"
     linear_solver: Literal["auto", "pardiso", "superlu", "cholespy", "eliminate"] = "auto"
+    torsion_free_beams: Literal["auto"] | bool = "auto"
     fairness: float = Field(default=1e-3, ge=0)
     closeness: float = Field(default=1e-2, ge=0)
     max_iter: int = Field(default=200, ge=1, le=100000)

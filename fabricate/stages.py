@@ -90,7 +90,8 @@ def stage_optimize(ctx) -> str:
                   fairness=opt.fairness, closeness=opt.closeness, tol=cfg.tolerances.to_tolerances(),
                   max_iter=opt.max_iter, callback=callback)
     if opt.method == "default":
-        kwargs.update(formulation=opt.formulation, linear_solver=opt.linear_solver)
+        kwargs.update(formulation=opt.formulation, linear_solver=opt.linear_solver,
+                      torsion_free_beams=opt.torsion_free_beams)
     hier = subdivide_and_perturb(mesh, levels, scheme=plan["scheme"], target=target, **kwargs)
     ctx.values["levels"] = [_plain(_level_facts(lv)) for lv in hier.levels]
     ctx.values["level_results"] = [lv.result for lv in hier.levels]
@@ -125,10 +126,14 @@ def stage_offset(ctx) -> str:
     at a conical vertex the fit is the cone axis the optimizer found, and at
     boundary and irregular vertices it is better than the optimizer's vertex-normal
     estimate (the offset stage turns free axes so that their beams are planar).
+    When the optimizer solved the axes together with planar beams
+    (``torsion_free_beams``, meshes with irregular vertices) its axes are used.
     """
     from fabricate.offset import offset_structure
 
-    structure = offset_structure(ctx["mesh"], ctx.config.layer_distances(), axes=None,
+    result = ctx.get("result")
+    axes = getattr(result, "beam_axes", None)
+    structure = offset_structure(ctx["mesh"], ctx.config.layer_distances(), axes=axes,
                                  flip=ctx.config.offset.flip, tol=ctx.config.tolerances.to_tolerances())
     ctx.values["structure"] = structure
     kind = "conical" if structure.is_conical else "not conical"

@@ -47,7 +47,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
                   reference: Mesh | None = None, fixed=None, glide_boundary: bool = False,
                   fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = Tolerances(),
                   max_iter: int = 200, callback=None, linear_solver: str = "auto",
-                  formulation: str = "auto", **options) -> OptimizeResult:
+                  formulation: str = "auto", torsion_free_beams="auto", **options) -> OptimizeResult:
     """Move the vertices of ``mesh`` so that it becomes ``target``; never mutates ``mesh``.
 
     mesh : Mesh, quads with n-gons and triangles allowed, boundary allowed.
@@ -71,6 +71,12 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     formulation : ``"auxiliary"`` (quadratic rows on positions plus unit normals,
         cone axes, circle centres), ``"vertices"`` (positions only) or ``"auto"``
         (``"vertices"`` for conical, else ``"auxiliary"``); default method only.
+    torsion_free_beams : conical with the vertex formulation: node axes become unknowns
+        at every vertex, with the cone condition at every valence and every beam
+        planar (``constraints.nodeaxes``); the result then carries them in
+        ``beam_axes`` for the offset stage.  ``"auto"``: when the
+        mesh has interior vertices of valence other than 4 (where the paper's angle
+        balance says nothing and beams would twist).
     options : extras of the paper's methods (``mu``, ``kkt_tol``, ...), passed on
         to ``optimize.paper.run_paper_method``; none for the default method.
 
@@ -115,7 +121,14 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         bnd = np.setdiff1d(np.nonzero(mesh.topology.is_boundary_vertex)[0], fixed_idx)
         if bnd.size:
             glide = Glide(bnd, glide_mod.BoundaryCurve(ref_norm))
-    form = Formulation(norm, target, resolve_formulation(target, formulation))
+    unknowns = resolve_formulation(target, formulation)
+    t = mesh.topology
+    if torsion_free_beams not in ("auto", True, False):
+        raise ConfigError(f"torsion_free_beams: {torsion_free_beams!r}, expected 'auto', true or false")
+    beams = (target == "conical" and unknowns == "vertices"
+             and (bool(np.any(~t.is_boundary_vertex & (t.star_size != 4))) if torsion_free_beams == "auto"
+                  else bool(torsion_free_beams)))
+    form = Formulation(norm, target, unknowns, beams=beams)
     x0 = form.start(norm.V)
     t_setup = time.perf_counter() - t0
     run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=fairness,
@@ -129,9 +142,12 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     t1 = time.perf_counter()
     normals = (_unit(L.view(run.x, "normals")) if "normals" in L
                else measures.face_normals(norm, Xn))
-    axes = cone_angles = None
+    axes = cone_angles = beam_axes = None
     if target == "conical":
         axes, cone_angles = _node_axes(form, run.x, normals)
+    if len(getattr(form, "axis_vertices", ())):
+        beam_axes = np.full((mesh.n_vertices, 3), np.nan)
+        beam_axes[form.axis_vertices] = axes[form.axis_vertices]
     max_distance = float(ref.distance(Xn).max() / ref.bbox_diagonal)
     defects = measures.summary(out, tol)
     status, message = run.status, run.message
@@ -147,7 +163,8 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     log.info("optimize_mesh(%s, %s): %s", mesh.name, target, message)
     return OptimizeResult(mesh=out, success=success, status=status, message=message,
                           nit=run.nit, history=run.history, defects=defects, max_distance=max_distance,
-                          normals=normals, axes=axes, cone_angles=cone_angles, timings=timings,
+                          normals=normals, axes=axes, cone_angles=cone_angles, beam_axes=beam_axes,
+                          timings=timings,
                           method=method, target=target)
 
 
@@ -171,6 +188,11 @@ def _node_axes(form: Formulation, x: np.ndarray, normals: np.ndarray) -> tuple[n
         cosines[cv] = form.layout.view(x, "cos") / np.linalg.norm(a, axis=1)
     elif len(cv):  # positions only: the axis of the circle through the four normals
         axes[cv], cosines[cv] = fit_axes(normals[SF[cv, :4]])
+    av = getattr(form, "axis_vertices", ())
+    if len(av):  # solved node axes (torsion-free beams), every interior vertex
+        a = form.layout.view(x, "node_axes")
+        axes[av] = _unit(a)
+        cosines[av] = form.layout.view(x, "node_cos") / np.linalg.norm(a, axis=1)
     return axes, np.arccos(np.clip(cosines, -1.0, 1.0))
 
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .constraints import anglebalance, anglesum, circular, conical, diagonals, planarity, unit
+from .constraints import anglebalance, anglesum, circular, conical, diagonals, nodeaxes, planarity, unit
 from .errors import ConfigError
 from .measures import face_normals
 from .mesh import Mesh
@@ -84,7 +84,7 @@ class Formulation:
         at most quadratic) or ``"vertices"`` (positions only, see above).
     """
 
-    def __init__(self, mesh: Mesh, target: str, unknowns: str = "auxiliary"):
+    def __init__(self, mesh: Mesh, target: str, unknowns: str = "auxiliary", beams: bool = False):
         if target not in TARGETS:
             raise ConfigError(f"target: {target!r} is not known, expected one of {TARGETS}")
         if unknowns not in UNKNOWNS:
@@ -101,7 +101,17 @@ class Formulation:
             self.ngons = np.nonzero(mesh.face_sizes > 4)[0]
             if len(self.ngons):  # a unit normal per n-gon (see constraints.diagonals)
                 self.layout.add("ngon_normals", len(self.ngons), 3)
+            self.axis_vertices = np.zeros(0, dtype=np.int64)
+            if beams and target == "conical":  # node axes as unknowns, planar beams (constraints.nodeaxes)
+                self.axis_vertices = nodeaxes.axis_vertices(mesh)
+                self.beam_edges = nodeaxes.beam_edges(mesh)
+                self.axis_row = np.full(mesh.n_vertices, -1, dtype=np.int64)
+                self.axis_row[self.axis_vertices] = np.arange(len(self.axis_vertices))
+                p = len(self.axis_vertices)
+                self.layout.add("node_axes", p, 3).add("node_cos", p, 1)
             return
+        if beams:
+            raise ConfigError("torsion_free_beams: written for formulation 'vertices' only, not 'auxiliary'")
         self.layout = L = Layout().add("vertices", mesh.n_vertices, 3).add("normals", mesh.n_faces, 3)
         if target == "conical":
             L.add("axes", len(self.cone_vertices), 3).add("cos", len(self.cone_vertices), 1)
@@ -117,6 +127,8 @@ class Formulation:
             blocks = {"vertices": V}
             if len(self.ngons):
                 blocks["ngon_normals"] = face_normals(self.mesh, V)[self.ngons]
+            if len(self.axis_vertices):
+                blocks["node_axes"], blocks["node_cos"] = nodeaxes.start(self.mesh, V, self.axis_vertices)
             return self.layout.pack(**blocks)
         N = face_normals(self.mesh, V)
         blocks = {"vertices": V, "normals": N}
@@ -165,8 +177,24 @@ class Formulation:
             parts.append(anglebalance.terms(x, self.layout, self.mesh))
         if self.target == "circular" and len(self.quads):
             parts.append(anglesum.terms(x, self.layout, self.mesh))
+        if len(self.axis_vertices):
+            parts += [nodeaxes.cone_terms(x, self.layout, self.mesh, self.axis_vertices),
+                      unit.terms(x, self.layout, "node_axes"),
+                      nodeaxes.beam_terms(x, self.layout, self.beam_edges, self.axis_row)]
         return (np.concatenate([r for r, _ in parts]), sp.vstack([J for _, J in parts], format="csr"),
                 [])
+
+    def axis_defects(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """With node-axis unknowns: ``{"node_cone": |n . a - c| (r,), "beam": |(e x a_v) . a_w| / |e|
+        (k,)}`` (both about radians: sines of the angles off the cone and off the beam plane)."""
+        if not len(getattr(self, "axis_vertices", ())):
+            return {}
+        a = self.layout.view(x, "node_axes")
+        unit_x = x.copy()
+        self.layout.view(unit_x, "node_axes")[:] = a / np.linalg.norm(a, axis=1, keepdims=True)
+        rc, _ = nodeaxes.cone_terms(unit_x, self.layout, self.mesh, self.axis_vertices)
+        rb, _ = nodeaxes.beam_terms(unit_x, self.layout, self.beam_edges, self.axis_row)
+        return {"node_cone": np.abs(rc), "beam": np.abs(rb)}
 
     def face_blocks(self) -> np.ndarray | None:
         """(m, b) int: per-face auxiliary unknowns (normal, and centre + radius for circular quads).

@@ -97,7 +97,7 @@ def _score(defects: dict, tol: Tolerances) -> float:
     ``glide`` (distance of gliding vertices to the boundary curve / mean edge
     length) is held to the planarity tolerance.
     """
-    limit = {"glide": tol.planarity}
+    limit = {"glide": tol.planarity, "node_cone": tol.conical, "beam": tol.conical}
     worst = [max(float(d.max(initial=0.0)), 1e-300) / limit.get(k, getattr(tol, k, None) or 1.0)
              for k, d in defects.items()]
     return float(np.log10(max(worst)))
@@ -185,6 +185,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         tm = time.perf_counter()
         V = L.view(x, "vertices")
         out = target_defects(form, V)
+        out.update(form.axis_defects(x) if hasattr(form, "axis_defects") else {})
         if glide is not None:
             Y, _ = glide.curve.closest(V[glide.vertices])
             out["glide"] = np.linalg.norm(V[glide.vertices] - Y, axis=1)  # mean edge length is 1

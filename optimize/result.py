@@ -53,6 +53,9 @@ class OptimizeResult:
         normals (conical target).
     multipliers : array or None
         Lagrange multipliers (SQP only).
+    beam_axes : (n, 3) float or None
+        Node axes solved together with planar beams (``torsion_free_beams``): the
+        offset stage should use them (NaN rows, if any, are left to it).
     timings : dict
         Seconds per phase (``total``, ``solve``, ``assemble``, ``closest``...).
     method, target : str
@@ -70,6 +73,7 @@ class OptimizeResult:
     axes: np.ndarray | None = None
     cone_angles: np.ndarray | None = None
     multipliers: np.ndarray | None = None
+    beam_axes: np.ndarray | None = None
     timings: dict = field(default_factory=dict)
     method: str = "default"
     target: str = "pq"

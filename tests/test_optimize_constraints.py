@@ -60,6 +60,27 @@ def test_vertex_formulation_jacobian_with_ngons():
     assert _fd_check(form.terms, _random_x(form, 11)) < 1e-7
 
 
+def test_node_axis_rows_jacobian_and_zero_on_a_surface_of_revolution():
+    from optimize.constraints import nodeaxes
+
+    mesh = shapes.perturbed(_revolution(), 0.1, seed=4)
+    form = Formulation(mesh, "conical", "vertices", beams=True)
+    assert form.layout.blocks["node_axes"] == (mesh.n_vertices, 3)
+    assert _fd_check(form.terms, _random_x(form, 12)) < 1e-7
+    exact = Formulation(_revolution(), "conical", "vertices", beams=True)
+    x = exact.start(exact.mesh.V)
+    d = exact.axis_defects(x)  # a surface of revolution: cones and planar beams by construction
+    interior = ~exact.mesh.topology.is_boundary_vertex
+    owner = np.repeat(np.arange(len(exact.axis_vertices)), exact.mesh.topology.star_size[exact.axis_vertices])
+    assert d["node_cone"][interior[exact.axis_vertices][owner]].max() < 1e-9
+    E = exact.beam_edges
+    both = interior[E[:, 0]] & interior[E[:, 1]]
+    assert d["beam"][both].max() < 1e-9
+    with pytest.raises(ConfigError, match="torsion_free_beams"):
+        Formulation(_revolution(), "conical", "auxiliary", beams=True)
+    assert nodeaxes.beam_edges(exact.mesh, boundary=False).shape[0] == both.sum()
+
+
 def test_diagonal_distance_is_the_planarity_measure_times_mean_diagonal():
     from optimize import measures
 

@@ -27,6 +27,9 @@ def register(sub) -> None:
     p.add_argument("--linear-solver", choices=("auto", "pardiso", "superlu", "cholespy", "eliminate"),
                    default="auto", help="sparse solver of the default method (auto: MKL PARDISO "
                                         "where installed, else SuperLU)")
+    p.add_argument("--torsion-free-beams", choices=("auto", "on", "off"), default="auto",
+                   help="conical: solve node axes with every interior beam planar (auto: when the mesh "
+                        "has interior vertices of valence other than 4)")
     p.add_argument("--fix", default="none", metavar="{boundary,corners,none}",
                    help="vertices that must not move (default none)")
     p.add_argument("--glide", action="store_true", help="boundary vertices glide on the boundary curve")
@@ -59,7 +62,9 @@ def run(args) -> int:
                         fairness=args.fairness, closeness=args.closeness, tol=tol,
                         max_iter=args.max_iter,
                         **({} if args.method != "default" else
-                           dict(formulation=args.formulation, linear_solver=args.linear_solver)))
+                           dict(formulation=args.formulation, linear_solver=args.linear_solver,
+                                torsion_free_beams={"auto": "auto", "on": True, "off": False}[
+                                    args.torsion_free_beams])))
     write_mesh(args.output, res.mesh)
     d = res.defects
     print(f"{mesh.name} -> {args.output}: {res.status} after {res.nit} iterations "
