@@ -21,7 +21,7 @@ the two faces at their edge only while those faces are not coplanar.  On
 vertices coplanar (the easy way to put five planes on one cone), the
 least-squares axes of the offset stage then twisted beams by 29 mm; with
 these rows and the solver's own axes every beam is planar to 3e-9 m (the
-run takes about 130 iterations, 10 s, against 11 without: the axes of
+run takes about 66 iterations, 5 s, against 12 without: the axes of
 nearly coplanar faces converge slowly).  With axes on interior vertices only,
 the beams from the boundary twisted by 25 mm: the offset stage could not turn
 the boundary axes to match the fixed interior ones.
