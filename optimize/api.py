@@ -145,7 +145,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     axes = cone_angles = beam_axes = None
     if target == "conical":
         axes, cone_angles = _node_axes(form, run.x, normals)
-    if len(getattr(form, "axis_vertices", ())):
+    if len(form.axis_vertices):
         beam_axes = np.full((mesh.n_vertices, 3), np.nan)
         beam_axes[form.axis_vertices] = axes[form.axis_vertices]
     max_distance = float(ref.distance(Xn).max() / ref.bbox_diagonal)
@@ -188,7 +188,7 @@ def _node_axes(form: Formulation, x: np.ndarray, normals: np.ndarray) -> tuple[n
         cosines[cv] = form.layout.view(x, "cos") / np.linalg.norm(a, axis=1)
     elif len(cv):  # positions only: the axis of the circle through the four normals
         axes[cv], cosines[cv] = fit_axes(normals[SF[cv, :4]])
-    av = getattr(form, "axis_vertices", ())
+    av = form.axis_vertices
     if len(av):  # solved node axes (torsion-free beams), every interior vertex
         a = form.layout.view(x, "node_axes")
         axes[av] = _unit(a)

@@ -95,13 +95,13 @@ class Formulation:
         self.cone_vertices = mesh.topology.interior_valence4 if target == "conical" else np.zeros(0, int)
         self.quads = circular.circle_faces(mesh) if target == "circular" else np.zeros(0, int)
         self.angle_mask = np.ones(len(self.cone_vertices), dtype=bool)
+        self.axis_vertices = np.zeros(0, dtype=np.int64)  # vertices with node-axis unknowns (beams)
         if unknowns == "vertices":
             self.layout = Layout().add("vertices", mesh.n_vertices, 3)
             self.quadruples = diagonals.quadruples(mesh, max_size=4)
             self.ngons = np.nonzero(mesh.face_sizes > 4)[0]
             if len(self.ngons):  # a unit normal per n-gon (see constraints.diagonals)
                 self.layout.add("ngon_normals", len(self.ngons), 3)
-            self.axis_vertices = np.zeros(0, dtype=np.int64)
             if beams and target == "conical":  # node axes as unknowns, planar beams (constraints.nodeaxes)
                 self.axis_vertices = nodeaxes.axis_vertices(mesh)
                 self.beam_edges = nodeaxes.beam_edges(mesh)
@@ -187,7 +187,7 @@ class Formulation:
     def axis_defects(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """With node-axis unknowns: ``{"node_cone": |n . a - c| (r,), "beam": |(e x a_v) . a_w| / |e|
         (k,)}`` (both about radians: sines of the angles off the cone and off the beam plane)."""
-        if not len(getattr(self, "axis_vertices", ())):
+        if not len(self.axis_vertices):
             return {}
         a = self.layout.view(x, "node_axes")
         unit_x = x.copy()

@@ -186,7 +186,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         tm = time.perf_counter()
         V = L.view(x, "vertices")
         out = target_defects(form, V)
-        out.update(form.axis_defects(x) if hasattr(form, "axis_defects") else {})
+        out.update(form.axis_defects(x))
         if glide is not None:
             Y, _ = glide.curve.closest(V[glide.vertices])
             out["glide"] = np.linalg.norm(V[glide.vertices] - Y, axis=1)  # mean edge length is 1

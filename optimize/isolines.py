@@ -78,24 +78,42 @@ def planar_faces(P: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     src, dst = np.concatenate([E[:, 0], E[:, 1]]), np.concatenate([E[:, 1], E[:, 0]])
     twin = (np.arange(2 * ne) + ne) % (2 * ne)
     d = P[dst] - P[src]
-    order = np.lexsort((np.arctan2(d[:, 1], d[:, 0]), src))
+    label, size, start, nxt = face_cycles(src, np.arctan2(d[:, 1], d[:, 0]), twin)
+    area = 0.5 * np.bincount(label, P[src, 0] * P[dst, 1] - P[dst, 0] * P[src, 1])
+    keep = np.nonzero(area > 0)[0]
+    return cycle_vertices(src, nxt, size, start, keep), area[keep]
+
+
+def face_cycles(src: np.ndarray, angle: np.ndarray, twin: np.ndarray):
+    """The face cycles of a graph embedded with half-edges ordered by angle at each node.
+
+    src : (H,) int start node of each half-edge; angle : (H,) its direction angle at
+    ``src``; twin : (H,) the opposite half-edge.  The next half-edge of a face is the
+    clockwise neighbour of the twin at its node.  Returns ``label (H,)`` (cycle of
+    each half-edge), ``size (c,)``, ``start (c,)`` (first half-edge of each cycle)
+    and ``nxt (H,)``.
+    """
+    order = np.lexsort((angle, src))
     pos = np.empty_like(order)
     pos[order] = np.arange(len(order))
     s_sorted = src[order]
     first = np.searchsorted(s_sorted, src, side="left")
     last = np.searchsorted(s_sorted, src, side="right") - 1
-    p = pos[twin]  # position of the twin among the half-edges leaving dst
+    p = pos[twin]  # position of the twin among the half-edges leaving its node
     base = first[twin]
     prev = np.where(p - 1 >= base, p - 1, last[twin])
     nxt = order[prev]
     H = len(src)
     _, label = connected_components(coo_matrix((np.ones(H), (np.arange(H), nxt)), shape=(H, H)),
                                     directed=True, connection="weak")
-    area = 0.5 * np.bincount(label, P[src, 0] * P[dst, 1] - P[dst, 0] * P[src, 1])
     size = np.bincount(label)
     start = np.full(len(size), H, dtype=np.int64)
     np.minimum.at(start, label, np.arange(H))
-    keep = np.nonzero(area > 0)[0]
+    return label, size, start, nxt
+
+
+def cycle_vertices(src, nxt, size, start, keep) -> np.ndarray:
+    """(f, k) int, ``-1`` padded: the nodes of the cycles ``keep (f,)`` of :func:`face_cycles`."""
     k = int(size[keep].max()) if len(keep) else 3
     F = np.full((len(keep), k), -1, dtype=np.int64)
     cur = start[keep]
@@ -103,7 +121,7 @@ def planar_faces(P: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         live = step < size[keep]
         F[live, step] = src[cur[live]]
         cur = nxt[cur]
-    return F, area[keep]
+    return F
 
 
 def _boundary_loops(surface: Mesh, UV: np.ndarray) -> list[np.ndarray]:

@@ -58,6 +58,7 @@ import scipy.sparse.linalg as spla
 from .crossfield import comb, face_crosses, face_frames, smooth_cross_field
 from .errors import ConfigError, MeshError
 from .isolines import extract
+from .measures import edge_lengths
 from .mesh import Mesh
 from .principal import oriented_surface, principal_frames
 
@@ -222,12 +223,7 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
                "distorted (no irregular vertices are placed)")
         log.warning(msg)
         out.notes.append(msg)
-    el = np.linalg.norm(out.V[out.topology.edges[:, 1]] - out.V[out.topology.edges[:, 0]], axis=1)
-    rep.edge_length = {"min": float(el.min()), "mean": float(el.mean()), "max": float(el.max())}
-    rep.face_sizes = {str(k): int(c) for k, c in enumerate(np.bincount(out.face_sizes)) if c}
-    rep.timings["total"] = time.perf_counter() - t0
-    log.info("remesh %s: %s", out.name, rep.as_dict())
-    return (out, rep) if with_report else out
+    return _finish(out, rep, t0, with_report)
 
 
 def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report):
@@ -251,12 +247,7 @@ def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report):
            "by a seamless parametrization cut to the boundary")
     log.info(msg)
     out.notes.append(msg)
-    el = np.linalg.norm(out.V[out.topology.edges[:, 1]] - out.V[out.topology.edges[:, 0]], axis=1)
-    rep.edge_length = {"min": float(el.min()), "mean": float(el.mean()), "max": float(el.max())}
-    rep.face_sizes = {str(k): int(c) for k, c in enumerate(np.bincount(out.face_sizes)) if c}
-    rep.timings["total"] = time.perf_counter() - t0
-    log.info("remesh %s: %s", out.name, rep.as_dict())
-    return (out, rep) if with_report else out
+    return _finish(out, rep, t0, with_report)
 
 
 def isoparametric_remesh(surface: Mesh, edge_length: float, *, axes: tuple = (0, 1),
@@ -309,3 +300,13 @@ def surface_to_mesh(surface: Mesh, edge_length: float, *, target: str = "conical
     out = res.mesh
     out.notes.extend(n for n in quads.notes if n not in out.notes)
     return out, res, rep
+
+
+def _finish(out: Mesh, rep: RemeshReport, t0: float, with_report: bool):
+    """Edge lengths, face sizes and total time into ``rep``; the return value of :func:`remesh`."""
+    el = edge_lengths(out)
+    rep.edge_length = {"min": float(el.min()), "mean": float(el.mean()), "max": float(el.max())}
+    rep.face_sizes = {str(k): int(c) for k, c in enumerate(np.bincount(out.face_sizes)) if c}
+    rep.timings["total"] = time.perf_counter() - t0
+    log.info("remesh %s: %s", out.name, rep.as_dict())
+    return (out, rep) if with_report else out

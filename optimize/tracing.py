@@ -30,6 +30,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .errors import MeshError
+from .isolines import cycle_vertices, face_cycles
 from .mesh import Mesh
 from .seamless import rotation
 
@@ -255,9 +256,8 @@ def _march(t, UVc, rot, shift, f, p, d, rem, max_steps):
 
 def _faces(X, src, dst, dir0, dir1, is_ring, mesh, name):
     """Faces ``(f, k)`` of the graph: half-edge orbits with edges ordered by angle at every node."""
-    N = len(X)
     ne = len(src)
-    hs, hd = np.concatenate([src, dst]), np.concatenate([dst, src])
+    hs = np.concatenate([src, dst])
     hdir = np.concatenate([dir0, dir1])
     twin = (np.arange(2 * ne) + ne) % (2 * ne)
     # node normals from the triangle surface: nearest vertex normal
@@ -272,33 +272,12 @@ def _faces(X, src, dst, dir0, dir1, is_ring, mesh, name):
     e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
     e2 = np.cross(n, e1)
     ang = np.arctan2(np.einsum("ij,ij->i", hdir, e2[hs]), np.einsum("ij,ij->i", hdir, e1[hs]))
-    order = np.lexsort((ang, hs))
-    posn = np.empty_like(order)
-    posn[order] = np.arange(len(order))
-    ss = hs[order]
-    first = np.searchsorted(ss, hs, side="left")
-    last = np.searchsorted(ss, hs, side="right") - 1
-    pt = posn[twin]
-    base = first[twin]
-    prev = np.where(pt - 1 >= base, pt - 1, last[twin])
-    nxt = order[prev]
-    H = len(hs)
-    _, label = connected_components(coo_matrix((np.ones(H), (np.arange(H), nxt)), shape=(H, H)),
-                                    directed=True, connection="weak")
+    label, size, start, nxt = face_cycles(hs, ang, twin)
     outside = np.zeros(label.max() + 1, dtype=bool)
     outside[label[ne:][is_ring]] = True  # ring edges run with the surface on their left
-    size = np.bincount(label)
     keep = np.nonzero(~outside)[0]
-    start = np.full(len(size), H, dtype=np.int64)
-    np.minimum.at(start, label, np.arange(H))
     k = int(size[keep].max()) if len(keep) else 3
     if k > 12:
         raise MeshError(f"{name}: a traced cell has {k} corners; the parametrization folds or a trace was "
                         "lost; expected a locally injective parametrization")
-    Fq = np.full((len(keep), k), -1, dtype=np.int64)
-    cur = start[keep]
-    for step in range(k):  # walk all faces at once, one step per vertex slot
-        live = step < size[keep]
-        Fq[live, step] = hs[cur[live]]
-        cur = nxt[cur]
-    return Fq
+    return cycle_vertices(hs, nxt, size, start, keep)
