@@ -189,7 +189,7 @@ def _node_axes(form: Formulation, x: np.ndarray, normals: np.ndarray) -> tuple[n
     elif len(cv):  # positions only: the axis of the circle through the four normals
         axes[cv], cosines[cv] = fit_axes(normals[SF[cv, :4]])
     av = form.axis_vertices
-    if len(av):  # solved node axes (torsion-free beams), every interior vertex
+    if len(av):  # solved node axes (torsion-free beams), every vertex
         a = form.layout.view(x, "node_axes")
         axes[av] = _unit(a)
         cosines[av] = form.layout.view(x, "node_cos") / np.linalg.norm(a, axis=1)

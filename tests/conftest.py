@@ -4,12 +4,14 @@
 - ``grid3x3``: 3 x 3 planar quads on 4 x 4 vertices (4 interior valence-4 vertices).
 - ``revolution``: a dome of revolution, meridians x parallels: planar, conical and
   circular by construction; ``perturbed_revolution``: the same with seeded noise.
-- ``halftunnel_path``, ``cylinder_path``: the shared real meshes; a missing file
+- ``halftunnel_path``, ``cylinder_path``: the shared real meshes (``shared/data``
+  beside the repository, or beside the one it was cloned from); a missing file
   fails the test with the path it looked for (never a silent skip).
 - ``rotation``: ``rotation(seed)`` gives a seeded (3, 3) rotation matrix.
 """
 from __future__ import annotations
 
+import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +19,28 @@ import pytest
 
 from optimize import Mesh, shapes
 
-SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
+REPO = Path(__file__).resolve().parents[1]
+
+
+def _shared_data() -> Path:
+    """``shared/data`` beside the repository (as CI lays it out) or, in a clone made
+    elsewhere (``git clone . $(mktemp -d)``), beside the repository it was cloned from."""
+    here = REPO.parent / "shared" / "data"
+    if here.is_dir():
+        return here
+    try:
+        origin = subprocess.run(["git", "-C", str(REPO), "config", "--get", "remote.origin.url"],
+                                capture_output=True, text=True, timeout=10).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        origin = ""
+    if origin and Path(origin).is_dir():
+        there = Path(origin).resolve().parent / "shared" / "data"
+        if there.is_dir():
+            return there
+    return here  # missing: shared_file says where it looked
+
+
+SHARED_DATA = _shared_data()
 
 
 def shared_file(name: str) -> Path:

@@ -7,7 +7,9 @@ from optimize import ConfigError, Tolerances, measures, optimize_mesh, shapes
 from optimize.closeness import Reference
 from optimize.io import read_mesh
 
-DATA = "/work/shared/data"
+from conftest import SHARED_DATA
+
+DATA = str(SHARED_DATA)
 
 
 @pytest.fixture(scope="module")
