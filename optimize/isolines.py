@@ -19,11 +19,15 @@ in the triangle that contains them).
 - boundary: cells are clipped by the boundary, so boundary faces are
   triangles, quads or pentagons (rarely more where the boundary bends inside
   one cell); the boundary is straightened between consecutive boundary nodes.
-  Boundary nodes closer than ``merge`` along the boundary are merged; cells
-  smaller than ``min_area`` (lattice cell = 1) are merged into the neighbour
-  across their longest inner edge, and a boundary node left with only two
-  boundary edges is dropped.  A merge leaves a node of degree 3 on the side
-  of the merged face: the paper's T-junction turned into a pentagon.
+  Boundary nodes closer than ``merge`` along the boundary are merged; a cell
+  smaller than ``min_area`` (lattice cell = 1) that touches the boundary is
+  snapped: its inner nodes collapse onto their nearest boundary node of the
+  cell, so the full cell behind a sliver becomes the boundary cell.  (Merging
+  the sliver into its neighbour instead left a T-junction pentagon with a
+  corner of about 178 degrees, which the conical optimization dented past 180.)
+  Small cells away from the boundary are merged into the neighbour across
+  their longest inner edge (a T-junction turned into a pentagon, as in the
+  paper), and a boundary node left with only two boundary edges is dropped.
 
 Holes: the outer loop (largest parameter area) is counter-clockwise, holes
 clockwise, the domain on the left of each; lattice nodes inside a hole are
@@ -372,8 +376,8 @@ def _domain_faces(P, E, ring, node_loop):
     return F[~hole], area[~hole]
 
 
-def _cleanup(P, E, ring, node_loop, is_corner, min_area, merge, rounds: int = 6):
-    """Prune, merge small cells, drop lone boundary nodes.  Returns ``(E (e, 2), ring (b,))``.
+def _cleanup(P, E, ring, node_loop, is_corner, min_area, merge, rounds: int = 8):
+    """Prune, snap or merge small cells, drop lone boundary nodes.  Returns ``(E (e, 2), ring (b,))``.
 
     P : (N, 2) nodes, E : (e, 2) sorted edges, ring : (b,) boundary nodes in
     order, loop after loop; node_loop : (N,) loop of each boundary node (-1 inside).
@@ -399,20 +403,59 @@ def _cleanup(P, E, ring, node_loop, is_corner, min_area, merge, rounds: int = 6)
         small = np.nonzero(area < min_area)[0]
         if not len(small):
             break
-        # drop the longest non-boundary edge of every small cell
-        a, b = F[small], np.roll(F[small], -1, axis=1)
-        last = (F[small] >= 0).sum(1) - 1
-        b[np.arange(len(small)), last] = F[small, 0]
-        ok = a >= 0
-        fa, ea, eb = np.nonzero(ok)[0], a[ok], b[ok]
-        key = np.minimum(ea, eb) * N + np.maximum(ea, eb)
-        rk = _ring_edges(ring, node_loop)
-        inner = ~np.isin(key, rk[:, 0] * N + rk[:, 1])
-        fa, key = fa[inner], key[inner]
-        if not len(key):
-            break
-        length = np.linalg.norm(P[key // N] - P[key % N], axis=1)
-        o = np.lexsort((-length, fa))
-        first = np.insert(fa[o][1:] != fa[o][:-1], 0, True)
-        E = E[~np.isin(E[:, 0] * N + E[:, 1], key[o][first])]
+        on_ring[:] = False
+        on_ring[ring] = True
+        E, snapped = _snap_small(P, E, F[small], on_ring)
+        if snapped:
+            continue
+        E = _merge_small(P, E, F[small], ring, node_loop)
     return E, ring
+
+
+def _cell_edges(F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Directed edges of the ``-1`` padded cycles ``F (f, k)``: ``(cell (h,), a (h,), b (h,))``."""
+    a, b = F, np.roll(F, -1, axis=1)
+    last = (F >= 0).sum(1) - 1
+    b[np.arange(len(F)), last] = F[:, 0]
+    ok = a >= 0
+    return np.nonzero(ok)[0], a[ok], b[ok]
+
+
+def _snap_small(P, E, cells, on_ring):
+    """Collapse the inner nodes of small boundary cells onto their nearest boundary node in the same cell.
+
+    A sliver between an iso-line and the boundary then disappears and the
+    lattice nodes next to it become boundary nodes (they move by the sliver's
+    width), instead of a merge that leaves a straight-angled T-junction beside
+    the boundary.  Each inner node goes to one boundary node.  Returns ``(E,
+    snapped)``; ``snapped`` is False when no small cell has an inner node next
+    to a boundary node.
+    """
+    _, a, b = _cell_edges(cells)
+    i, r = np.concatenate([a, b]), np.concatenate([b, a])  # (inner node, boundary node) pairs, both ways
+    pick = ~on_ring[i] & on_ring[r]
+    i, r = i[pick], r[pick]
+    if not len(i):
+        return E, False
+    o = np.lexsort((np.linalg.norm(P[i] - P[r], axis=1), i))
+    first = np.insert(i[o][1:] != i[o][:-1], 0, True)
+    rep = np.arange(len(P))
+    rep[i[o][first]] = r[o][first]
+    E = rep[E]
+    return np.unique(np.sort(E[E[:, 0] != E[:, 1]], axis=1), axis=0), True
+
+
+def _merge_small(P, E, cells, ring, node_loop):
+    """Merge each small cell into its neighbour across its longest non-boundary edge (a T-junction)."""
+    N = len(P)
+    fa, ea, eb = _cell_edges(cells)
+    key = np.minimum(ea, eb) * N + np.maximum(ea, eb)
+    rk = _ring_edges(ring, node_loop)
+    inner = ~np.isin(key, rk[:, 0] * N + rk[:, 1])
+    fa, key = fa[inner], key[inner]
+    if not len(key):
+        return E
+    length = np.linalg.norm(P[key // N] - P[key % N], axis=1)
+    o = np.lexsort((-length, fa))
+    first = np.insert(fa[o][1:] != fa[o][:-1], 0, True)
+    return E[~np.isin(E[:, 0] * N + E[:, 1], key[o][first])]

@@ -36,10 +36,11 @@ Not supported: closed surfaces; holes around which the field turns (holes are
 not cut, a translational period is absorbed by the least squares); index
 other than +-1/4; surfaces whose least-squares parametrization folds (e.g.
 /work/shared/data/halftunnel.off, a pair of pants with ~10 singularities:
-the traced cells do not close, MeshError); the seamless branch does not merge
-tiny boundary cells (more 3- and 5-gons along the boundary than the planar
-branch).  Boundary gliding during the conical optimization does not reach the
-planarity tolerance on the holed and seamless examples (free boundary does).
+the traced cells do not close, MeshError).  Slivers along the boundary are
+snapped onto it in both branches (:func:`optimize.isolines.extract`,
+:func:`optimize.boundary_cells.snap_slivers`), so no boundary cell keeps a
+corner near 180 degrees: the holed roof and the monkey saddle become conical
+with the boundary free or gliding, and no panel folds.
 Folds of the planar branch are counted in ``RemeshReport.folded`` and noted
 in ``mesh.notes``.  Edge length is ``h`` where the principal field is
 integrable and varies elsewhere (principal lines spread and converge): see
@@ -228,6 +229,7 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
 
 def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report):
     """The seamless branch of :func:`remesh`: cut, integer-seamless ``u, v``, traced iso-lines."""
+    from .boundary_cells import snap_slivers
     from .seamless import parametrize
     from .tracing import trace_quads
 
@@ -240,6 +242,7 @@ def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report):
     rep.timings["cross_field"] = time.perf_counter() - t1
     t3 = time.perf_counter()
     out, corners = trace_quads(mesh, P["UVc"], P["rot"], P["shift"], name=name or f"{mesh.name}-quads")
+    out, corners = snap_slivers(out, corners, edge_length)
     rep.corners = corners.tolist()
     rep.timings["extract"] = time.perf_counter() - t3
     msg = (f"{out.name}: {len(P['singular'])} cross-field singularit(ies) kept (indices "

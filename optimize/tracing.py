@@ -19,8 +19,9 @@ transitions map the integer lattice to itself, the iso-lines ``u = i``,
 
 A singular vertex at a lattice node gets the 3 or 5 traces of its wedges (a
 valence-3/5 vertex); one at a cell centre is surrounded by a 3- or 5-gon.
-Not done here (unlike :func:`optimize.isolines.extract`): merging tiny
-boundary cells and close boundary nodes.
+Tiny boundary cells and close boundary nodes are left to
+:func:`optimize.boundary_cells.snap_slivers`, which :func:`optimize.remesh.remesh`
+applies to the traced mesh.
 """
 from __future__ import annotations
 
