@@ -46,6 +46,7 @@ import scipy.sparse as sp
 
 from . import measures
 from .closeness import Reference, closeness_terms
+from .constraints import edgefloor
 from .constraints import glide as glide_mod
 from .fairness import fairness_matrix, fairness_matrix_parts
 from .formulation import Formulation
@@ -66,6 +67,8 @@ class Glide:
 
     vertices: np.ndarray
     curve: glide_mod.BoundaryCurve
+    edges: np.ndarray | None = None  # (e, 2) edges at gliding vertices, kept above ``floor (e,)``
+    floor: np.ndarray | None = None
 
 
 @dataclass
@@ -95,9 +98,10 @@ def _score(defects: dict, tol: Tolerances) -> float:
     """log10 of the worst defect / tolerance ratio (<= 0 means converged).
 
     ``glide`` (distance of gliding vertices to the boundary curve / mean edge
-    length) is held to the planarity tolerance.
+    length) and ``short_edge`` (how far an edge at a gliding vertex fell below
+    its floor / mean edge length) are held to the planarity tolerance.
     """
-    limit = {"glide": tol.planarity, "node_cone": tol.conical, "beam": tol.conical}
+    limit = {"glide": tol.planarity, "short_edge": tol.planarity, "node_cone": tol.conical, "beam": tol.conical}
     worst = [max(float(d.max(initial=0.0)), 1e-300) / limit.get(k, getattr(tol, k, None) or 1.0)
              for k, d in defects.items()]
     return float(np.log10(max(worst)))
@@ -178,6 +182,10 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             rg, Jg = glide_mod.terms(x, L, glide.vertices, glide.curve, gfoot)
             rs.append(rg)
             Js.append(Jg)
+            if glide.edges is not None and len(glide.edges):
+                re, Je = edgefloor.terms(x, L, glide.edges, glide.floor)
+                rs.append(re)
+                Js.append(Je)
         rw = [w[0] for w in wide]
         phi_all = np.concatenate([phi] + [w[0] for w in wide if w[1] is not None])
         return np.concatenate(rs + rw), sp.vstack(Js, format="csr"), [w[2] for w in wide], phi_all
@@ -190,6 +198,8 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         if glide is not None:
             Y, _ = glide.curve.closest(V[glide.vertices])
             out["glide"] = np.linalg.norm(V[glide.vertices] - Y, axis=1)  # mean edge length is 1
+            if glide.edges is not None and len(glide.edges):
+                out["short_edge"] = edgefloor.shortfall(V, glide.edges, glide.floor)
         timings["measure"] += time.perf_counter() - tm
         return out
 

@@ -152,6 +152,43 @@ def test_glide_jacobian_and_footpoints():
     np.testing.assert_allclose(np.linalg.norm(Y - P, axis=1), best, atol=1e-14)
 
 
+def test_edge_floor_rows_act_only_on_short_edges():
+    from optimize.constraints import edgefloor
+
+    mesh = shapes.grid(4, 3)
+    form = Formulation(mesh, "pq")
+    E = mesh.topology.edges
+    x = form.start(mesh.V)
+    length = np.linalg.norm(mesh.V[E[:, 0]] - mesh.V[E[:, 1]], axis=1)
+    floor = length * np.where(np.arange(len(E)) % 2 == 0, 1.5, 0.5)  # every other edge is too short
+    r, J = edgefloor.terms(x, form.layout, E, floor)
+    np.testing.assert_allclose(r, np.where(np.arange(len(E)) % 2 == 0, -0.5 * length, 0.0), atol=1e-12)
+    assert np.all(J.getnnz(axis=1)[1::2] == 0) and np.all(J.getnnz(axis=1)[::2] == 6)
+    np.testing.assert_allclose(edgefloor.shortfall(mesh.V, E, floor), -r, atol=1e-12)
+    rng = np.random.default_rng(3)
+    y = x + 0.01 * rng.standard_normal(x.size)  # no edge near its floor: the hinge is smooth there
+    assert _fd_check(lambda z: edgefloor.terms(z, form.layout, E, floor), y) < 1e-8
+
+
+def test_gliding_boundary_vertex_does_not_slide_into_a_corner():
+    """The atrium roof's remeshed quads, conical with the boundary gliding: without the edge floor a
+    vertex next to a corner slid into it (an edge of 0.0 mm, a panel the CAD stage refused)."""
+    from optimize.api import GLIDE_EDGE_FLOOR, optimize_mesh
+    from optimize.remesh import remesh
+    from optimize.surfaces import holed_roof
+
+    surf = holed_roof()
+    quads, rep = remesh(surf, 0.3, with_report=True)
+    res = optimize_mesh(quads, "conical", reference=surf, glide_boundary=True, fixed=rep.corners)
+    assert res.status == "converged", res.message
+    E = quads.topology.edges
+    at = quads.topology.is_boundary_vertex[E].any(1)
+    before = np.linalg.norm(quads.V[E[:, 0]] - quads.V[E[:, 1]], axis=1)
+    after = np.linalg.norm(res.mesh.V[E[:, 0]] - res.mesh.V[E[:, 1]], axis=1)
+    assert np.all(after[at] >= GLIDE_EDGE_FLOOR * before[at] * (1 - 1e-6))
+    assert res.defects["planarity"]["max"] <= 1e-6 and res.defects["conical"]["max"] <= 1e-6
+
+
 @pytest.mark.parametrize("unknowns", ["auxiliary", "vertices"])
 def test_zero_residual_on_translational_surface_pq(unknowns):
     form = Formulation(_translational(), "pq", unknowns)
