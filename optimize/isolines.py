@@ -296,7 +296,7 @@ def extract(surface: Mesh, UV: np.ndarray, *, corner_angle: float = 35.0, merge:
     remap[used] = np.arange(len(used))
     out = Mesh(X3[used], np.where(F >= 0, remap[np.maximum(F, 0)], -1), name=name)
     out.notes.append(f"{name}: {int(np.sum(out.face_sizes == 4))} quads, "
-                     f"{int(np.sum(out.face_sizes != 4))} other faces (boundary cells and merges)")
+                     f"{int(np.sum(out.face_sizes != 4))} other faces (boundary cells, merged small cells)")
     corners = remap[np.nonzero(is_corner)[0]]
     return out, np.sort(corners[corners >= 0])
 

@@ -197,6 +197,32 @@ def height_field(f=None, size: tuple = (4.0, 3.0), n: tuple = (41, 31), jitter: 
     return AnalyticSurface(Mesh(V, F, name=name), grad=grad, hess=hess, side=(0.0, 0.0, -1.0))
 
 
+def holed_roof(radius: float = 0.6, centre: tuple = (0.3, 0.2), size: tuple = (4.0, 3.0), n: tuple = (41, 31),
+               seed: int = 0, scale: float = 1.0, name: str = "holed-roof") -> Mesh:
+    """The default saddle roof of :func:`height_field` minus a disk: a roof with an opening (two boundary loops).
+
+    radius, centre : the opening, in the roof's units before ``scale``; n : grid
+    points (jittered, Delaunay); scale : multiplies every coordinate (6000 gives
+    a 24 m x 18 m roof in mm).  The rim of the opening is sampled exactly on the
+    circle.  Returns the triangle Mesh.
+    """
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(np.linspace(-size[0] / 2, size[0] / 2, n[0]), np.linspace(-size[1] / 2, size[1] / 2, n[1]),
+                       indexing="ij")
+    P = np.stack([x.ravel(), y.ravel()], 1)
+    s = size[0] / (n[0] - 1)
+    inner = (np.abs(P[:, 0]) < size[0] / 2 - 1e-9) & (np.abs(P[:, 1]) < size[1] / 2 - 1e-9)
+    P[inner] += 0.3 * s * rng.uniform(-0.5, 0.5, (int(inner.sum()), 2))
+    P = P[np.linalg.norm(P - centre, axis=1) > radius + 0.5 * s]
+    k = int(np.ceil(2 * np.pi * radius / s))
+    t = 2 * np.pi * np.arange(k) / k
+    P = np.vstack([P, np.asarray(centre) + radius * np.stack([np.cos(t), np.sin(t)], 1)])
+    T = Delaunay(P).simplices
+    T = T[np.linalg.norm(P[T].mean(1) - centre, axis=1) > radius]
+    z = 0.15 * P[:, 0] ** 2 - 0.1 * P[:, 1] ** 2 + 0.05 * P[:, 0] * P[:, 1]
+    return Mesh(scale * np.column_stack([P, z]), T, name=name)
+
+
 def angle_error(d: np.ndarray, d_exact: np.ndarray, n_exact: np.ndarray) -> np.ndarray:
     """(k,) degrees between line fields ``d`` and ``d_exact`` (k, 3) after projecting ``d`` on the exact tangent plane."""
     d = d - np.einsum("ij,ij->i", d, n_exact)[:, None] * n_exact

@@ -134,24 +134,9 @@ def test_cli_remesh_writes_a_mesh(tmp_path, roof):
 
 
 # -- holes and singularities ---------------------------------------------------
-def _holed_roof(R=0.6, centre=(0.3, 0.2), n=(41, 31), seed=0):
+def _holed_roof():
     """The default roof ``0.15 x^2 - 0.1 y^2 + 0.05 x y`` over a 4 x 3 rectangle minus a disk (a smooth hole)."""
-    from scipy.spatial import Delaunay
-
-    rng = np.random.default_rng(seed)
-    x, y = np.meshgrid(np.linspace(-2, 2, n[0]), np.linspace(-1.5, 1.5, n[1]), indexing="ij")
-    P = np.stack([x.ravel(), y.ravel()], 1)
-    s = 4.0 / (n[0] - 1)
-    inner = (np.abs(P[:, 0]) < 2 - 1e-9) & (np.abs(P[:, 1]) < 1.5 - 1e-9)
-    P[inner] += 0.3 * s * rng.uniform(-0.5, 0.5, (int(inner.sum()), 2))
-    P = P[np.linalg.norm(P - centre, axis=1) > R + 0.5 * s]
-    k = int(np.ceil(2 * np.pi * R / s))
-    t = 2 * np.pi * np.arange(k) / k
-    P = np.vstack([P, np.asarray(centre) + R * np.stack([np.cos(t), np.sin(t)], 1)])
-    T = Delaunay(P).simplices
-    T = T[np.linalg.norm(P[T].mean(1) - centre, axis=1) > R]
-    z = 0.15 * P[:, 0] ** 2 - 0.1 * P[:, 1] ** 2 + 0.05 * P[:, 0] * P[:, 1]
-    return Mesh(np.column_stack([P, z]), T, name="holed-roof")
+    return surfaces.holed_roof()
 
 
 def _monkey_saddle():
