@@ -15,7 +15,7 @@ deformation.  Also printed: the cost of the volume-PCA estimate relative to a
 quadric fit on the same mesh, in the same run.
 
 Run: ``python benchmarks/bench_remesh.py [--target conical|circular] [--h 0.3]
-[--free-boundary]``.  Timings are noisy on a shared machine.
+[--boundary glide|free|both]``; a summary table closes the output.  Timings are noisy on a shared machine.
 """
 from __future__ import annotations
 
@@ -82,40 +82,43 @@ def _deep(quads) -> np.ndarray:
 
 
 def run_one(label, quads, corners, surface, target, glide, weights):
+    """Optimize ``quads`` at each fairness weight; print a line each; return ``[(status, move, fairness)]``."""
     c0 = conical_defect(quads)
     deep = _deep(quads)
     sizes = np.bincount(quads.face_sizes)
     print(f"  {label}: {quads.n_faces} faces ({sizes[4] if len(sizes) > 4 else 0} quads), initial conical "
           f"defect max {c0.max():.3f} mean {c0.mean():.4f}, deep max {c0[deep].max():.3f} "
           f"mean {c0[deep].mean():.4f}, fairness {fairness(quads).mean():.3f}")
-    moves = []
+    out = []
     for w in weights:
         t0 = time.perf_counter()
         res = optimize_mesh(quads, target, reference=surface, glide_boundary=glide,
                             fixed=corners if glide else None, fairness=w)
         dt = time.perf_counter() - t0
         move = np.linalg.norm(res.mesh.V - quads.V, axis=1) / quads.bbox_diagonal()
-        moves.append(move)
+        fair = float(fairness(res.mesh).mean())
+        out.append((res.status, move, fair))
         print(f"    fairness weight {w:g}: {res.status:<9} {res.nit:3d} it {dt:5.1f}s  move max "
-              f"{move.max():.4f} mean {move.mean():.4f}  dist {res.max_distance:.4f}  "
-              f"fairness {fairness(res.mesh).mean():.3f}")
-    return moves
+              f"{move.max():.4f} mean {move.mean():.4f}  dist {res.max_distance:.4f}  fairness {fair:.3f}")
+    return out
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--target", default="conical", choices=("conical", "circular"))
     ap.add_argument("--h", type=float, default=0.3, help="target edge length (roofs are 4 x 3)")
-    ap.add_argument("--free-boundary", action="store_true",
-                    help="boundary vertices move freely (default: they glide, corners fixed)")
+    ap.add_argument("--boundary", default="both", choices=("glide", "free", "both"),
+                    help="boundary vertices glide along the roof's outline (corners fixed), move freely, "
+                         "or both runs (default)")
     ap.add_argument("--weights", default="1e-3,1e-5",
                     help="fairness weights to run (the default 1e-3 slides vertices along the surface "
                          "to even them out; 1e-5 leaves the constraints to decide)")
     args = ap.parse_args()
-    glide = not args.free_boundary
+    modes = {"glide": [True], "free": [False], "both": [True, False]}[args.boundary]
     weights = [float(w) for w in args.weights.split(",")]
-    print(f"target {args.target}, edge length {args.h}, boundary {'glides' if glide else 'free'}; "
-          "moves and distances relative to the bbox diagonal; fairness = mean |a - 2v + b| / mean edge")
+    print(f"target {args.target}, edge length {args.h}; moves and distances relative to the bbox diagonal; "
+          "fairness = mean |a - 2v + b| / mean edge")
+    table = []
     for name, make in ROOFS.items():
         surf = make()
         print(f"{name}: {surf.mesh.n_vertices} vertices, {surf.mesh.n_faces} triangles")
@@ -124,12 +127,20 @@ def main() -> None:
             print(f"  (principal field: {rep.singular_triangles} singular triangles even after smoothing)")
         elif rep.smoothing > 1:
             print(f"  (principal field smoothed over {rep.smoothing:g} h to remove its singularities)")
-        m_p = run_one("principal", quads, rep.corners, surf.mesh, args.target, glide, weights)
         grid, corners = isoparametric_remesh(surf.mesh, args.h, with_corners=True)
-        m_g = run_one("iso-grid ", grid, corners, surf.mesh, args.target, glide, weights)
-        for w, a, b in zip(weights, m_p, m_g):
-            print(f"  iso-grid / principal at fairness {w:g}: mean move x{b.mean() / a.mean():.2f}, "
-                  f"max move x{b.max() / a.max():.2f}")
+        for glide in modes:
+            print(f" boundary {'glides' if glide else 'free'}:")
+            p = run_one("principal", quads, rep.corners, surf.mesh, args.target, glide, weights)
+            g = run_one("iso-grid ", grid, corners, surf.mesh, args.target, glide, weights)
+            for w, (sp_, mp, fp), (sg, mg, fg) in zip(weights, p, g):
+                table.append((name, "glides" if glide else "free", w, sp_, sg, mg.mean() / mp.mean(),
+                              mg.max() / mp.max(), fp, fg))
+    print("\nsummary: iso-grid / principal vertex moves (> 1: the principal mesh moves less); a ratio "
+          "against a run that did not converge compares unequal results")
+    print(f"{'roof':<24}{'boundary':<9}{'fairness':>9}  {'principal':<10}{'iso-grid':<10}{'mean move':>10}"
+          f"{'max move':>9}{'fair p':>8}{'fair g':>8}")
+    for name, b, w, sp_, sg, rm, rx, fp, fg in table:
+        print(f"{name:<24}{b:<9}{w:>9g}  {sp_:<10}{sg:<10}{rm:>9.2f}x{rx:>8.2f}x{fp:>8.3f}{fg:>8.3f}")
     surf = ROOFS["wave roof"]()
     r = 0.3
     t0 = time.perf_counter()
