@@ -89,26 +89,56 @@ def vertex_indices(mesh: Mesh, X1: np.ndarray) -> np.ndarray:
 
 
 def cut_graph(mesh: Mesh, singular: np.ndarray) -> np.ndarray:
-    """(c, 2) sorted vertex pairs: the edges of the shortest paths from ``singular (s,)`` vertices to the boundary."""
+    """(c, 2) sorted vertex pairs: the cut that opens ``mesh`` into a disk with ``singular (s,)`` on its rim.
+
+    Shortest paths (edge lengths, boundary edges not crossed) from every
+    singular vertex to the boundary, and, on a surface with several boundary
+    loops (holes), from every loop to the outer loop or a loop already joined
+    to it.  The union is the cut; cut open, the surface is simply connected, so
+    the combed field has no mismatch left and every period of the
+    parametrization is a transition across a cut arc.
+    """
     t = mesh.topology
     E = t.edges
-    if len(singular) == 0:
-        return np.zeros((0, 2), dtype=np.int64)
     n = len(mesh.V)
+    loops = t.boundary_loops
+    if not loops:
+        raise MeshError(f"{mesh.name}: closed surface; singularities are cut to the boundary, expected one")
     L = np.linalg.norm(mesh.V[E[:, 1]] - mesh.V[E[:, 0]], axis=1)
-    # boundary edges are not crossed: paths end at the first boundary vertex
     inner = ~t.is_boundary_edge
     G = sp.coo_matrix((L[inner], (E[inner, 0], E[inner, 1])), shape=(n, n)).tocsr()
-    bnd = np.nonzero(t.is_boundary_vertex)[0]
-    if not len(bnd):
-        raise MeshError(f"{mesh.name}: closed surface; singularities are cut to the boundary, expected one")
-    _, pred, _ = dijkstra(G, directed=False, indices=bnd, min_only=True, return_predecessors=True)
     pairs = []
-    for s in np.asarray(singular).tolist():  # a handful of singular vertices, one path each
-        v = s
+
+    def walk(pred, v):
         while pred[v] >= 0:
             pairs.append((min(v, pred[v]), max(v, pred[v])))
             v = pred[v]
+        return v
+
+    # holes: join loop after loop to the outer one (the longest), nearest first
+    loop_of = np.full(n, -1)
+    for k, lp in enumerate(loops):
+        loop_of[lp] = k
+    outer = int(np.argmax([np.linalg.norm(mesh.V[lp] - mesh.V[np.roll(lp, 1)], axis=1).sum() for lp in loops]))
+    joined = np.zeros(len(loops), dtype=bool)
+    joined[outer] = True
+    while not joined.all():  # a handful of holes: one shortest path each
+        src = np.nonzero(joined[np.maximum(loop_of, 0)] & (loop_of >= 0))[0]
+        src = np.union1d(src, np.unique(np.array(pairs, dtype=np.int64)))
+        dist, pred, _ = dijkstra(G, directed=False, indices=src, min_only=True, return_predecessors=True)
+        cand = np.nonzero((loop_of >= 0) & ~joined[np.maximum(loop_of, 0)])[0]
+        v = int(cand[np.argmin(dist[cand])])
+        if not np.isfinite(dist[v]):
+            raise MeshError(f"{mesh.name}: boundary loop {int(loop_of[v])} cannot be joined to the others")
+        start = len(pairs)
+        walk(pred, v)
+        on_path = np.unique(np.array(pairs[start:], dtype=np.int64)) if len(pairs) > start else np.array([v])
+        joined[np.unique(loop_of[on_path][loop_of[on_path] >= 0])] = True
+    if len(singular):
+        bnd = np.nonzero(t.is_boundary_vertex)[0]
+        _, pred, _ = dijkstra(G, directed=False, indices=bnd, min_only=True, return_predecessors=True)
+        for s in np.asarray(singular).tolist():  # a handful of singular vertices, one path each
+            walk(pred, s)
     return np.unique(np.array(pairs, dtype=np.int64).reshape(-1, 2), axis=0)
 
 

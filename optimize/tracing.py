@@ -35,6 +35,8 @@ from .isolines import cycle_vertices, face_cycles
 from .mesh import Mesh
 from .seamless import rotation
 
+LATTICE_SLACK = 1e-6  # barycentric slack when finding lattice nodes in triangles
+NEAR = 0.3  # parameter distance along a trace at which its direction at a node is taken
 _DIRS = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
 
 
@@ -68,7 +70,7 @@ def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray,
     nt = len(F)
     V3 = V[F]
     scale = float(np.linalg.norm(V3[:, 1] - V3[:, 0], axis=1).mean())
-    tol3 = 1e-6 * scale
+    tol3 = 1e-5 * scale
     # -- lattice nodes -------------------------------------------------------
     lo, hi = np.ceil(UVc.min(1) - 1e-9), np.floor(UVc.max(1) + 1e-9)
     cnt = np.maximum(hi - lo + 1, 0).astype(np.int64)
@@ -77,7 +79,7 @@ def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray,
     k = np.arange(m.sum()) - np.repeat(np.cumsum(m) - m, m)
     Q = lo[f] + np.stack([k // cnt[f, 1], k % cnt[f, 1]], 1)
     lam = _bary(UVc[f], Q)
-    ok = lam.min(1) >= -1e-9
+    ok = lam.min(1) >= -LATTICE_SLACK  # a singular vertex sits on its node only to the solver's precision
     f, Q, lam = f[ok], Q[ok], np.clip(lam[ok], 0, 1)
     P3 = np.einsum("kc,kcj->kj", lam, V3[f])
     node = _merge_points(P3, tol3)
@@ -148,12 +150,18 @@ def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray,
     sign = np.einsum("ij,ij->i", td, np.ones_like(td))
     nxt_int = np.where(sign > 0, np.floor(along_c + 1e-9) + 1, np.ceil(along_c - 1e-9) - 1)
     rem = np.abs(nxt_int - along_c)
-    J0 = _jacobian(V3[tf], UVc[tf])
-    dir0 = np.einsum("kij,kj->ki", J0, td)
-    end_face, end_p, end_kind, end_dir = _march(t, UVc, rot, shift, tf, tp, td, rem, max_steps)
-    J1 = _jacobian(V3[end_face], UVc[end_face])
-    end3 = np.einsum("kc,kcj->kj", _bary(UVc[end_face], end_p).clip(0, 1), V3[end_face])
-    dir1 = -np.einsum("kij,kj->ki", J1, end_dir)
+    end_face, end_p, end_kind, end_dir, left = _march(t, UVc, rot, shift, tf, tp, td, rem, max_steps)
+    end3 = _point(UVc, V3, end_face, end_p)
+    # directions at both ends for the angular order around the nodes: chords to the points a
+    # little way along the trace (a Jacobian at the node itself misleads where the parameters
+    # are distorted, around a singular node: up to 60 degrees there, enough to swap two edges)
+    travelled = np.where(end_kind == 1, rem - left, rem)
+    step = np.minimum(NEAR, 0.5 * travelled)
+    fa, pa, _, _, _ = _march(t, UVc, rot, shift, tf, tp, td, step, max_steps)
+    fb, pb, _, _, _ = _march(t, UVc, rot, shift, tf, tp, td, travelled - step, max_steps)
+    start3 = _point(UVc, V3, tf, tp)
+    dir0 = _point(UVc, V3, fa, pa) - start3
+    dir1 = _point(UVc, V3, fb, pb) - end3
     # endpoints: nearest lattice node (kind 0) or boundary node (kind 1)
     tdst = np.full(len(tf), -1)
     if n_lat:
@@ -188,6 +196,12 @@ def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray,
     dir0 = np.concatenate([dir0, chord])
     dir1 = np.concatenate([dir1, -chord])
     is_ring = np.concatenate([np.zeros(len(first), dtype=bool), np.ones(len(ra), dtype=bool)])
+    # a trace that runs along the boundary between two consecutive boundary nodes repeats a ring edge
+    nn = len(X_all)
+    pair = np.minimum(src, dst) * nn + np.maximum(src, dst)
+    keep = is_ring | ~np.isin(pair, pair[is_ring])
+    keep &= _prune_dangling(src, dst, nn, keep)  # a lost trace leaves its partner edge hanging
+    src, dst, dir0, dir1, is_ring = src[keep], dst[keep], dir0[keep], dir1[keep], is_ring[keep]
     Fq = _faces(X_all, src, dst, dir0, dir1, is_ring, mesh, name)
     used = np.unique(Fq[Fq >= 0])
     remap = np.full(len(X_all), -1, dtype=np.int64)
@@ -197,6 +211,11 @@ def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray,
                      f"other faces (boundary cells, singularities); {lost} trace(s) lost")
     corners = remap[c_ids]
     return out, np.sort(corners[corners >= 0])
+
+
+def _point(UVc: np.ndarray, V3: np.ndarray, f: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """(k, 3) surface points of the parameter points ``p (k, 2)`` in the charts of faces ``f (k,)``."""
+    return np.einsum("kc,kcj->kj", _bary(UVc[f], p).clip(0, 1), V3[f])
 
 
 def _merge_points(P: np.ndarray, tol: float) -> np.ndarray:
@@ -210,7 +229,8 @@ def _march(t, UVc, rot, shift, f, p, d, rem, max_steps):
     """Follow all traces at once, one triangle per step.
 
     Returns per trace the final face, point (in that face's chart), kind
-    (0 reached its lattice node, 1 hit the boundary, 2 lost) and direction.
+    (0 reached its lattice node, 1 hit the boundary, 2 lost), direction and
+    the parameter distance left to go (0 for kind 0).
     """
     f, p, d, rem = f.copy(), p.copy(), d.copy(), rem.copy()
     kind = np.full(len(f), 2)
@@ -243,6 +263,7 @@ def _march(t, UVc, rot, shift, f, p, d, rem, max_steps):
         hit = tw < 0
         p[go[hit]] = x[hit]
         kind[go[hit]] = 1
+        rem[go[hit]] -= sx[~arrive][hit]
         cont = go[~hit]
         he, x, tw = he[~hit], x[~hit], tw[~hit]
         M = rotation(rot[he]).astype(float)
@@ -252,7 +273,20 @@ def _march(t, UVc, rot, shift, f, p, d, rem, max_steps):
         f[cont] = tw // 3
         entry[cont] = tw % 3
         live = cont
-    return f, p, kind, d
+    rem[kind == 0] = 0.0
+    return f, p, kind, d, rem
+
+
+def _prune_dangling(src: np.ndarray, dst: np.ndarray, n: int, keep: np.ndarray | None = None) -> np.ndarray:
+    """(e,) bool: the edges ``src -> dst`` (those in ``keep``, default all) left after repeatedly
+    removing edges at nodes of degree 1."""
+    keep = np.ones(len(src), dtype=bool) if keep is None else keep.copy()
+    while True:  # each pass removes the current dead ends; chains take a few passes
+        deg = np.bincount(src[keep], minlength=n) + np.bincount(dst[keep], minlength=n)
+        dead = keep & ((deg[src] == 1) | (deg[dst] == 1))
+        if not dead.any():
+            return keep
+        keep &= ~dead
 
 
 def _faces(X, src, dst, dir0, dir1, is_ring, mesh, name):
