@@ -28,7 +28,7 @@ log = logging.getLogger(__name__)
 
 METHODS = ("default", "penalty", "sqp", "hybrid")
 FORMULATIONS = ("auto",) + UNKNOWNS
-GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no edge at a gliding vertex below half its start length
+GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
 
 
 def resolve_formulation(target: str, formulation: str) -> str:
@@ -61,10 +61,10 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         when None); triangulated inside.
     fixed : None | "none" | "boundary" | "corners" | (k,) int vertex indices that do not move.
     glide_boundary : keep free boundary vertices on the reference's boundary curve
-        (corner vertices, with one face, are then fixed); edges at gliding
-        vertices keep at least ``GLIDE_EDGE_FLOOR`` of their start length (a
-        one-sided row, :mod:`optimize.constraints.edgefloor`), so a vertex
-        cannot slide onto its neighbour or into a corner.
+        (corner vertices, with one face, are then fixed); boundary edges at
+        gliding vertices keep at least ``GLIDE_EDGE_FLOOR`` of their start
+        length (a one-sided row, :mod:`optimize.constraints.edgefloor`), so a
+        vertex cannot slide onto its neighbour or into a corner.
     fairness, closeness : weights of the scale-free fairness and tangent-plane
         closeness energies relative to the constraints (halved every iteration).
     tol : Tolerances; the run converges when every defect of the target is within it.
@@ -125,7 +125,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         bnd = np.setdiff1d(np.nonzero(mesh.topology.is_boundary_vertex)[0], fixed_idx)
         if bnd.size:
             E = mesh.topology.edges
-            at = np.isin(E, bnd).any(1)  # edges at a gliding vertex keep half their length or more
+            at = mesh.topology.is_boundary_edge & np.isin(E, bnd).any(1)  # a gliding vertex cannot slide onto its neighbour
             floor = GLIDE_EDGE_FLOOR * np.linalg.norm(norm.V[E[at, 0]] - norm.V[E[at, 1]], axis=1)
             glide = Glide(bnd, glide_mod.BoundaryCurve(ref_norm), E[at], floor)
     unknowns = resolve_formulation(target, formulation)

@@ -48,7 +48,7 @@ def _collapse(F: np.ndarray, rep: np.ndarray, remove: np.ndarray) -> np.ndarray:
 
 
 def snap_slivers(mesh: Mesh, corners: np.ndarray, edge_length: float, *, min_area: float = 0.25,
-                 merge: float = 0.2, rounds: int = 6) -> tuple[Mesh, np.ndarray]:
+                 merge: float = 0.35, rounds: int = 6) -> tuple[Mesh, np.ndarray]:
     """Collapse small boundary cells onto the boundary and merge close boundary vertices.
 
     mesh : polygon Mesh with a boundary; corners : (c,) int vertices at corners of

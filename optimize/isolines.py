@@ -205,7 +205,7 @@ def _best_shift(B: np.ndarray, nxt: np.ndarray, trials: int = 5, near: float = 0
     return best
 
 
-def extract(surface: Mesh, UV: np.ndarray, *, corner_angle: float = 35.0, merge: float = 0.2,
+def extract(surface: Mesh, UV: np.ndarray, *, corner_angle: float = 35.0, merge: float = 0.35,
             min_area: float = 0.25, name: str = "remeshed") -> tuple[Mesh, np.ndarray]:
     """Quad-dominant mesh of the integer iso-lines of ``UV (n, 2)`` on the triangle mesh ``surface``.
 

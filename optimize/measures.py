@@ -111,6 +111,9 @@ def _vector_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     return n
 
 
+COLLAPSED = 1e-3  # an edge shorter than this fraction of its start length has collapsed
+
+
 def corner_turns(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(c,) float: signed sine of each corner angle about its face's normal (Newell):
     positive at a convex corner, negative at a reflex one (topology corner order)."""
@@ -126,15 +129,21 @@ def corner_turns(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
 def folded_faces(mesh: Mesh, V: np.ndarray, V0: np.ndarray | None = None, tol: float = 1e-6) -> np.ndarray:
     """(m,) bool: faces that folded going from positions ``V0 (n, 3)`` (default ``mesh.V``)
     to ``V (n, 3)``: a corner convex at ``V0`` turned reflex (signed sine below ``-tol``),
-    or the face normal turned by more than 90 degrees.  A planar bow-tie or a dented
-    panel is planar but cannot be cut from glass, so the optimizer reports it."""
+    the face normal turned by more than 90 degrees, or an edge shrank below
+    ``COLLAPSED`` of its length at ``V0`` (a vertex slid onto its neighbour: the quad is
+    a triangle now).  A planar bow-tie, a dented or a collapsed panel is planar but
+    cannot be cut from glass, so the optimizer reports it."""
     V0 = mesh.V if V0 is None else V0
     t = mesh.topology
     before, after = corner_turns(mesh, V0), corner_turns(mesh, V)
-    dented = np.zeros(mesh.n_faces, dtype=bool)
-    np.logical_or.at(dented, t.corner_face, (before > -tol) & (after < -tol))
+    bad = np.zeros(mesh.n_faces, dtype=bool)
+    np.logical_or.at(bad, t.corner_face, (before > -tol) & (after < -tol))
+    nxt = t.corner_next_vertex
+    l0 = np.linalg.norm(V0[nxt] - V0[t.corner_vertex], axis=1)
+    l1 = np.linalg.norm(V[nxt] - V[t.corner_vertex], axis=1)
+    np.logical_or.at(bad, t.corner_face, l1 < COLLAPSED * l0)
     flipped = np.einsum("ij,ij->i", face_normals(mesh, V0), face_normals(mesh, V)) < 0
-    return dented | flipped
+    return bad | flipped
 
 
 def face_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:

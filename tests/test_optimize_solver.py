@@ -155,6 +155,12 @@ def test_folded_faces_measure_on_hand_made_quads():
     assert not measures.folded_faces(square, square.V).any()
     assert measures.folded_faces(square, dented).all()
     assert measures.folded_faces(square, flipped).all()
+    collapsed = square.V.copy()
+    collapsed[1] = [1e-5, 0.0, 0.0]  # vertex 1 slid onto vertex 0: a triangle with a zero edge
+    assert measures.folded_faces(square, collapsed).all()
+    short = square.V.copy()
+    short[1] = [0.1, 0.0, 0.0]  # a short edge, still a quad
+    assert not measures.folded_faces(square, short).any()
     assert measures.corner_turns(square).min() == pytest.approx(1.0)
 
 
