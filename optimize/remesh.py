@@ -26,21 +26,24 @@ a 3-/5-gon (``RemeshReport.method == "seamless"``, ``singularities`` lists
 them).  ``singularities="smooth"`` is the old behaviour.
 
 Supported: one connected surface with one or more boundary loops (disks and
-disks with holes: roofs, facades, canopies, a roof with an opening), whose
-parameter image is one-to-one after the cuts.  Measured (tests): a roof with a
-circular hole gives two boundary loops, 138 quads + 9 pentagons at h = 0.3,
-conical and planar to 1e-6 after optimization (free boundary); a monkey saddle
+disks with holes: roofs, facades, canopies, a roof with an opening), given as
+triangles or polygons (quads are split along their shorter diagonal first),
+whose parameter image is one-to-one after the cuts.  Measured (tests): a roof
+with a circular hole gives two boundary loops, mostly quads, conical and planar
+to 1e-6 after optimization with the boundary free or gliding; a monkey saddle
 gives two index -1/4 singularities near the umbilic, each a 5-gon or a
-valence-5 vertex, conical after optimization.
-Not supported: closed surfaces; holes around which the field turns (holes are
-not cut, a translational period is absorbed by the least squares); index
-other than +-1/4; surfaces whose least-squares parametrization folds (e.g.
-/work/shared/data/halftunnel.off, a pair of pants with ~10 singularities:
-the traced cells do not close, MeshError).  Slivers along the boundary are
+valence-5 vertex, conical after optimization; with a hole added the hole is cut
+to the outer loop too; ``halftunnel.off`` (a pair of pants, three loops) gives
+12 singularities and about 150 faces at ``h = 1``.
+Not supported: closed surfaces; index other than +-1/4; surfaces whose
+least-squares parametrization folds (the traced cells do not close:
+MeshError).  The conical optimization of the remeshed ``halftunnel.off``
+stalls with torsion-free beams at its irregular nodes (planarity about 1e-2);
+without them it converges at some edge lengths and smoothings and folds a
+face or two at others.  Slivers along the boundary are
 snapped onto it in both branches (:func:`optimize.isolines.extract`,
 :func:`optimize.boundary_cells.snap_slivers`), so no boundary cell keeps a
-corner near 180 degrees: the holed roof and the monkey saddle become conical
-with the boundary free or gliding, and no panel folds.
+corner near 180 degrees.
 Folds of the planar branch are counted in ``RemeshReport.folded`` and noted
 in ``mesh.notes``.  Edge length is ``h`` where the principal field is
 integrable and varies elsewhere (principal lines spread and converge): see
@@ -72,6 +75,7 @@ class RemeshReport:
 
     radius: float
     edge_length_target: float
+    triangulated: int = 0  # polygons of the input split into triangles first
     singular_triangles: int = 0
     mismatched_edges: int = 0
     folded: int = 0
@@ -150,6 +154,32 @@ def default_radius(surface: Mesh, edge_length: float) -> float:
     return max(float(edge_length), 3.0 * mean_edge)
 
 
+def as_triangles(surface) -> tuple[Mesh, int]:
+    """The surface as a triangle Mesh, and how many polygons were split.
+
+    A quad is split along its shorter diagonal, a larger polygon into a fan
+    from its first vertex (a quad mesh exported from a modeller is a valid
+    surface input).  Triangle meshes pass through unchanged.
+    """
+    mesh = surface if isinstance(surface, Mesh) else Mesh(*surface)
+    if mesh.F.shape[1] == 3 and not np.any(mesh.F < 0):
+        return mesh, 0
+    F, V, sizes = mesh.F, mesh.V, mesh.face_sizes
+    tris = [F[sizes == 3, :3]]
+    q = F[sizes == 4, :4]
+    d02 = np.linalg.norm(V[q[:, 2]] - V[q[:, 0]], axis=1)
+    d13 = np.linalg.norm(V[q[:, 3]] - V[q[:, 1]], axis=1)
+    a = d02 <= d13
+    tris += [q[a][:, [0, 1, 2]], q[a][:, [0, 2, 3]], q[~a][:, [0, 1, 3]], q[~a][:, [1, 2, 3]]]
+    big = F[sizes > 4]
+    nb = sizes[sizes > 4]
+    for j in range(1, F.shape[1] - 1):  # fan of the larger polygons, one corner slot at a time
+        sel = nb > j + 1
+        tris.append(np.stack([big[sel, 0], big[sel, j], big[sel, j + 1]], axis=1))
+    out = Mesh(V, np.concatenate(tris), name=mesh.name)
+    return out, int(np.sum(sizes > 3))
+
+
 def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, side=None,
            smoothing: float = 1.0, singularities: str = "auto", with_report: bool = False,
            name: str | None = None):
@@ -174,6 +204,7 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
     if not np.isfinite(edge_length) or edge_length <= 0:
         raise ConfigError(f"edge_length = {edge_length}, expected a positive length")
     t0 = time.perf_counter()
+    surface, split = as_triangles(surface)
     mesh, N, closed = oriented_surface(surface, None, side)
     if closed:
         raise MeshError(f"{mesh.name}: closed surface; remeshing supports disk-like surfaces "
@@ -188,7 +219,7 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
         raise MeshError(f"{mesh.name}: {comps} components; remeshing supports one connected surface "
                         "(a disk, or a disk with holes); remesh each component on its own")
     r = default_radius(mesh, edge_length) if radius is None else float(radius)
-    rep = RemeshReport(radius=r, edge_length_target=float(edge_length))
+    rep = RemeshReport(radius=r, edge_length_target=float(edge_length), triangulated=split)
     fr = principal_frames(mesh, None, r, side=side)
     rep.timings["principal"] = time.perf_counter() - t0
     t1 = time.perf_counter()
@@ -307,6 +338,9 @@ def surface_to_mesh(surface: Mesh, edge_length: float, *, target: str = "conical
 
 def _finish(out: Mesh, rep: RemeshReport, t0: float, with_report: bool):
     """Edge lengths, face sizes and total time into ``rep``; the return value of :func:`remesh`."""
+    if rep.triangulated:
+        out.notes.insert(0, f"{out.name}: the input's {rep.triangulated} polygon(s) were split into triangles "
+                            "(quads along their shorter diagonal) before remeshing")
     el = edge_lengths(out)
     rep.edge_length = {"min": float(el.min()), "mean": float(el.mean()), "max": float(el.max())}
     rep.face_sizes = {str(k): int(c) for k, c in enumerate(np.bincount(out.face_sizes)) if c}

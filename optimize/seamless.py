@@ -9,7 +9,7 @@ quad mesh:
    cross field around every interior vertex (period jumps across the edges of
    its star, with the angle defect of the vertex);
 2. :func:`cut_graph`: shortest paths (edge lengths) from every singular vertex
-   to the boundary; their union is the cut;
+   to the boundary, and from every hole to the outer loop; their union is the cut;
 3. :func:`cut_open`: the triangle mesh cut open along it (vertices on the cut
    duplicated, one copy per wedge of faces between cut edges);
 4. :func:`seamless_uv`: the combed field on the cut mesh is consistent; across
@@ -27,11 +27,14 @@ The iso-lines of such a parametrization are extracted on the surface by
 :func:`optimize.tracing.trace_quads` (a planar arrangement no longer exists:
 the parameter image around a ``-1/4`` singularity covers 450 degrees).
 
+Holes: each inner boundary loop is joined to the outer one by a cut too, so
+the cut surface is a disk; the field's turn around a hole and the period of
+``u, v`` around it become the transition across that cut (rotation from the
+combed field, translation rounded to an integer like the others).
+
 Not supported: singularities of index other than ``+-1/4`` (they are cut to
-the boundary like the others, but give folded cells), holes whose field turns
-by a quarter turn around them (holes are not cut; the least-squares ``u, v``
-absorb a translational period around a hole), closed surfaces; the integer
-rounding is greedy (no branch and bound).
+the boundary like the others, but give folded cells), closed surfaces; the
+integer rounding is greedy (no branch and bound).
 """
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ from optimize import ConfigError, Mesh, MeshError, Tolerances, surfaces
 from optimize.closeness import Reference
 from optimize.isolines import planar_faces
 from optimize.measures import conical_defect, planarity
-from optimize.remesh import isoparametric_remesh, remesh, surface_to_mesh
+from optimize.remesh import as_triangles, isoparametric_remesh, remesh, surface_to_mesh
 
 
 @pytest.fixture(scope="module")
@@ -266,3 +266,60 @@ def test_snap_slivers_on_a_small_mesh():
     assert np.allclose(out.V[c], V[corners])
     same, _ = snap_slivers(Mesh(V[:8], F[:3], name="grid"), [0, 3, 4, 7], 1.0)  # nothing small: unchanged
     assert np.array_equal(same.F, np.asarray(F[:3])) and np.array_equal(same.V, V[:8])
+
+
+def _holed_monkey_saddle(R=0.35, centre=(0.75, 0.45), n=41, seed=0):
+    """The monkey saddle over a 3 x 3 square minus a disk: an umbilic (singularities) and a hole together."""
+    from scipy.spatial import Delaunay
+
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(np.linspace(-1.5, 1.5, n), np.linspace(-1.5, 1.5, n), indexing="ij")
+    P = np.stack([x.ravel(), y.ravel()], 1)
+    s = 3.0 / (n - 1)
+    inner = np.abs(P).max(1) < 1.5 - 1e-9
+    P[inner] += 0.3 * s * rng.uniform(-0.5, 0.5, (int(inner.sum()), 2))
+    P = P[np.linalg.norm(P - centre, axis=1) > R + 0.5 * s]
+    k = int(np.ceil(2 * np.pi * R / s))
+    t = 2 * np.pi * np.arange(k) / k
+    P = np.vstack([P, np.asarray(centre) + R * np.stack([np.cos(t), np.sin(t)], 1)])
+    T = Delaunay(P).simplices
+    T = T[np.linalg.norm(P[T].mean(1) - centre, axis=1) > R]
+    return Mesh(np.column_stack([P, 0.1 * (P[:, 0] ** 3 - 3 * P[:, 0] * P[:, 1] ** 2)]), T, name="holed-monkey")
+
+
+def test_singularities_and_a_hole_together():
+    """The seamless branch on a surface with a hole: the hole is cut to the outer loop, so the
+    periods around it are integer transitions and the traced cells close up."""
+    surf = _holed_monkey_saddle()
+    quads, rep = remesh(surf, 0.3, with_report=True)
+    assert rep.method == "seamless" and rep.singularities
+    t = quads.topology
+    assert len(t.boundary_loops) == 2 and t.n_components == 1
+    assert quads.face_sizes.max() <= 5 and np.mean(quads.face_sizes == 4) > 0.6
+    assert Reference(surf).distance(quads.V).max() < 1e-9 * surf.bbox_diagonal()
+    assert _straight_corners(quads) == 0
+    tol = Tolerances()
+    mesh, res, _ = surface_to_mesh(surf, 0.3, target="conical", glide_boundary=False, tol=tol)
+    assert res.status == "converged", res.message
+    assert conical_defect(mesh).max() <= tol.conical and planarity(mesh).max() <= tol.planarity
+
+
+def test_a_quad_mesh_surface_with_three_boundary_loops_is_remeshed():
+    """halftunnel.off (784 quads, a pair of pants: three boundary loops) as a surface: its quads are
+    split along their shorter diagonals, the field's 12 singularities (indices summing to 4 chi = -4
+    quarter turns) are kept, and the three loops survive."""
+    from conftest import shared_file
+    from optimize.io import read_mesh
+
+    surf = read_mesh(shared_file("halftunnel.off"))
+    quads, rep = remesh(surf, 1.0, with_report=True)
+    assert rep.triangulated == surf.n_faces and any("split into triangles" in n for n in quads.notes)
+    assert rep.method == "seamless"
+    assert sum(s["index_quarter_turns"] for s in rep.singularities) == -4
+    t = quads.topology
+    assert len(t.boundary_loops) == 3 and t.n_components == 1
+    assert quads.face_sizes.max() <= 6 and np.mean(quads.face_sizes == 4) > 0.8
+    tri, _ = as_triangles(surf)  # the vertices lie on the split surface (its quads are not planar),
+    # to the lattice-node slack at the singular nodes
+    assert Reference(tri).distance(quads.V).max() < 1e-7 * surf.bbox_diagonal()
+    assert 0.8 < rep.edge_length["mean"] < 1.25
