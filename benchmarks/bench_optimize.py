@@ -230,7 +230,7 @@ def comparison(args):
                 continue
             p = fn(lib, mesh, args.peer_budget)
             reached = p["max"] <= 1e-6
-            p["note"] = (p["note"] + ("" if reached else f", did not reach 1e-6"))
+            p["note"] = (p["note"] + ("" if reached else ", did not reach 1e-6"))
             rows.append(p)
             peers.append(p)
             ratios.append(f"{name} x{p['seconds'] / r['seconds']:.1f}" + ("" if reached else " (peer unconverged)"))

@@ -50,7 +50,7 @@ from .constraints import edgefloor
 from .constraints import glide as glide_mod
 from .fairness import fairness_matrix, fairness_matrix_parts
 from .formulation import Formulation
-from .linalg import NormalSolver, SolveError, normal_matrix
+from .linalg import NormalSolver, SolveError
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)

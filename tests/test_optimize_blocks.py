@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from optimize import Mesh, shapes
+from optimize import shapes
 from optimize.closeness import Reference, closeness_terms, closest_on_triangles
 from optimize.fairness import fairness_energy, fairness_matrix
 from optimize.measures import edge_lengths, fairness

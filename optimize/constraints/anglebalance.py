@@ -12,7 +12,6 @@ Block: ``vertices (n, 3)``.  One row per vertex.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..mesh import Mesh
 from ..variables import Layout
