@@ -18,17 +18,9 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import MeshError
+from .isolines import cycle_edges
 from .measures import face_areas
 from .mesh import Mesh
-
-
-def _face_edges(F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Directed edges of the ``-1`` padded faces ``F (m, k)``: ``(face (h,), a (h,), b (h,))``."""
-    a, b = F, np.roll(F, -1, axis=1)
-    last = (F >= 0).sum(1) - 1
-    b[np.arange(len(F)), last] = F[:, 0]
-    ok = a >= 0
-    return np.nonzero(ok)[0], a[ok], b[ok]
 
 
 def _collapse(F: np.ndarray, rep: np.ndarray, remove: np.ndarray) -> np.ndarray:
@@ -79,7 +71,7 @@ def snap_slivers(mesh: Mesh, corners: np.ndarray, edge_length: float, *, min_are
         # 2. inner vertices of small boundary cells go to their nearest boundary neighbour in the cell
         small = (face_areas(current) < min_area * edge_length ** 2) & on_ring[np.maximum(F, 0)].any(1)
         if np.any(small):
-            _, a, b = _face_edges(F[small])
+            _, a, b = cycle_edges(F[small])
             i, r = np.concatenate([a, b]), np.concatenate([b, a])
             pick = ~on_ring[i] & on_ring[r] & (rep[r] == r)
             i, r = i[pick], r[pick]
@@ -89,7 +81,7 @@ def snap_slivers(mesh: Mesh, corners: np.ndarray, edge_length: float, *, min_are
                 rep[i[o][first]] = r[o][first]
             # a small cell with no inner vertex (it cuts a corner of the boundary): its shortest
             # edge goes, the end that is not a corner onto the other
-            hs, a, b = _face_edges(F[small])
+            hs, a, b = cycle_edges(F[small])
             bare = ~np.bincount(hs, ~on_ring[a], minlength=int(small.sum())).astype(bool)
             ok = bare[hs] & ~(is_corner[a] & is_corner[b]) & (rep[a] == a) & (rep[b] == b)
             if ok.any():

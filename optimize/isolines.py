@@ -412,7 +412,7 @@ def _cleanup(P, E, ring, node_loop, is_corner, min_area, merge, rounds: int = 8)
     return E, ring
 
 
-def _cell_edges(F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def cycle_edges(F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Directed edges of the ``-1`` padded cycles ``F (f, k)``: ``(cell (h,), a (h,), b (h,))``."""
     a, b = F, np.roll(F, -1, axis=1)
     last = (F >= 0).sum(1) - 1
@@ -431,7 +431,7 @@ def _snap_small(P, E, cells, on_ring):
     snapped)``; ``snapped`` is False when no small cell has an inner node next
     to a boundary node.
     """
-    _, a, b = _cell_edges(cells)
+    _, a, b = cycle_edges(cells)
     i, r = np.concatenate([a, b]), np.concatenate([b, a])  # (inner node, boundary node) pairs, both ways
     pick = ~on_ring[i] & on_ring[r]
     i, r = i[pick], r[pick]
@@ -448,7 +448,7 @@ def _snap_small(P, E, cells, on_ring):
 def _merge_small(P, E, cells, ring, node_loop):
     """Merge each small cell into its neighbour across its longest non-boundary edge (a T-junction)."""
     N = len(P)
-    fa, ea, eb = _cell_edges(cells)
+    fa, ea, eb = cycle_edges(cells)
     key = np.minimum(ea, eb) * N + np.maximum(ea, eb)
     rk = _ring_edges(ring, node_loop)
     inner = ~np.isin(key, rk[:, 0] * N + rk[:, 1])

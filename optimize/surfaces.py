@@ -198,20 +198,25 @@ def height_field(f=None, size: tuple = (4.0, 3.0), n: tuple = (41, 31), jitter: 
 
 
 def holed_roof(radius: float = 0.6, centre: tuple = (0.3, 0.2), size: tuple = (4.0, 3.0), n: tuple = (41, 31),
-               seed: int = 0, scale: float = 1.0, name: str = "holed-roof") -> Mesh:
-    """The default saddle roof of :func:`height_field` minus a disk: a roof with an opening (two boundary loops).
+               seed: int = 0, scale: float = 1.0, height=None, name: str = "holed-roof") -> Mesh:
+    """A height field over a rectangle minus a disk: a roof with an opening (two boundary loops).
 
-    radius, centre : the opening, in the roof's units before ``scale``; n : grid
-    points (jittered, Delaunay); scale : multiplies every coordinate (6000 gives
-    a 24 m x 18 m roof in mm).  The rim of the opening is sampled exactly on the
+    radius, centre : the opening, in the roof's units before ``scale``; size : the
+    rectangle (centred at the origin); n : grid points (jittered, Delaunay);
+    height : ``z(x, y)`` on arrays (default the saddle ``0.15 x^2 - 0.1 y^2 + 0.05 x y``
+    of :func:`height_field`); scale : multiplies every coordinate (6000 gives a
+    24 m x 18 m roof in mm).  The rim of the opening is sampled exactly on the
     circle.  Returns the triangle Mesh.
     """
+    if height is None:
+        def height(x, y):
+            return 0.15 * x ** 2 - 0.1 * y ** 2 + 0.05 * x * y
     rng = np.random.default_rng(seed)
-    x, y = np.meshgrid(np.linspace(-size[0] / 2, size[0] / 2, n[0]), np.linspace(-size[1] / 2, size[1] / 2, n[1]),
-                       indexing="ij")
+    half = np.asarray(size, dtype=float) / 2
+    x, y = np.meshgrid(np.linspace(-half[0], half[0], n[0]), np.linspace(-half[1], half[1], n[1]), indexing="ij")
     P = np.stack([x.ravel(), y.ravel()], 1)
     s = size[0] / (n[0] - 1)
-    inner = (np.abs(P[:, 0]) < size[0] / 2 - 1e-9) & (np.abs(P[:, 1]) < size[1] / 2 - 1e-9)
+    inner = np.all(np.abs(P) < half - 1e-9, axis=1)
     P[inner] += 0.3 * s * rng.uniform(-0.5, 0.5, (int(inner.sum()), 2))
     P = P[np.linalg.norm(P - centre, axis=1) > radius + 0.5 * s]
     k = int(np.ceil(2 * np.pi * radius / s))
@@ -219,8 +224,7 @@ def holed_roof(radius: float = 0.6, centre: tuple = (0.3, 0.2), size: tuple = (4
     P = np.vstack([P, np.asarray(centre) + radius * np.stack([np.cos(t), np.sin(t)], 1)])
     T = Delaunay(P).simplices
     T = T[np.linalg.norm(P[T].mean(1) - centre, axis=1) > radius]
-    z = 0.15 * P[:, 0] ** 2 - 0.1 * P[:, 1] ** 2 + 0.05 * P[:, 0] * P[:, 1]
-    return Mesh(scale * np.column_stack([P, z]), T, name=name)
+    return Mesh(scale * np.column_stack([P, height(P[:, 0], P[:, 1])]), T, name=name)
 
 
 def angle_error(d: np.ndarray, d_exact: np.ndarray, n_exact: np.ndarray) -> np.ndarray:

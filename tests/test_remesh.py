@@ -268,23 +268,10 @@ def test_snap_slivers_on_a_small_mesh():
     assert np.array_equal(same.F, np.asarray(F[:3])) and np.array_equal(same.V, V[:8])
 
 
-def _holed_monkey_saddle(R=0.35, centre=(0.75, 0.45), n=41, seed=0):
+def _holed_monkey_saddle():
     """The monkey saddle over a 3 x 3 square minus a disk: an umbilic (singularities) and a hole together."""
-    from scipy.spatial import Delaunay
-
-    rng = np.random.default_rng(seed)
-    x, y = np.meshgrid(np.linspace(-1.5, 1.5, n), np.linspace(-1.5, 1.5, n), indexing="ij")
-    P = np.stack([x.ravel(), y.ravel()], 1)
-    s = 3.0 / (n - 1)
-    inner = np.abs(P).max(1) < 1.5 - 1e-9
-    P[inner] += 0.3 * s * rng.uniform(-0.5, 0.5, (int(inner.sum()), 2))
-    P = P[np.linalg.norm(P - centre, axis=1) > R + 0.5 * s]
-    k = int(np.ceil(2 * np.pi * R / s))
-    t = 2 * np.pi * np.arange(k) / k
-    P = np.vstack([P, np.asarray(centre) + R * np.stack([np.cos(t), np.sin(t)], 1)])
-    T = Delaunay(P).simplices
-    T = T[np.linalg.norm(P[T].mean(1) - centre, axis=1) > R]
-    return Mesh(np.column_stack([P, 0.1 * (P[:, 0] ** 3 - 3 * P[:, 0] * P[:, 1] ** 2)]), T, name="holed-monkey")
+    return surfaces.holed_roof(radius=0.35, centre=(0.75, 0.45), size=(3.0, 3.0), n=(41, 41),
+                               height=lambda x, y: 0.1 * (x ** 3 - 3 * x * y * y), name="holed-monkey")
 
 
 def test_singularities_and_a_hole_together():
