@@ -106,6 +106,7 @@ class InputSection(Section):
     control: Path | None = None
     surface: Path | None = None
     edge_length: float | None = Field(default=None, gt=0)
+    irregular: Literal["faces", "vertices", "nearest"] | None = None
 
     _paths = field_validator("mesh", "control", "surface", mode="before")(_resolve_path)
 
@@ -121,6 +122,8 @@ class InputSection(Section):
                                       "edge length in the input's units)")
         if self.surface is None and self.edge_length is not None:
             raise PydanticCustomError("edge_length", "edge_length applies only to a surface input")
+        if self.surface is None and self.irregular is not None:
+            raise PydanticCustomError("irregular", "irregular applies only to a surface input")
         return self
 
     @property

@@ -52,7 +52,7 @@ def stage_input(ctx) -> str:
         if kind == "surface":
             from optimize.remesh import remesh
 
-            mesh, rep = remesh(mesh, inp.edge_length, with_report=True)
+            mesh, rep = remesh(mesh, inp.edge_length, irregular=inp.irregular or "faces", with_report=True)
             plan["remesh"] = _plain(dict(rep.as_dict(), faces=mesh.n_faces, vertices=mesh.n_vertices))
     for key, value in (("levels", cfg.subdivision.levels), ("scheme", cfg.subdivision.scheme),
                        ("target", cfg.optimize.target)):

@@ -21,9 +21,9 @@ Singularities (umbilics) that survive the smoothing are kept (``singularities=
 field): steps 3-4 are replaced by :mod:`optimize.seamless` (cut from each
 singular vertex to the boundary, integration with the rotation + integer
 translation across the cut) and :mod:`optimize.tracing` (iso-lines traced on
-the surface): an index ``+-1/4`` singularity becomes a valence-3/5 vertex or
-a 3-/5-gon (``RemeshReport.method == "seamless"``, ``singularities`` lists
-them).  ``singularities="smooth"`` is the old behaviour.
+the surface): an index ``+-1/4`` singularity becomes a 3-/5-gon (``irregular="faces"``,
+the default) or a valence-3/5 vertex (``"vertices"``)
+(``RemeshReport.method == "seamless"``, ``singularities`` lists them).  ``singularities="smooth"`` is the old behaviour.
 
 Supported: one connected surface with one or more boundary loops (disks and
 disks with holes: roofs, facades, canopies, a roof with an opening), given as
@@ -67,6 +67,8 @@ from .mesh import Mesh
 from .principal import oriented_surface, principal_frames
 
 log = logging.getLogger(__name__)
+
+IRREGULAR = ("faces", "vertices", "nearest")  # what a kept singularity becomes
 
 
 @dataclass
@@ -181,8 +183,8 @@ def as_triangles(surface) -> tuple[Mesh, int]:
 
 
 def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, side=None,
-           smoothing: float = 1.0, singularities: str = "auto", with_report: bool = False,
-           name: str | None = None):
+           smoothing: float = 1.0, singularities: str = "auto", irregular: str = "faces",
+           with_report: bool = False, name: str | None = None):
     """Quad-dominant mesh of a triangle surface (a disk, or a disk with holes) along its principal curvature lines.
 
     surface : triangle Mesh (or anything :func:`optimize.principal.oriented_surface` accepts).
@@ -196,6 +198,14 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
         ``"place"`` (no extra smoothing: every singularity of the field at
         ``smoothing`` becomes an irregular vertex / face) or ``"smooth"`` (the
         old behaviour: never placed, the cells around them get distorted).
+    irregular : what a kept singularity becomes: ``"faces"`` (default: a 3- or
+        5-gon around it, every interior vertex keeps valence 4), ``"vertices"``
+        (a valence-3 / 5 vertex) or ``"nearest"`` (whichever the rounding of the
+        parametrization gives).  For conical meshes faces are the easier choice:
+        a 5-gon is one more glass panel, a valence-5 node needs a cone touching
+        five faces (measured, boundary free: the monkey saddle converges in 8
+        iterations with faces, 25 with vertices; with a hole, 9 iterations
+        against a stall).
     Returns the Mesh (faces counter-clockwise about the outward normal; the
     notes say what was approximated), or ``(Mesh, RemeshReport)`` with ``with_report``.
     Raises MeshError (closed, several components, or a folded seamless
@@ -211,6 +221,8 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
                         "(one boundary loop) only")
     if singularities not in ("auto", "place", "smooth"):
         raise ConfigError(f"singularities = {singularities!r}, expected 'auto', 'place' or 'smooth'")
+    if irregular not in IRREGULAR:
+        raise ConfigError(f"irregular = {irregular!r}, expected one of {', '.join(IRREGULAR)}")
     if edge_length >= 0.5 * mesh.bbox_diagonal():
         raise ConfigError(f"{mesh.name}: edge length {edge_length:g} is not below half the bounding-box "
                           f"diagonal {mesh.bbox_diagonal():.4g}; expected a smaller edge length")
@@ -233,7 +245,7 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
             break
     rep.smoothing = grow * smoothing
     if index.any() and singularities != "smooth":
-        return _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report)
+        return _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report, irregular)
     X1, mismatch = comb(mesh, X1)
     nf = face_frames(mesh)[0]
     X2 = np.cross(nf, X1)
@@ -258,14 +270,14 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
     return _finish(out, rep, t0, with_report)
 
 
-def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report):
+def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report, irregular):
     """The seamless branch of :func:`remesh`: cut, integer-seamless ``u, v``, traced iso-lines."""
     from .boundary_cells import snap_slivers
     from .seamless import parametrize
     from .tracing import trace_quads
 
     rep.method = "seamless"
-    P = parametrize(mesh, X1, edge_length, gradient_operator)
+    P = parametrize(mesh, X1, edge_length, gradient_operator, place=irregular)
     rep.singular_triangles = int(len(P["singular"]))
     rep.mismatched_edges = P["mismatch"]
     rep.singularities = [{"vertex": int(v), "index_quarter_turns": int(k), "point": mesh.V[v].tolist()}
@@ -309,10 +321,10 @@ def isoparametric_remesh(surface: Mesh, edge_length: float, *, axes: tuple = (0,
 
 def surface_to_mesh(surface: Mesh, edge_length: float, *, target: str = "conical",
                     radius: float | None = None, side=None, glide_boundary: bool = True,
-                    **optimize_kwargs):
+                    irregular: str = "faces", **optimize_kwargs):
     """The whole chain: triangle surface -> principal quad mesh -> conical / circular mesh.
 
-    surface : disk-like triangle Mesh; edge_length, radius, side : as in :func:`remesh`.
+    surface : disk-like triangle Mesh; edge_length, radius, side, irregular : as in :func:`remesh`.
     target : ``"conical"`` | ``"circular"`` | ``"pq"`` | ``"none"`` (remesh only).
     glide_boundary and ``optimize_kwargs`` go to ``optimize_mesh`` (the
     original surface is the reference); when the boundary glides and no
@@ -321,7 +333,7 @@ def surface_to_mesh(surface: Mesh, edge_length: float, *, target: str = "conical
     Returns ``(mesh, result, report)``: the optimized Mesh (the remeshed one
     for ``"none"``), the OptimizeResult (None for ``"none"``) and the RemeshReport.
     """
-    quads, rep = remesh(surface, edge_length, radius=radius, side=side, with_report=True)
+    quads, rep = remesh(surface, edge_length, radius=radius, side=side, irregular=irregular, with_report=True)
     if target in (None, "none"):
         return quads, None, rep
     from .api import optimize_mesh

@@ -51,6 +51,9 @@ from .mesh import Mesh
 M1 = np.array([[0, 1], [-1, 0]])
 
 
+_STEPS = np.array([[a, b] for a in (-1, 0, 1) for b in (-1, 0, 1)], dtype=float)  # integer neighbours
+
+
 def rotation(r) -> np.ndarray:
     """(..., 2, 2) int matrices ``M1^r`` for integer ``r`` (any shape)."""
     r = np.asarray(r) % 4
@@ -193,13 +196,18 @@ def transitions(mesh: Mesh, X1c: np.ndarray, is_cut_he: np.ndarray) -> np.ndarra
 
 def seamless_uv(cut_mesh: Mesh, G: sp.csr_matrix, area: np.ndarray, X1: np.ndarray, X2: np.ndarray,
                 h: float, pairs: np.ndarray, rot: np.ndarray, group: np.ndarray,
-                weight: float = 1e6) -> tuple[np.ndarray, np.ndarray]:
+                weight: float = 1e6, parity: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Integer-seamless ``UV (n_c, 2)`` on the cut mesh, and the integer translations ``(g, 2)``.
 
     G, area : gradient operator ``(3t, n_c)`` and areas of the cut mesh;
     X1, X2 : (t, 3) combed fields; pairs : (k, 2) cut-mesh vertices ``(a, b)``
     with ``uv[b] = M^rot uv[a] + t[group]``; rot : (k,) quarter turns;
-    group : (k,) translation group of each pair (one per cut arc).
+    group : (k,) translation group of each pair (one per cut arc);
+    parity : (k,) int, ``-1`` (free), ``0`` or ``1``: the wanted parity of
+    ``t_u + t_v`` for the pair's group.  Under a quarter turn the fixed point
+    ``(I - M)^-1 t`` is a lattice node when ``t_u + t_v`` is even and a cell
+    centre when it is odd, so the parity of a singular vertex's group decides
+    whether it becomes an irregular vertex or an irregular face.
     """
     nc = cut_mesh.n_vertices
     W = sp.diags(np.repeat(area, 3))
@@ -241,6 +249,10 @@ def seamless_uv(cut_mesh: Mesh, G: sp.csr_matrix, area: np.ndarray, X1: np.ndarr
     ng2 = int(grp.max()) + 1 if len(grp) else 0
     Ct = sp.csr_matrix((-np.ones(2 * k), (np.arange(2 * k), 2 * np.repeat(grp[group], 2) + np.tile([0, 1], k))),
                        shape=(2 * k, 2 * ng2))
+    want = np.full(ng2, -1)
+    if parity is not None:
+        sel = parity >= 0
+        want[grp[group[sel]]] = parity[sel]
     fixed = np.zeros(2 * ng2, dtype=bool)
     tval = np.zeros(2 * ng2)
     while not fixed.all():  # a handful of arcs: one rounding per pass
@@ -248,8 +260,23 @@ def seamless_uv(cut_mesh: Mesh, G: sp.csr_matrix, area: np.ndarray, X1: np.ndarr
         err = np.abs(tf - np.round(tf))
         j = int(np.argmin(err))
         idx = np.nonzero(~fixed)[0][j]
-        tval[idx] = np.round(tf[j])
-        fixed[idx] = True
+        g = idx // 2
+        if want[g] < 0:
+            tval[idx] = np.round(tf[j])
+            fixed[idx] = True
+            continue
+        # a singular vertex's arc: both coordinates at once, the nearest integer pair of the wanted parity
+        cur = np.full(2 * ng2, np.nan)
+        cur[~fixed] = tf
+        t2 = np.where(fixed[2 * g:2 * g + 2], tval[2 * g:2 * g + 2], cur[2 * g:2 * g + 2])
+        cand = np.round(t2) + _STEPS
+        ok = (cand.sum(1).astype(np.int64) % 2) == want[g]
+        if fixed[2 * g] or fixed[2 * g + 1]:  # one coordinate already set: keep it
+            keep = 0 if fixed[2 * g] else 1
+            ok &= cand[:, keep] == t2[keep]
+        best = cand[ok][np.argmin(np.linalg.norm(cand[ok] - t2, axis=1))]
+        tval[2 * g:2 * g + 2] = best
+        fixed[2 * g:2 * g + 2] = True
     x, _ = solve(Ct, fixed, tval)
     UV = np.stack([x[:nc], x[nc:]], 1)
     return UV, tval.reshape(-1, 2)
@@ -262,10 +289,13 @@ def rot_of_group(group: np.ndarray, rot: np.ndarray, ng: int) -> np.ndarray:
     return out
 
 
-def parametrize(mesh: Mesh, X1: np.ndarray, h: float, gradient) -> dict:
+def parametrize(mesh: Mesh, X1: np.ndarray, h: float, gradient, place: str = "nearest") -> dict:
     """The whole seamless chain on a triangle mesh with an uncombed per-triangle cross field ``X1 (t, 3)``.
 
     gradient : ``mesh -> (G (3t, n), area (t,))`` (:func:`optimize.remesh.gradient_operator`).
+    place : where singular vertices go: ``"nearest"`` (lattice node or cell
+    centre, whichever the rounding gives), ``"faces"`` (cell centres: 3-/5-gons)
+    or ``"vertices"`` (lattice nodes: valence-3/5 vertices).
     Returns a dict: ``UVc (t, 3, 2)`` per-corner parameters, ``rot (3t,)`` and
     ``shift (3t, 2)`` transitions into the twin face's chart, ``singular (s,)``
     vertices and their ``index (s,)`` (quarter turns), ``cut (c, 2)`` edges,
@@ -289,7 +319,16 @@ def parametrize(mesh: Mesh, X1: np.ndarray, h: float, gradient) -> dict:
     rot = np.concatenate([r[c], r[c]])
     group = np.concatenate([np.arange(len(c)), np.arange(len(c))])
     G, area = gradient(cm)
-    UV, _ = seamless_uv(cm, G, area, X1c, X2c, h, pairs, rot, group)
+    if place not in ("nearest", "faces", "vertices"):
+        raise ValueError(f"place = {place!r}, expected 'nearest', 'faces' or 'vertices'")
+    parity = np.full(len(pairs), -1)
+    if place != "nearest":  # the pairs of a singular vertex with itself: its own transition's fixed point
+        parity[(pairs[:, 0] == pairs[:, 1]) & (rot % 2 == 1)] = 1 if place == "faces" else 0
+    UV, _ = seamless_uv(cm, G, area, X1c, X2c, h, pairs, rot, group, parity=parity)
+    # a singular vertex is the fixed point of its quarter turn: a lattice node or a cell centre, exactly
+    # (the solve leaves it 1e-8 off, enough for a trace leaving the node to miss every triangle)
+    fix = pairs[(pairs[:, 0] == pairs[:, 1]) & (rot % 2 == 1), 0]
+    UV[fix] = np.round(2 * UV[fix]) / 2
     UVc = UV[cm.F]
     # transitions of every half-edge, from the solved parameters (integers by construction)
     he = np.nonzero(t.twin >= 0)[0]

@@ -310,3 +310,25 @@ def test_a_quad_mesh_surface_with_three_boundary_loops_is_remeshed():
     # to the lattice-node slack at the singular nodes
     assert Reference(tri).distance(quads.V).max() < 1e-7 * surf.bbox_diagonal()
     assert 0.8 < rep.edge_length["mean"] < 1.25
+
+
+def test_singularities_become_faces_or_vertices_as_asked():
+    """Under a quarter turn the singular vertex is the fixed point of its transition: a cell centre
+    when the rounded translation has an odd coordinate sum (a 5-gon around it), a lattice node when
+    even (a valence-5 vertex).  Both choices give a conical mesh of the monkey saddle."""
+    surf = _monkey_saddle()
+    found = {}
+    for irregular in ("faces", "vertices"):
+        quads, rep = remesh(surf.mesh, 0.3, side=surf.side, irregular=irregular, with_report=True)
+        t = quads.topology
+        bv = t.is_boundary_vertex
+        inner = ~bv[np.maximum(quads.F, 0)].any(1)
+        found[irregular] = (sorted(t.valence[~bv & (t.valence != 4)].tolist()),
+                            sorted(quads.face_sizes[inner & (quads.face_sizes != 4)].tolist()))
+        mesh, res, _ = surface_to_mesh(surf.mesh, 0.3, target="conical", side=surf.side, glide_boundary=False,
+                                       irregular=irregular)
+        assert res.status == "converged", (irregular, res.message)
+    assert found["faces"] == ([], [5, 5])  # every interior vertex regular, two pentagons
+    assert found["vertices"] == ([5, 5], [])  # two valence-5 nodes, only quads inside
+    with pytest.raises(ConfigError, match="irregular = 'corners'"):
+        remesh(surf.mesh, 0.3, irregular="corners")

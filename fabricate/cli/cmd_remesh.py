@@ -22,7 +22,7 @@ def register(sub) -> None:
         description="Estimate principal directions of a triangle surface (roof, facade, canopy; "
                     "one piece, with one or more boundary loops) by volume PCA at kernel radius R, "
                     "integrate them into a quad-dominant mesh with the given edge length (umbilics "
-                    "become valence-3/5 vertices or 3-/5-gons), then optimize it to a conical (or "
+                    "become 3-/5-gons or valence-3/5 vertices), then optimize it to a conical (or "
                     "circular) mesh close to the surface.  Exit 3 when the optimization misses a tolerance "
                     "(the mesh is written all the same, and the report says so).")
     p.add_argument("surface", help="triangle mesh (.obj, .off, .ply): one piece, open (holes allowed)")
@@ -36,6 +36,9 @@ def register(sub) -> None:
                         "write --side=-1,0,0 when it starts with a minus)")
     p.add_argument("--optimize", choices=("conical", "circular", "pq", "none"), default="conical",
                    help="optimization after remeshing (default conical)")
+    p.add_argument("--irregular", choices=("faces", "vertices", "nearest"), default="faces",
+                   help="what a kept singularity becomes: a 3-/5-gon (default), a valence-3/5 vertex, "
+                        "or whichever the parametrization's rounding gives")
     p.add_argument("--free-boundary", action="store_true",
                    help="let boundary vertices move freely instead of gliding along the boundary")
     p.add_argument("--report", default=None, help="write a JSON report here")
@@ -49,7 +52,8 @@ def run(args) -> int:
 
     surface = read_mesh(args.surface)
     mesh, res, rep = surface_to_mesh(surface, args.edge_length, target=args.optimize, radius=args.radius,
-                                     side=args.side, glide_boundary=not args.free_boundary)
+                                     side=args.side, glide_boundary=not args.free_boundary,
+                                     irregular=args.irregular)
     write_mesh(args.output, mesh)
     facts = {"input": args.surface, "output": args.output, "remesh": rep.as_dict(), "notes": mesh.notes}
     if res is not None:
