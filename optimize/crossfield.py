@@ -9,7 +9,7 @@ uses the discrete connection ``rho_ij``: the angle, in ``i``'s frame, of ``j``'s
 - :func:`smooth_cross_field`: principal directions are undefined at umbilics
   and in flat regions and noisy near them.  One sparse Hermitian solve
   minimizes ``sum_edges |z_i - e^{4 i rho_ij} z_j|^2 + lam sum_i c_i |z_i - z0_i|^2``
-  with ``c_i`` in [0, 1] the confidence of the estimate (see
+  with ``c_i >= 0`` the confidence of the estimate (see
   :func:`optimize.remesh.confidence`) and ``lam`` set by the smoothing
   length, so well-defined directions are kept and the rest is filled in
   smoothly over the smoothing length.
@@ -42,8 +42,10 @@ def smooth_cross_field(mesh: Mesh, normals: np.ndarray, dirs: np.ndarray, confid
     """(n, 3) unit tangent vectors: one arm of the smoothed cross at every vertex.
 
     mesh : triangle Mesh; normals : (n, 3) unit vertex normals; dirs : (n, 3)
-    tangent directions (principal); confidence : (n,) in [0, 1]; length :
-    smoothing length (model units; about the target edge length).
+    tangent directions (principal); confidence : (n,) >= 0, 1 for a full
+    estimate at a vertex (more where one estimate stands for several vertices,
+    0 where there is none: filled in); length : smoothing length (model units;
+    about the target edge length).
     """
     V, E = mesh.V, mesh.topology.edges
     n = len(V)
@@ -54,7 +56,7 @@ def smooth_cross_field(mesh: Mesh, normals: np.ndarray, dirs: np.ndarray, confid
     rho_ij = _rho(normals[i], e1[i], e2[i], e1[j])  # j's frame seen from i
     h = np.linalg.norm(V[j] - V[i], axis=1).mean()
     lam = (h / max(length, h)) ** 2
-    c = np.clip(confidence, 0.0, 1.0)
+    c = np.maximum(confidence, 0.0)
     if c.max() <= 1e-6:
         c = np.full(n, 1e-3)  # no reliable direction anywhere: keep the raw field, smoothed hard
     w = np.exp(4j * rho_ij)

@@ -64,11 +64,12 @@ from .errors import ConfigError, MeshError
 from .isolines import extract
 from .measures import edge_lengths
 from .mesh import Mesh
-from .principal import oriented_surface, principal_frames
+from .principal import oriented_surface, principal_frames, tangent_frames
 
 log = logging.getLogger(__name__)
 
 IRREGULAR = ("faces", "vertices", "nearest")  # what a kept singularity becomes
+SAMPLE = 0.25  # principal frames at vertices about SAMPLE * r apart on a surface finer than that
 
 
 @dataclass
@@ -78,6 +79,7 @@ class RemeshReport:
     radius: float
     edge_length_target: float
     triangulated: int = 0  # polygons of the input split into triangles first
+    principal_samples: int = 0  # vertices the principal frames were estimated at
     singular_triangles: int = 0
     mismatched_edges: int = 0
     folded: int = 0
@@ -147,6 +149,21 @@ def confidence(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
     """
     d = np.abs(k1 - k2)
     return np.minimum(1.0, d / max(float(np.percentile(d, 90)), 1e-300)) ** 2
+
+
+def sample_vertices(mesh: Mesh, spacing: float) -> np.ndarray:
+    """(k,) int vertices about ``spacing`` apart (one per cell of a cubic grid), or every vertex when
+    that would keep more than half of them (or ``spacing`` is not positive).
+
+    The volume-PCA estimate at radius ``r`` varies over lengths of about ``r``; on
+    a surface much finer than that, estimating it at every vertex costs time
+    and nothing in accuracy once the cross field is smoothed over ``h >= r``.
+    """
+    if not spacing > 0:
+        return np.arange(mesh.n_vertices)
+    key = np.floor((mesh.V - mesh.V.min(0)) / spacing).astype(np.int64)
+    _, first = np.unique(key, axis=0, return_index=True)
+    return np.sort(first) if len(first) < 0.5 * mesh.n_vertices else np.arange(mesh.n_vertices)
 
 
 def default_radius(surface: Mesh, edge_length: float) -> float:
@@ -232,12 +249,18 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
                         "(a disk, or a disk with holes); remesh each component on its own")
     r = default_radius(mesh, edge_length) if radius is None else float(radius)
     rep = RemeshReport(radius=r, edge_length_target=float(edge_length), triangulated=split)
-    fr = principal_frames(mesh, None, r, side=side)
+    at = sample_vertices(mesh, SAMPLE * r)
+    fr = principal_frames(mesh, None, r, side=side, at=at)
+    rep.principal_samples = len(at)
     rep.timings["principal"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    conf = confidence(fr.k1, fr.k2)
+    # the smoothing fills in the vertices between samples; each sample stands for n / k vertices
+    conf = np.zeros(mesh.n_vertices)
+    conf[at] = confidence(fr.k1, fr.k2) * (mesh.n_vertices / len(at))
+    dirs = tangent_frames(N)[0]
+    dirs[at] = fr.k1dir
     for grow in (1, 2, 4, 8):  # smooth harder until no singularity is left (or give up)
-        arms = smooth_cross_field(mesh, fr.normals, fr.k1dir, conf, grow * smoothing * edge_length)
+        arms = smooth_cross_field(mesh, N, dirs, conf, grow * smoothing * edge_length)
         X1, index = face_crosses(mesh, arms)
         if not index.any():
             break

@@ -332,3 +332,22 @@ def test_singularities_become_faces_or_vertices_as_asked():
     assert found["vertices"] == ([5, 5], [])  # two valence-5 nodes, only quads inside
     with pytest.raises(ConfigError, match="irregular = 'corners'"):
         remesh(surf.mesh, 0.3, irregular="corners")
+
+
+def test_a_fine_surface_is_sampled_for_the_principal_frames():
+    """On a surface much finer than the kernel radius the frames are estimated at vertices about
+    r / 4 apart and the cross-field smoothing fills in the rest: far fewer estimates, the same
+    alignment with the exact principal directions."""
+    A = np.array([[0.08, 0.025], [0.025, -0.06]])
+    f = (lambda x, y: A[0, 0] * x * x + 2 * A[0, 1] * x * y + A[1, 1] * y * y,
+         lambda x, y: 2 * np.stack([A[0, 0] * x + A[0, 1] * y, A[0, 1] * x + A[1, 1] * y], 1),
+         lambda x, y: np.broadcast_to(2 * A, (len(x), 2, 2)).copy())
+    coarse, fine = surfaces.height_field(f, n=(41, 31)), surfaces.height_field(f, n=(121, 91))
+    found = {}
+    for name, surf in (("coarse", coarse), ("fine", fine)):
+        quads, rep = remesh(surf.mesh, 0.3, side=surf.side, with_report=True)
+        ang = _edge_alignment(quads, surf)
+        found[name] = (rep.principal_samples, surf.mesh.n_vertices, float(ang.mean()))
+    assert found["coarse"][0] == found["coarse"][1]  # coarse enough: every vertex
+    assert found["fine"][0] < 0.25 * found["fine"][1]
+    assert found["fine"][2] < 2.0 and abs(found["fine"][2] - found["coarse"][2]) < 0.5, found
