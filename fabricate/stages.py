@@ -52,6 +52,7 @@ def stage_input(ctx) -> str:
         if kind == "surface":
             from optimize.remesh import remesh
 
+            ctx.values["surface"] = mesh  # the optimizer's reference: the user's surface, not the quads
             mesh, rep = remesh(mesh, inp.edge_length, irregular=inp.irregular or "faces", with_report=True)
             plan["remesh"] = _plain(dict(rep.as_dict(), faces=mesh.n_faces, vertices=mesh.n_vertices))
     for key, value in (("levels", cfg.subdivision.levels), ("scheme", cfg.subdivision.scheme),
@@ -61,6 +62,8 @@ def stage_input(ctx) -> str:
     plan.update(scale=cfg.scale, mm_per_unit=factor, faces=mesh.n_faces, vertices=mesh.n_vertices)
     if factor != 1.0:
         mesh = mesh.with_vertices(mesh.V * factor)
+        if "surface" in ctx.values:
+            ctx.values["surface"] = ctx.values["surface"].with_vertices(ctx.values["surface"].V * factor)
     ctx.values["input_mesh"] = mesh
     ctx.values["plan"] = plan
     ctx.notes.extend(mesh.notes)
@@ -92,7 +95,8 @@ def stage_optimize(ctx) -> str:
     if opt.method == "default":
         kwargs.update(formulation=opt.formulation, linear_solver=opt.linear_solver,
                       torsion_free_beams=opt.torsion_free_beams)
-    hier = subdivide_and_perturb(mesh, levels, scheme=plan["scheme"], target=target, **kwargs)
+    hier = subdivide_and_perturb(mesh, levels, scheme=plan["scheme"], target=target,
+                                 surface=ctx.values.get("surface"), **kwargs)
     ctx.values["levels"] = [_plain(_level_facts(lv)) for lv in hier.levels]
     ctx.values["level_results"] = [lv.result for lv in hier.levels]
     result = hier.levels[-1].result

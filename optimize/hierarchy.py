@@ -101,7 +101,7 @@ class HierarchyResult:
 
 def subdivide_and_perturb(control: Mesh, levels: int, *, scheme: str = "catmull_clark",
                           target: str = "conical", perturb_control: bool = False,
-                          **optimize_kwargs) -> HierarchyResult:
+                          surface: Mesh | None = None, **optimize_kwargs) -> HierarchyResult:
     """``levels`` rounds of "subdivide once, then perturb to ``target``".
 
     Parameters
@@ -113,6 +113,9 @@ def subdivide_and_perturb(control: Mesh, levels: int, *, scheme: str = "catmull_
     scheme : one of :data:`ALL_SCHEMES`.
     target : ``"pq"`` | ``"conical"`` | ``"circular"`` | ``"strip"`` | ``"none"``.
     perturb_control : also perturb the control mesh first (level 0).
+    surface : the surface the control mesh was made from (a remeshed triangle
+        surface): the reference of level 0 (closeness, gliding boundary)
+        instead of the control mesh itself.
     **optimize_kwargs
         Passed to :func:`optimize.optimize_mesh` at every level (``method``,
         ``fixed``, ``fairness``, ``closeness``, ``tol``, ``max_iter``,
@@ -144,7 +147,7 @@ def subdivide_and_perturb(control: Mesh, levels: int, *, scheme: str = "catmull_
     mesh = control
     if perturb_control or levels == 0:
         out.levels.append(_perturb(0, control, sp.identity(control.n_vertices, format="csr"),
-                                   scheme, target, tol, 0.0, optimize_kwargs))
+                                   scheme, target, tol, 0.0, optimize_kwargs, surface))
         mesh = out.levels[-1].mesh
     for level in range(1, levels + 1):
         t0 = time.perf_counter()
@@ -169,7 +172,7 @@ def refine_strip(strip: Mesh, levels: int, *, scheme: str = "chaikin", target: s
 
 
 def _perturb(level: int, ref: Mesh, S, scheme: str, target: str, tol: Tolerances, t_sub: float,
-             kwargs: dict) -> LevelResult:
+             kwargs: dict, surface: Mesh | None = None) -> LevelResult:
     t0 = time.perf_counter()
     if target == "none":
         result, mesh = None, ref
@@ -179,7 +182,7 @@ def _perturb(level: int, ref: Mesh, S, scheme: str, target: str, tol: Tolerances
     else:
         from .api import optimize_mesh
 
-        result = optimize_mesh(ref, target, reference=ref, **kwargs)
+        result = optimize_mesh(ref, target, reference=ref if surface is None else surface, **kwargs)
         mesh = result.mesh
     seconds = {"subdivide": t_sub, "optimize": time.perf_counter() - t0}
     return LevelResult(level, mesh, ref, S, result, _measures(mesh, tol, scheme, target), seconds)
