@@ -47,6 +47,17 @@ def test_round_trip_is_exact(tmp_path, revolution, ext, how):
         assert back.name == str(path) and back.notes == []
 
 
+@pytest.mark.parametrize("ext,how", FORMATS[:4], ids=FORMAT_IDS[:4])
+def test_header_comments_are_written_and_read_past(tmp_path, revolution, ext, how):
+    """A result that missed its tolerance is marked in the file itself; readers skip the mark."""
+    path = tmp_path / f"marked.{ext}"
+    write_mesh(path, revolution, comments=["NOT CONVERGED: conical stalled\nafter 3 iterations", "two"], **how)
+    head = path.read_bytes()[:400].decode("ascii", "replace")
+    assert "NOT CONVERGED: conical stalled after 3 iterations" in head and "two" in head
+    back = read_mesh(path)
+    assert np.array_equal(back.V, revolution.V) and np.array_equal(back.F, revolution.F)
+
+
 @pytest.mark.parametrize("ext,how", FORMATS, ids=FORMAT_IDS)
 def test_round_trip_of_shared_meshes(tmp_path, halftunnel_path, cylinder_path, ext, how):
     for src in (halftunnel_path, cylinder_path):

@@ -48,6 +48,7 @@ def test_optimize_exit_3_when_budget_too_small(tmp_path, capsys):
                  "--report", str(rep)])
     assert code == 3
     assert out.exists()
+    assert "# NOT CONVERGED: circular max_iter after 1 iterations" in out.read_text().splitlines()[1]
     report = json.loads(rep.read_text())
     assert report["success"] is False and report["status"] == "max_iter"
     assert "NOT reached" in capsys.readouterr().out

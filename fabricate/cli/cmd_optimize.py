@@ -65,7 +65,7 @@ def run(args) -> int:
                            dict(formulation=args.formulation, linear_solver=args.linear_solver,
                                 torsion_free_beams={"auto": "auto", "on": True, "off": False}[
                                     args.torsion_free_beams])))
-    write_mesh(args.output, res.mesh)
+    write_mesh(args.output, res.mesh, comments=_marks(res))
     d = res.defects
     print(f"{mesh.name} -> {args.output}: {res.status} after {res.nit} iterations "
           f"({res.timings.get('total', 0.0):.2f} s, {res.method}/{res.target})")
@@ -83,3 +83,10 @@ def run(args) -> int:
         with atomic_open(args.report) as fh:
             json.dump(rep, fh, indent=2)
     return 0 if res.success else 3
+
+
+def _marks(res) -> list[str]:
+    """Header comments of a written result that missed a tolerance (none for a success)."""
+    if res is None or res.success:
+        return []
+    return [f"NOT CONVERGED: {res.target} {res.status} after {res.nit} iterations: {res.message}"]

@@ -54,7 +54,9 @@ def run(args) -> int:
     mesh, res, rep = surface_to_mesh(surface, args.edge_length, target=args.optimize, radius=args.radius,
                                      side=args.side, glide_boundary=not args.free_boundary,
                                      irregular=args.irregular)
-    write_mesh(args.output, mesh)
+    from .cmd_optimize import _marks
+
+    write_mesh(args.output, mesh, comments=_marks(res))
     facts = {"input": args.surface, "output": args.output, "remesh": rep.as_dict(), "notes": mesh.notes}
     if res is not None:
         facts["optimize"] = {"target": args.optimize, "status": res.status, "success": res.success,

@@ -116,20 +116,22 @@ def _located(exc: MeshError, parsed: Parsed, name: str) -> MeshError:
 
 
 def write_mesh(path: str | os.PathLike, mesh: Mesh, *, fmt: str | None = None,
-               binary: bool = True) -> None:
+               binary: bool = True, comments=()) -> None:
     """Write ``mesh`` atomically as OBJ, OFF or PLY (same vertex order and faces).
 
     Text coordinates use ``%.17g`` and binary PLY stores doubles, so reading
     the file back gives exactly ``mesh.V`` and ``mesh.F``.  ``binary`` selects
     binary little-endian PLY (default) or ascii PLY; it is ignored for OBJ/OFF.
     Raises :class:`MeshError` for an unknown format, :class:`ExportError` if
-    the file cannot be written.
+    the file cannot be written.  ``comments`` (one line each) go into the header: a
+    result that missed its tolerance says so in the file itself.
     """
     kind = detect_format(path, fmt)
     if kind == "ply":
-        payload = format_ply(mesh, ENCODINGS[1] if binary else ENCODINGS[0])
+        payload = format_ply(mesh, ENCODINGS[1] if binary else ENCODINGS[0], comments)
     else:
-        payload = (format_obj(mesh) if kind == "obj" else format_off(mesh)).encode("ascii")
+        text = format_obj(mesh, comments) if kind == "obj" else format_off(mesh, comments)
+        payload = text.encode("ascii", errors="replace")
     try:
         with atomic_open(path, "wb") as fh:
             fh.write(payload)

@@ -106,9 +106,16 @@ def _resolve(raw: np.ndarray, sizes: np.ndarray, defined: np.ndarray, face_at) -
     return out
 
 
-def format_obj(mesh) -> str:
-    """OBJ text of ``mesh``: ``%.17g`` vertices, 1-based faces in mesh order."""
+def format_obj(mesh, comments=()) -> str:
+    """OBJ text of ``mesh``: ``%.17g`` vertices, 1-based faces in mesh order; ``comments`` (one-line
+    strings) follow the first comment line."""
     head = f"# {mesh.n_vertices} vertices, {mesh.n_faces} faces (written by conical-fab)\n"
+    head += "".join(f"# {c}\n" for c in _one_line(comments))
     vs = "".join("v %.17g %.17g %.17g\n" % tuple(r) for r in mesh.V.tolist())
     fs = "".join("f " + " ".join(map(str, f)) + "\n" for f in face_lists(mesh, base=1))
     return head + vs + fs
+
+
+def _one_line(comments) -> list[str]:
+    """Comments with line breaks turned into spaces (a comment is one line in every format), ASCII."""
+    return [" ".join(str(c).split()).encode("ascii", "replace").decode("ascii") for c in comments]

@@ -83,9 +83,13 @@ def _header(tk: Tokens, path: str) -> int:
     return 1
 
 
-def format_off(mesh) -> str:
-    """OFF text of ``mesh``: ``%.17g`` vertices, 0-based faces in mesh order."""
-    head = f"OFF\n{mesh.n_vertices} {mesh.n_faces} {len(mesh.topology.edges)}\n"
+def format_off(mesh, comments=()) -> str:
+    """OFF text of ``mesh``: ``%.17g`` vertices, 0-based faces in mesh order; ``comments`` as ``#``
+    lines after the keyword."""
+    from .obj import _one_line
+
+    head = "OFF\n" + "".join(f"# {c}\n" for c in _one_line(comments))
+    head += f"{mesh.n_vertices} {mesh.n_faces} {len(mesh.topology.edges)}\n"
     vs = "".join("%.17g %.17g %.17g\n" % tuple(r) for r in mesh.V.tolist())
     fs = "".join(f"{len(f)} " + " ".join(map(str, f)) + "\n" for f in face_lists(mesh, base=0))
     return head + vs + fs

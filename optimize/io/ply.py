@@ -325,14 +325,17 @@ def _ascii_records(tk: Tokens, p: int, el: Element, path: str):
 
 
 # -- writing --------------------------------------------------------------------
-def format_ply(mesh, encoding: str = "binary_little_endian") -> bytes:
+def format_ply(mesh, encoding: str = "binary_little_endian", comments=()) -> bytes:
     """PLY bytes of ``mesh``: vertices as double, faces as ``list uchar int`` (``uint`` counts
     past 255 corners); ``encoding`` one of :data:`ENCODINGS`."""
     if encoding not in ENCODINGS:
         raise ValueError(f"PLY encoding {encoding!r}, expected one of {ENCODINGS}")
     sizes = np.asarray(mesh.face_sizes, dtype=np.int64)
     count_type = "uchar" if sizes.max(initial=0) <= 255 else "uint"
-    head = (f"ply\nformat {encoding} 1.0\ncomment written by conical-fab\n"
+    from .obj import _one_line
+
+    extra = "".join(f"comment {c}\n" for c in _one_line(comments))
+    head = (f"ply\nformat {encoding} 1.0\ncomment written by conical-fab\n{extra}"
             f"element vertex {mesh.n_vertices}\nproperty double x\nproperty double y\n"
             f"property double z\nelement face {mesh.n_faces}\n"
             f"property list {count_type} int vertex_indices\nend_header\n").encode("ascii")
