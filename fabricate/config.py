@@ -17,6 +17,7 @@ relative to the config file's folder.
 from __future__ import annotations
 
 import inspect
+import math
 from pathlib import Path
 from typing import Any, Literal
 
@@ -107,6 +108,7 @@ class InputSection(Section):
     surface: Path | None = None
     edge_length: float | None = Field(default=None, gt=0)
     irregular: Literal["faces", "vertices", "nearest"] | None = None
+    side: Literal["keep"] | tuple[float, float, float] | None = None
 
     _paths = field_validator("mesh", "control", "surface", mode="before")(_resolve_path)
 
@@ -124,6 +126,11 @@ class InputSection(Section):
             raise PydanticCustomError("edge_length", "edge_length applies only to a surface input")
         if self.surface is None and self.irregular is not None:
             raise PydanticCustomError("irregular", "irregular applies only to a surface input")
+        if self.surface is None and self.side is not None:
+            raise PydanticCustomError("side", "side applies only to a surface input")
+        if isinstance(self.side, tuple) and not (all(math.isfinite(c) for c in self.side) and any(self.side)):
+            raise PydanticCustomError("side", "side {side} is not a nonzero finite vector, expected "
+                                      "[x, y, z] toward the inside or 'keep'", {"side": list(self.side)})
         return self
 
     @property

@@ -92,7 +92,9 @@ def oriented_surface(V, T, side=None, name: str = "surface") -> tuple[Mesh, np.n
     """Orient a triangle mesh so its normals point away from the inside.
 
     V : (n, 3) float, T : (t, 3) int.  side : (3,) vector toward the inside of an
-    open surface (default ``(0, 0, -1)``), ignored for a closed one.
+    open surface (default ``(0, 0, -1)``), or ``"keep"``: the faces' own
+    orientation (their normals point outside; for a tube or a tunnel, where no
+    one direction points inside everywhere); ignored for a closed surface.
     Returns ``(mesh, normals (n, 3) unit area-weighted vertex normals, closed)``.
     Raises MeshError (non-triangles, non-orientable) and ConfigError (a side
     vector that does not tell the two sides apart).
@@ -110,6 +112,9 @@ def oriented_surface(V, T, side=None, name: str = "surface") -> tuple[Mesh, np.n
     if closed:
         score = np.bincount(comp, np.einsum("ij,ij->i", fn, P[F[:, 0]]))  # 6 x signed volume
         total = np.bincount(comp, np.linalg.norm(fn, axis=1) * np.linalg.norm(P[F[:, 0]] - P.mean(0), axis=1))
+    elif isinstance(side, str) and side == "keep":  # the file's orientation: normals point outside
+        score = np.ones(comp.max() + 1)
+        total = score
     else:
         s = _unit_side(side)
         score = -np.bincount(comp, fn @ s)
@@ -132,6 +137,8 @@ def oriented_surface(V, T, side=None, name: str = "surface") -> tuple[Mesh, np.n
 
 
 def _unit_side(side) -> np.ndarray:
+    if isinstance(side, str):
+        raise ConfigError(f"side = {side!r}, expected a nonzero 3-vector x,y,z or 'keep'")
     s = np.asarray(DEFAULT_SIDE if side is None else side, dtype=float).reshape(-1)
     if s.shape != (3,) or not np.all(np.isfinite(s)) or np.linalg.norm(s) == 0:
         raise ConfigError(f"side = {np.asarray(side).tolist()}, expected a nonzero 3-vector x,y,z")

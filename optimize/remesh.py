@@ -234,8 +234,9 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
     surface, split = as_triangles(surface)
     mesh, N, closed = oriented_surface(surface, None, side)
     if closed:
-        raise MeshError(f"{mesh.name}: closed surface; remeshing supports disk-like surfaces "
-                        "(one boundary loop) only")
+        raise MeshError(f"{mesh.name}: closed surface (no boundary); remeshing supports open surfaces "
+                        "with one or more boundary loops (a roof, a facade, a roof with openings): "
+                        "cut it open first")
     if singularities not in ("auto", "place", "smooth"):
         raise ConfigError(f"singularities = {singularities!r}, expected 'auto', 'place' or 'smooth'")
     if irregular not in IRREGULAR:
@@ -269,16 +270,21 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
     rep.smoothing = grow * smoothing
     if index.any() and singularities != "smooth":
         return _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report, irregular)
-    X1, mismatch = comb(mesh, X1)
+    X1c, mismatch = comb(mesh, X1)
     nf = face_frames(mesh)[0]
-    X2 = np.cross(nf, X1)
+    X2 = np.cross(nf, X1c)
+    t2 = time.perf_counter()
+    UV = integrate(mesh, X1c, X2, edge_length)
+    fold = folded(mesh, UV)
+    if len(mesh.topology.boundary_loops) > 1 and singularities != "smooth" and (fold.any() or mismatch.any()):
+        # around a hole the field turns or u, v have a period (a tube, a tunnel): no single-valued
+        # u, v exists; the seamless branch cuts the holes open and makes the periods transitions
+        rep.timings["cross_field"] = time.perf_counter() - t1
+        return _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report, irregular)
     rep.singular_triangles = int(np.count_nonzero(index))
     rep.mismatched_edges = int(mismatch.sum())
-    rep.timings["cross_field"] = time.perf_counter() - t1
-    t2 = time.perf_counter()
-    UV = integrate(mesh, X1, X2, edge_length)
-    fold = folded(mesh, UV)
     rep.folded = int(fold.sum())
+    rep.timings["cross_field"] = t2 - t1
     rep.timings["integrate"] = time.perf_counter() - t2
     t3 = time.perf_counter()
     out, corners = extract(mesh, UV, name=name or f"{mesh.name}-quads")
@@ -311,9 +317,11 @@ def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report, irre
     out, corners = snap_slivers(out, corners, edge_length)
     rep.corners = corners.tolist()
     rep.timings["extract"] = time.perf_counter() - t3
-    msg = (f"{out.name}: {len(P['singular'])} cross-field singularit(ies) kept (indices "
-           f"{sorted(set(int(k) for k in P['index']))} quarter turns): placed as irregular vertices or faces "
-           "by a seamless parametrization cut to the boundary")
+    holes = len(mesh.topology.boundary_loops) - 1
+    msg = (f"{out.name}: seamless parametrization, cut open from {len(P['singular'])} cross-field "
+           f"singularit(ies) (indices {sorted(set(int(k) for k in P['index']))} quarter turns, placed as "
+           f"irregular {'faces' if irregular == 'faces' else 'vertices or faces'}) and {holes} hole(s) to the "
+           "boundary")
     log.info(msg)
     out.notes.append(msg)
     return _finish(out, rep, t0, with_report)

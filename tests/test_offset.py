@@ -235,6 +235,31 @@ def test_flat_and_cylindrical_stars_use_the_normal_and_the_bisector():
     assert c.beam_twist_mm.max() <= 1e-9
 
 
+def test_nearly_cylindrical_conical_vertices_keep_their_beams_planar(monkeypatch):
+    """A cylinder of circles and rulings (radius 1 m) moved by 1e-5 mm: conical to 4e-7 rad, within the
+    default tolerance, but the cone axis at each vertex is ill-conditioned (the normals nearly span a
+    plane).  The exact least-squares axes tilt along the rulings and twist the beams by about 76 mm;
+    counting the near-free direction as free (AXIS_NEAR) lets the beams be straightened (3e-6 mm)
+    while face distances stay within 1e-5 mm."""
+    import fabricate.offset.axes as axes_mod
+
+    th, y = np.linspace(0, np.pi, 13), np.linspace(0.0, 3000.0, 11)
+    T, Y = np.meshgrid(th, y, indexing="ij")
+    V = np.stack([1000 * np.cos(T), Y, 1000 * np.sin(T)], -1).reshape(-1, 3)
+    n = len(y)
+    F = [[i * n + j, i * n + j + 1, (i + 1) * n + j + 1, (i + 1) * n + j] for i in range(len(th) - 1)
+         for j in range(n - 1)]
+    V = V + 1e-5 * np.random.default_rng(3).standard_normal(V.shape)
+    mesh = Mesh(V, F, name="cylinder")
+    assert conical_defect(mesh).max() < 1e-6
+    interior = ~mesh.topology.is_boundary_vertex[mesh.topology.edges].any(axis=1)
+    s = offset_structure(mesh, (0.0, -200.0))
+    monkeypatch.setattr(axes_mod, "AXIS_NEAR", axes_mod.AXIS_RCOND)  # the exact least-squares axes
+    exact = offset_structure(mesh, (0.0, -200.0))
+    assert s.beam_twist_mm[interior].max() < 1e-4 and exact.beam_twist_mm[interior].max() > 1.0
+    assert s.face_distance_error.max() < 1e-5
+
+
 def test_non_orientable_mesh_is_refused():
     k = 12
     t = np.linspace(0, 2 * np.pi, k, endpoint=False)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fabricate.offset.axes import AXIS_NEAR, AXIS_RCOND, NEAR_CONICAL
 from fabricate.offset import (axis_line_intersections, edge_families, focal_meshes, offset_structure,
                               quad_circular_defect, require_pq)
 from optimize import Tolerances, shapes
@@ -38,13 +39,18 @@ def _newell(P):
 
 
 def reference_offsets(mesh):
-    """Loop reference: per vertex, the minimum-norm least-squares X with n_i . X = 1."""
+    """Loop reference: per vertex, the minimum-norm least-squares X with n_i . X = 1; at a conical
+    vertex (its face angles to the axis agree within NEAR_CONICAL) with the cut-off AXIS_NEAR."""
     t = mesh.topology
     N = np.array([_newell(mesh.V[f[f >= 0]]) for f in mesh.F])
     X = np.zeros((mesh.n_vertices, 3))
     for v in range(mesh.n_vertices):
         faces = t.star_faces[v][t.star_faces[v] >= 0]
-        X[v] = np.linalg.lstsq(N[faces], np.ones(len(faces)), rcond=1e-10)[0]
+        x = np.linalg.lstsq(N[faces], np.ones(len(faces)), rcond=AXIS_RCOND)[0]
+        ang = np.arccos(np.clip(N[faces] @ (x / np.linalg.norm(x)), -1, 1))
+        if 0.5 * (ang.max() - ang.min()) < NEAR_CONICAL:
+            x = np.linalg.lstsq(N[faces], np.ones(len(faces)), rcond=AXIS_NEAR)[0]
+        X[v] = x
     return N, X
 
 
@@ -91,16 +97,24 @@ def test_non_conical_pq_mesh_twist_and_face_errors_match_a_direct_computation():
 
 
 def test_planar_beam_axes_only_change_free_vertices():
+    from fabricate.offset.axes import face_planes, fit_axes
+
     m = translational()
     s = offset_structure(m, DIST, free_axes="min_norm")
     p = offset_structure(m, DIST)
     t = m.topology
     inner = ~t.is_boundary_vertex
-    np.testing.assert_array_equal(p.axes[inner], s.axes[inner])
+    fit = fit_axes(m, face_planes(m)[0])
+    fixed = inner & (fit.free_rank == 0)
+    assert fixed.any()
+    np.testing.assert_array_equal(p.axes[fixed], s.axes[fixed])
     boundary = t.is_boundary_vertex[p.edges].all(axis=1)
-    assert p.beam_twist_mm[boundary].max() < 1e-6 < s.beam_twist_mm[boundary].max()
-    # face distances are untouched by the free directions
-    np.testing.assert_allclose(p.face_distance_error, s.face_distance_error, atol=1e-9)
+    # the mesh is not conical: its beams inside twist, so turning the free axes is a least-squares
+    # compromise, and the boundary beams come out planar to a few 1e-6 mm (from 0.1 mm and more)
+    assert p.beam_twist_mm[boundary].max() < 1e-5 and s.beam_twist_mm[boundary].max() > 1e-2
+    # free directions move face distances by at most AXIS_NEAR of the turn (exactly 0 for k < 3)
+    turn = np.linalg.norm(p.offset - s.offset, axis=1).max()  # the largest change of an offset vector
+    assert np.abs(p.face_distance_error - s.face_distance_error).max() <= 1e-9 + AXIS_NEAR * max(DIST) * turn
 
 
 # -- the paper's Remark: a PQ mesh with the offset property is conical ---------------------------
@@ -264,6 +278,7 @@ def test_planar_beam_jacobian_matches_finite_differences():
     # the free directions keep every face distance: n_i . (X + B p) = n_i . X
     X, N = prob.offsets(p), face_planes(m)[0]
     t = m.topology
-    for v in np.nonzero(fit.free_rank > 0)[0]:
+    for v in np.nonzero(fit.free_rank > 0)[0]:  # exactly, or within AXIS_RCOND of the turn when nearly free
         faces = t.star_faces[v][t.star_faces[v] >= 0]
-        np.testing.assert_allclose(N[faces] @ X[v], N[faces] @ fit.offset[v], atol=1e-12)
+        turn = np.linalg.norm(X[v] - fit.offset[v])
+        np.testing.assert_allclose(N[faces] @ X[v], N[faces] @ fit.offset[v], atol=1e-12 + AXIS_NEAR * turn)

@@ -305,6 +305,33 @@ def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
         assert (out / name).stat().st_size > 0
 
 
+def test_a_tube_from_a_real_mesh_through_the_pipeline(tmp_path):
+    """cylinder.obj without its caps, in metres, as a surface with ``side: keep``: remeshed along its
+    circles and rulings, conical, offset and built into panels and beams (exit 0)."""
+    import numpy as np
+
+    from conftest import shared_file
+    from optimize import Mesh
+    from optimize.io import write_mesh
+
+    m = read_mesh(shared_file("cylinder.obj"))
+    quads = m.F[m.face_sizes == 4][:, :4]
+    used = np.unique(quads)
+    remap = np.full(m.n_vertices, -1)
+    remap[used] = np.arange(len(used))
+    write_mesh(tmp_path / "tube.obj", Mesh(m.V[used], remap[quads], name="tube"))
+    (tmp_path / "t.yaml").write_text("input: {surface: tube.obj, edge_length: 0.3, side: keep}\nunits: m\n"
+                                     "outputs: {step: false, stl: false, 3mf: false, svg: false, "
+                                     "pictures: false, html: false}\n")
+    summary = run_pipeline(load_config(tmp_path / "t.yaml"), tmp_path / "out")
+    assert summary.exit_code == 0, summary.message
+    report = json.loads((tmp_path / "out" / "t" / "report.json").read_text())
+    assert report["input"]["remesh"]["method"] == "seamless"
+    assert report["measures"]["conical"]["pass"] and report["measures"]["beam_planarity"]["pass"]
+    rows = list(csv.DictReader((tmp_path / "out" / "t" / "bom.csv").open()))
+    assert sum(r["kind"] == "panel" for r in rows) == summary.faces
+
+
 # -- outputs.check: full | fast | off | auto -------------------------------------------------------
 CAD_FILES = {"step": True, "stl": True, "3mf": True, "dxf": True, "svg": True, "bom": True,
              "pictures": False, "html": False}

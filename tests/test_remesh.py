@@ -351,3 +351,33 @@ def test_a_fine_surface_is_sampled_for_the_principal_frames():
     assert found["coarse"][0] == found["coarse"][1]  # coarse enough: every vertex
     assert found["fine"][0] < 0.25 * found["fine"][1]
     assert found["fine"][2] < 2.0 and abs(found["fine"][2] - found["coarse"][2]) < 0.5, found
+
+
+def test_a_tube_is_remeshed_into_circles_and_rulings():
+    """cylinder.obj without its caps (a real mesh, two boundary loops): no single-valued u, v exists
+    around the tube, so the seamless branch cuts it open; the quads follow the circles and the rulings
+    (the principal lines) and the mesh is conical.  No one vector points inside a tube: side='keep'
+    takes the file's orientation, and a vector that cannot tell the sides apart is refused."""
+    from conftest import shared_file
+    from optimize.io import read_mesh
+
+    m = read_mesh(shared_file("cylinder.obj"))
+    quads_in = m.F[m.face_sizes == 4][:, :4]
+    used = np.unique(quads_in)
+    remap = np.full(m.n_vertices, -1)
+    remap[used] = np.arange(len(used))
+    tube = Mesh(m.V[used], remap[quads_in], name="tube")
+    with pytest.raises(ConfigError, match="does not tell the two sides"):
+        remesh(tube, 0.3, side=(0.0, 0.0, 1.0))
+    with pytest.raises(ConfigError, match="'inward'"):
+        remesh(tube, 0.3, side="inward")
+    quads, rep = remesh(tube, 0.3, side="keep", with_report=True)
+    assert rep.method == "seamless" and not rep.singularities
+    assert len(quads.topology.boundary_loops) == 2 and np.all(quads.face_sizes == 4)
+    E = quads.topology.edges
+    d = quads.V[E[:, 1]] - quads.V[E[:, 0]]
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    off = np.minimum(np.abs(d[:, 1]), np.hypot(d[:, 0], d[:, 2]))  # 0 along a ruling (y) or a circle
+    assert np.degrees(np.arcsin(off)).max() < 3.0
+    mesh, res, _ = surface_to_mesh(tube, 0.3, side="keep", target="conical", glide_boundary=False)
+    assert res.status == "converged", res.message

@@ -7,12 +7,14 @@ import json
 def _vector(text: str):
     import argparse
 
+    if text == "keep":
+        return text
     try:
         v = [float(x) for x in text.split(",")]
     except ValueError:
         v = []
     if len(v) != 3:
-        raise argparse.ArgumentTypeError(f"{text!r}: expected three numbers x,y,z (a vector toward the inside)")
+        raise argparse.ArgumentTypeError(f"{text!r}: expected three numbers x,y,z (a vector toward the inside) or 'keep'")
     return v
 
 
@@ -33,7 +35,8 @@ def register(sub) -> None:
                         "least 3 mean triangle edges)")
     p.add_argument("--side", type=_vector, default=None,
                    help="x,y,z: direction toward the inside of the surface (default 0,0,-1: below; "
-                        "write --side=-1,0,0 when it starts with a minus)")
+                        "write --side=-1,0,0 when it starts with a minus), or 'keep': the file's face "
+                        "orientation says which side is outside (a tube, a tunnel)")
     p.add_argument("--optimize", choices=("conical", "circular", "pq", "none"), default="conical",
                    help="optimization after remeshing (default conical)")
     p.add_argument("--irregular", choices=("faces", "vertices", "nearest"), default="faces",

@@ -19,7 +19,15 @@ squares sense for every vertex at once (batched SVD):
   solution, i.e. the bisector of two normals, or the normal itself.  Such a
   vertex keeps ``free_rank`` degrees of freedom that do not change any face
   distance (``free_basis``); :mod:`fabricate.offset.straighten` uses them to
-  make the beams planar.
+  make the beams planar.  At a conical vertex (axis defect below
+  ``NEAR_CONICAL``) singular values of ``N_v`` below ``AXIS_NEAR = 1e-3`` of the
+  largest count as zero as well: at a nearly cylindrical vertex the exact cone
+  axis is ill-conditioned (a conical defect of 2e-8 rad tilted the axes of a
+  remeshed tube so far that beams twisted by 0.6 mm), while turning along such
+  a direction changes face distances by at most ``1e-3`` of the turn (0.0001 mm
+  on that tube, whose beams are then planar to 0.0002 mm); the face-distance
+  error stays measured and reported.  Non-conical vertices keep the exact
+  least-squares axis.
 
 ``cos(theta_v) = 1 / |X_v| > 0``: the axis points to the side of the normals.
 """
@@ -35,6 +43,13 @@ from optimize.mesh import Mesh
 
 AXIS_RCOND = 1e-10
 """Singular values of ``N_v`` below ``AXIS_RCOND * sigma_max`` count as zero (free directions)."""
+
+AXIS_NEAR = 1e-3
+"""At a conical vertex (axis defect below ``NEAR_CONICAL``), singular values below
+``AXIS_NEAR * sigma_max`` count as zero too (a nearly cylindrical vertex; see above)."""
+
+NEAR_CONICAL = 1e-4
+"""Radians: the axis defect below which a vertex counts as conical for ``AXIS_NEAR``."""
 
 
 @dataclass(frozen=True)
@@ -120,12 +135,18 @@ def fit_axes(mesh: Mesh, normals: np.ndarray, rcond: float = AXIS_RCOND) -> Axis
     Ns, valid = star_normals(mesh, normals)
     b = valid.astype(float)  # (n, s): right-hand side 1 per face, 0 in padding
     U, S, Vt = np.linalg.svd(Ns, full_matrices=False)  # (n,s,3) (n,3) (n,3,3)
-    keep = S > rcond * S[:, :1]
-    coef = np.where(keep, np.einsum("nsi,ns->ni", U, b) / np.where(keep, S, 1.0), 0.0)
-    X = np.einsum("ni,nij->nj", coef, Vt)
-    norm = np.linalg.norm(X, axis=1)
-    cos_theta = 1.0 / norm
-    axes = X * cos_theta[:, None]
+
+    def solve(cut):
+        keep = S > cut[:, None] * S[:, :1]
+        coef = np.where(keep, np.einsum("nsi,ns->ni", U, b) / np.where(keep, S, 1.0), 0.0)
+        X = np.einsum("ni,nij->nj", coef, Vt)
+        cos_theta = 1.0 / np.linalg.norm(X, axis=1)
+        return keep, X, cos_theta, X * cos_theta[:, None]
+
+    keep, X, cos_theta, axes = solve(np.full(len(S), rcond))
+    near = angle_spread(Ns, valid, axes) < NEAR_CONICAL  # conical: an ill-conditioned axis may turn
+    if near.any() and rcond < AXIS_NEAR:
+        keep, X, cos_theta, axes = solve(np.where(near, AXIS_NEAR, rcond))
     free = ~keep  # (n, 3), singular values sorted descending: free ones are last
     free_rank = free.sum(axis=1)
     basis = np.zeros((len(X), 3, 2))
