@@ -109,6 +109,7 @@ class InputSection(Section):
     edge_length: float | None = Field(default=None, gt=0)
     irregular: Literal["faces", "vertices", "nearest"] | None = None
     side: Literal["keep"] | tuple[float, float, float] | None = None
+    radius: float | None = Field(default=None, gt=0)
 
     _paths = field_validator("mesh", "control", "surface", mode="before")(_resolve_path)
 
@@ -128,6 +129,8 @@ class InputSection(Section):
             raise PydanticCustomError("irregular", "irregular applies only to a surface input")
         if self.surface is None and self.side is not None:
             raise PydanticCustomError("side", "side applies only to a surface input")
+        if self.surface is None and self.radius is not None:
+            raise PydanticCustomError("radius", "radius applies only to a surface input")
         if isinstance(self.side, tuple) and not (all(math.isfinite(c) for c in self.side) and any(self.side)):
             raise PydanticCustomError("side", "side {side} is not a nonzero finite vector, expected "
                                       "[x, y, z] toward the inside or 'keep'", {"side": list(self.side)})

@@ -53,8 +53,8 @@ def stage_input(ctx) -> str:
             from optimize.remesh import remesh
 
             ctx.values["surface"] = mesh  # the optimizer's reference: the user's surface, not the quads
-            mesh, rep = remesh(mesh, inp.edge_length, side=inp.side, irregular=inp.irregular or "faces",
-                               with_report=True)
+            mesh, rep = remesh(mesh, inp.edge_length, radius=inp.radius, side=inp.side,
+                               irregular=inp.irregular or "faces", with_report=True)
             plan["remesh"] = _plain(dict(rep.as_dict(), faces=mesh.n_faces, vertices=mesh.n_vertices))
     for key, value in (("levels", cfg.subdivision.levels), ("scheme", cfg.subdivision.scheme),
                        ("target", cfg.optimize.target)):

@@ -125,6 +125,8 @@ CASES = {
                       ["job.yaml:1", "input.side", "'inward'", "'keep'"]),
     "zero side": ("input: {surface: ../data/grid.obj, edge_length: 2, side: [0, 0, 0]}\n",
                   ["input", "side [0.0, 0.0, 0.0]", "nonzero"]),
+    "negative radius": ("input: {surface: ../data/grid.obj, edge_length: 2, radius: -1}\n",
+                        ["input.radius", "value -1", "greater than 0"]),
     "side without surface": ("input: {mesh: ../data/grid.obj, side: keep}\n",
                              ["input", "side applies only to a surface"]),
     "irregular without surface": ("input: {mesh: ../data/grid.obj, irregular: faces}\n",

@@ -262,12 +262,13 @@ def test_surface_input_is_remeshed_into_quads(tmp_path):
 
     g = shapes.grid(12, 12, size=(6.0, 6.0), height=lambda X, Y: 0.15 * ((X - 3) ** 2 - 0.5 * (Y - 3) ** 2))
     write_mesh(tmp_path / "saddle.obj", Mesh(g.V, g.triangulate(), name="saddle"))
-    (tmp_path / "s.yaml").write_text("input: {surface: saddle.obj, edge_length: 2.0}\nunits: m\n"
+    (tmp_path / "s.yaml").write_text("input: {surface: saddle.obj, edge_length: 2.0, radius: 2.5}\nunits: m\n"
                                      "outputs: {step: false, stl: false, 3mf: false, dxf: false, svg: false, "
                                      "bom: false, pictures: false, html: false}\n")
     summary = run_pipeline(load_config(tmp_path / "s.yaml"), tmp_path / "out")
     report = json.loads((tmp_path / "out" / "s" / "report.json").read_text())
     assert report["input"]["kind"] == "surface" and report["input"]["remesh"]["faces"] == summary.faces
+    assert report["input"]["remesh"]["radius"] == 2.5  # input.radius, in the input's units
     mesh = read_mesh(tmp_path / "out" / "s" / "mesh.obj")
     assert (mesh.face_sizes == 4).mean() > 0.5  # quad-dominant
     assert summary.status in ("ok", "tolerance_not_reached"), summary.message
