@@ -160,6 +160,8 @@ def outcome(ctx: RunContext) -> dict[str, Any]:
         status = "tolerance_not_reached"
         message = "tolerance not reached: " + ", ".join(
             f"{k} {measures[k]['max']:.3g} > {measures[k]['tolerance']:.3g}" for k in failed)
+        if ctx.get("cad_skipped"):
+            message += "; " + ctx.get("cad_skipped")
     else:
         status, message = "ok", "every tolerance reached"
     return {"status": status, "exit_code": EXIT_CODES[status], "failed": failed, "message": message}

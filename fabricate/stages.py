@@ -147,12 +147,26 @@ def stage_offset(ctx) -> str:
 
 # -- CAD -----------------------------------------------------------------------------
 def stage_cad(ctx) -> str:
-    """Panels, beams and nodes as data (``fabricate.cad.build_parts``)."""
+    """Panels, beams and nodes as data (``fabricate.cad.build_parts``).
+
+    An optimization that ended ``folded`` (dented or flipped panels: no glass can be cut from
+    them) builds no parts: the run goes on to write the mesh, the layers and the report, marked
+    as a missed tolerance (exit 3), so the result can be inspected."""
     from fabricate.cad import PartSpec, build_parts
 
     spec = PartSpec(**ctx.config.parts.model_dump())
-    parts = build_parts(ctx["structure"], spec)
     ctx.values["spec"] = spec
+    result = ctx.get("result")
+    if result is not None and result.status == "folded":
+        faces = (result.defects.get("folded") or {}).get("faces", [])
+        msg = (f"no panels or beams built: the optimized mesh has {len(faces)} folded face(s) "
+               f"{list(faces)[:8]} (dented or flipped; no glass can be cut from them); see mesh.obj "
+               "and report.json")
+        ctx.values["parts"] = None
+        ctx.values["cad_skipped"] = msg
+        ctx.notes.append(msg)
+        return "skipped: folded panels"
+    parts = build_parts(ctx["structure"], spec)
     ctx.values["parts"] = parts
     counts = {k: sum(len(g) for g in parts.of_kind(k)) for k in ("panel", "beam", "node")}
     return ", ".join(f"{n} {k}s" for k, n in counts.items())
@@ -193,6 +207,9 @@ def stage_exports(ctx) -> str:
             ctx.files[name] = {"what": f"offset layer at {d:g} mm"}
     from fabricate import export
 
+    if ctx.get("parts") is None:  # the CAD stage built nothing (folded panels): meshes only
+        ctx.values["check"] = {"pass": None, "mode": "off", "checks": {}, "skipped": ctx.get("cad_skipped")}
+        return f"{len(ctx.files)} files (no CAD files: {ctx.get('cad_skipped')})"
     wanted = [(key, fname, fn) for key, fname, fn in EXPORTS if getattr(cfg.outputs, key)]
     for key, fname, fn in wanted:
         ctx.progress.advance("exports", 1, fname)

@@ -231,9 +231,10 @@ def test_input_mesh_is_not_changed_and_units_convert(tmp_path, monkeypatch):
     assert read_mesh(tmp_path / "dome_m.obj").V.tolist() == mesh.V.tolist()
 
 
-def test_folded_panels_stop_the_run_before_any_cut_file(tmp_path, capsys):
+def test_folded_panels_write_no_cut_file_and_end_marked(tmp_path, capsys):
     """Planar to tolerance but dented: z = x y meshed along its rulings, noisy boundary fixed.
-    The optimizer says "folded"; the CAD stage refuses to cut such panels and names them."""
+    The optimizer says "folded"; no panel or beam is built and no cut file written, but the mesh,
+    the layers and the report are, marked as a missed tolerance (exit 3), with the faces named."""
     from fabricate.cli import main
     from optimize import optimize_mesh, shapes
     from optimize.io import write_mesh
@@ -245,8 +246,13 @@ def test_folded_panels_stop_the_run_before_any_cut_file(tmp_path, capsys):
     (tmp_path / "f.yaml").write_text("input: {mesh: hypar.obj}\noptimize: {target: pq, fixed: boundary}\n")
     code = main(["run", str(tmp_path / "f.yaml"), "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
-    assert code == 2 and "folded" in err and "panel P" in err
-    assert not (tmp_path / "out" / "f").exists()  # nothing that looks complete
+    assert code == 3 and "folded" in err and "no panels or beams built" in err
+    out = tmp_path / "out" / "f"
+    assert (out / "TOLERANCE_NOT_REACHED.txt").exists() and (out / "mesh.obj").exists()
+    for name in ("model.step", "model.stl", "model.3mf", "outlines.dxf", "outlines.svg", "bom.csv"):
+        assert not (out / name).exists(), name
+    report = json.loads((out / "report.json").read_text())
+    assert report["exit_code"] == 3 and "folded" in report["failed"] and report["parts"] is None
 
 
 def test_design_parameter_error_from_the_config(tmp_path):
