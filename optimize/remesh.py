@@ -98,15 +98,18 @@ class RemeshReport:
 def gradient_operator(mesh: Mesh) -> tuple[sp.csr_matrix, np.ndarray]:
     """Per-triangle gradient ``G (3t, n)`` of piecewise linear functions, and triangle areas ``(t,)``.
 
-    Row ``3 f + c`` is coordinate ``c`` of the (constant) gradient in triangle ``f``.
+    Row ``3 f + c`` is coordinate ``c`` of the (constant) gradient in triangle ``f``.  A
+    degenerate triangle (area below 1e-12 of the mean, e.g. three collinear points in a
+    modeller's export) has no gradient: its rows are zero and its area counts as 0.
     """
     V, F = mesh.V, mesh.F
     nf, _, _, area = face_frames(mesh)
+    area = np.where(area > 1e-12 * area.mean(), area, 0.0)
     rows, cols, vals = [], [], []
     t = np.arange(len(F))
     for k in range(3):  # gradient of the hat function of corner k: n x (opposite edge) / 2A
         opp = V[F[:, (k + 2) % 3]] - V[F[:, (k + 1) % 3]]
-        g = np.cross(nf, opp) / (2 * area)[:, None]
+        g = np.cross(nf, opp) / np.where(area > 0, 2 * area, np.inf)[:, None]
         for c in range(3):
             rows.append(3 * t + c)
             cols.append(F[:, k])

@@ -381,3 +381,17 @@ def test_a_tube_is_remeshed_into_circles_and_rulings():
     assert np.degrees(np.arcsin(off)).max() < 3.0
     mesh, res, _ = surface_to_mesh(tube, 0.3, side="keep", target="conical", glide_boundary=False)
     assert res.status == "converged", res.message
+
+
+def test_a_degenerate_triangle_in_the_input_is_harmless():
+    """Three collinear points (a modeller's sliver triangle): no gradient there, no NaN anywhere."""
+    import warnings
+
+    s = surfaces.height_field()
+    V, F = s.mesh.V.copy(), s.mesh.F.copy()
+    a, b, c = F[100]
+    V[c] = 0.5 * (V[a] + V[b])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a 0 / 0 would warn
+        mesh, res, _ = surface_to_mesh(Mesh(V, F, name="sliver"), 0.3, target="conical")
+    assert np.isfinite(mesh.V).all() and res.status == "converged", res.message
