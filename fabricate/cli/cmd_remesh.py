@@ -27,7 +27,8 @@ def register(sub) -> None:
                     "become 3-/5-gons or valence-3/5 vertices), then optimize it to a conical (or "
                     "circular) mesh close to the surface.  Exit 3 when the optimization misses a tolerance "
                     "(the mesh is written all the same, and the report says so).")
-    p.add_argument("surface", help="triangle mesh (.obj, .off, .ply): one piece, open (holes allowed)")
+    p.add_argument("surface", help="triangle or polygon mesh (.obj, .off, .ply, .stl): one piece, open "
+                                   "(holes allowed)")
     p.add_argument("--edge-length", type=float, required=True, help="target edge length (model units)")
     p.add_argument("-o", "--output", required=True, help="output quad mesh (.obj, .off, .ply)")
     p.add_argument("--radius", type=float, default=None,

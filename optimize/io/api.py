@@ -21,9 +21,10 @@ from .common import Parsed, decode, pad, where
 from .obj import format_obj, parse_obj
 from .off import format_off, parse_off
 from .ply import ENCODINGS, format_ply, parse_ply
+from .stl import parse_stl
 
-#: Formats by name; ``fmt`` arguments and file extensions use these names.
-FORMATS = ("obj", "off", "ply")
+#: Formats by name; ``fmt`` arguments and file extensions use these names (STL: read only).
+FORMATS = ("obj", "off", "ply", "stl")
 
 
 def detect_format(path: str | os.PathLike, fmt: str | None = None) -> str:
@@ -38,7 +39,8 @@ def detect_format(path: str | os.PathLike, fmt: str | None = None) -> str:
 
 
 def read_mesh(path: str | os.PathLike, *, fmt: str | None = None) -> Mesh:
-    """Read a polygon mesh from an OBJ, OFF or PLY (ascii or binary) file.
+    """Read a polygon mesh from an OBJ, OFF or PLY (ascii or binary) file, or a triangle surface
+    from an STL file (binary or ASCII; corners welded, see :mod:`optimize.io.stl`).
 
     Returns a validated :class:`Mesh` named ``str(path)`` (with notes on
     anything skipped or repaired).  Raises :class:`MeshError` reading
@@ -60,6 +62,8 @@ def read_mesh(path: str | os.PathLike, *, fmt: str | None = None) -> Mesh:
         parsed = parse_obj(decode(data), name)
     elif kind == "off":
         parsed = parse_off(decode(data), name)
+    elif kind == "stl":
+        parsed = parse_stl(data, name)
     else:
         parsed = parse_ply(data, name)
     return build_mesh(parsed, name)
@@ -127,6 +131,9 @@ def write_mesh(path: str | os.PathLike, mesh: Mesh, *, fmt: str | None = None,
     result that missed its tolerance says so in the file itself.
     """
     kind = detect_format(path, fmt)
+    if kind == "stl":
+        raise MeshError(f"{path}: STL is read here, not written (it keeps no connectivity); "
+                        "expected .obj, .off or .ply")
     if kind == "ply":
         payload = format_ply(mesh, ENCODINGS[1] if binary else ENCODINGS[0], comments)
     else:
