@@ -41,7 +41,8 @@ def test_measure_table(cylinder_path, capsys):
 @pytest.mark.parametrize("name,content,fact", [
     ("bad.obj", "v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n", "bad.obj:3: 'x' is not a number"),
     ("short.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n", "short.off:4: file ends after 2 of 4 vertices"),
-    ("mesh.stl", "solid\n", "unknown mesh extension '.stl'"),
+    ("mesh.dae", "<COLLADA/>\n", "unknown mesh extension '.dae'"),
+    ("mesh.stl", "solid\n", "ASCII STL without any 'vertex' line"),
     ("missing.ply", None, "missing.ply: no such file"),
 ])
 def test_malformed_file_gives_one_line_and_exit_2(tmp_path, capsys, name, content, fact):
