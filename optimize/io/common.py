@@ -61,6 +61,12 @@ def decode(data: bytes) -> str:
     return data.decode("utf-8", errors="replace")
 
 
+def one_line(comments) -> list[str]:
+    """Header comments for a writer: line breaks turned into spaces (a comment is one line in every
+    format), ASCII."""
+    return [" ".join(str(c).split()).encode("ascii", "replace").decode("ascii") for c in comments]
+
+
 def is_count(token: str) -> bool:
     """True for a non-negative decimal integer written in ASCII digits."""
     return token.isascii() and token.isdigit()

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MeshError
-from .common import Parsed, face_lists, fail, to_floats, to_ints, where
+from .common import Parsed, face_lists, fail, one_line, to_floats, to_ints, where
 
 #: Keywords of the OBJ format that carry nothing a polygon mesh needs.
 IGNORED = frozenset("""vt vn vp g o s usemtl mtllib l p cstype deg bmat step curv curv2 surf
@@ -110,12 +110,7 @@ def format_obj(mesh, comments=()) -> str:
     """OBJ text of ``mesh``: ``%.17g`` vertices, 1-based faces in mesh order; ``comments`` (one-line
     strings) follow the first comment line."""
     head = f"# {mesh.n_vertices} vertices, {mesh.n_faces} faces (written by conical-fab)\n"
-    head += "".join(f"# {c}\n" for c in _one_line(comments))
+    head += "".join(f"# {c}\n" for c in one_line(comments))
     vs = "".join("v %.17g %.17g %.17g\n" % tuple(r) for r in mesh.V.tolist())
     fs = "".join("f " + " ".join(map(str, f)) + "\n" for f in face_lists(mesh, base=1))
     return head + vs + fs
-
-
-def _one_line(comments) -> list[str]:
-    """Comments with line breaks turned into spaces (a comment is one line in every format), ASCII."""
-    return [" ".join(str(c).split()).encode("ascii", "replace").decode("ascii") for c in comments]

@@ -15,7 +15,7 @@ import re
 
 import numpy as np
 
-from .common import BadToken, Parsed, Tokens, face_lists, fail, show, to_floats, to_ints, where
+from .common import BadToken, Parsed, Tokens, face_lists, fail, one_line, show, to_floats, to_ints, where
 
 _HEADER = re.compile(r"^(ST)?(C)?(N)?(4)?(n)?OFF$")
 
@@ -86,9 +86,7 @@ def _header(tk: Tokens, path: str) -> int:
 def format_off(mesh, comments=()) -> str:
     """OFF text of ``mesh``: ``%.17g`` vertices, 0-based faces in mesh order; ``comments`` as ``#``
     lines after the keyword."""
-    from .obj import _one_line
-
-    head = "OFF\n" + "".join(f"# {c}\n" for c in _one_line(comments))
+    head = "OFF\n" + "".join(f"# {c}\n" for c in one_line(comments))
     head += f"{mesh.n_vertices} {mesh.n_faces} {len(mesh.topology.edges)}\n"
     vs = "".join("%.17g %.17g %.17g\n" % tuple(r) for r in mesh.V.tolist())
     fs = "".join(f"{len(f)} " + " ".join(map(str, f)) + "\n" for f in face_lists(mesh, base=0))

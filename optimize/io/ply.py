@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MeshError
-from .common import Parsed, Tokens, face_lists, fail, is_count, show, to_floats, to_ints, where
+from .common import Parsed, Tokens, face_lists, fail, is_count, one_line, show, to_floats, to_ints, where
 
 ENCODINGS = ("ascii", "binary_little_endian", "binary_big_endian")
 _TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
@@ -332,9 +332,7 @@ def format_ply(mesh, encoding: str = "binary_little_endian", comments=()) -> byt
         raise ValueError(f"PLY encoding {encoding!r}, expected one of {ENCODINGS}")
     sizes = np.asarray(mesh.face_sizes, dtype=np.int64)
     count_type = "uchar" if sizes.max(initial=0) <= 255 else "uint"
-    from .obj import _one_line
-
-    extra = "".join(f"comment {c}\n" for c in _one_line(comments))
+    extra = "".join(f"comment {c}\n" for c in one_line(comments))
     head = (f"ply\nformat {encoding} 1.0\ncomment written by conical-fab\n{extra}"
             f"element vertex {mesh.n_vertices}\nproperty double x\nproperty double y\n"
             f"property double z\nelement face {mesh.n_faces}\n"

@@ -39,7 +39,7 @@ def _binary(data: bytes, n: int, path: str) -> Parsed:
 
 def _ascii(text: str, path: str) -> Parsed:
     tk = Tokens(text, comments=False)
-    words = np.array([t.lower() for t in tk.tokens])
+    words = np.char.lower(np.asarray(tk.tokens, dtype=str))
     at = np.nonzero(words == "vertex")[0]
     loops = np.nonzero(words == "loop")[0]  # "outer loop": one per facet
     if not len(at):
