@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import MeshError
-from .isolines import cycle_edges
+from .isolines import least_per_key
 from .measures import face_areas
 from .mesh import Mesh
 
@@ -71,25 +71,23 @@ def snap_slivers(mesh: Mesh, corners: np.ndarray, edge_length: float, *, min_are
         # 2. inner vertices of small boundary cells go to their nearest boundary neighbour in the cell
         small = (face_areas(current) < min_area * edge_length ** 2) & on_ring[np.maximum(F, 0)].any(1)
         if np.any(small):
-            _, a, b = cycle_edges(F[small])
+            sel = small[t.corner_face]  # the edges of the small cells, from the mesh's own corners
+            hs, a, b = t.corner_face[sel], t.corner_vertex[sel], t.corner_next_vertex[sel]
             i, r = np.concatenate([a, b]), np.concatenate([b, a])
             pick = ~on_ring[i] & on_ring[r] & (rep[r] == r)
             i, r = i[pick], r[pick]
             if len(i):
-                o = np.lexsort((np.linalg.norm(V[i] - V[r], axis=1), i))
-                first = np.insert(i[o][1:] != i[o][:-1], 0, True)
-                rep[i[o][first]] = r[o][first]
+                k = least_per_key(i, np.linalg.norm(V[i] - V[r], axis=1))
+                rep[i[k]] = r[k]
             # a small cell with no inner vertex (it cuts a corner of the boundary): its shortest
             # edge goes, the end that is not a corner onto the other
-            hs, a, b = cycle_edges(F[small])
-            bare = ~np.bincount(hs, ~on_ring[a], minlength=int(small.sum())).astype(bool)
+            bare = ~np.bincount(hs, ~on_ring[a], minlength=len(F)).astype(bool)
             ok = bare[hs] & ~(is_corner[a] & is_corner[b]) & (rep[a] == a) & (rep[b] == b)
             if ok.any():
                 hs, a, b = hs[ok], a[ok], b[ok]
                 a, b = np.where(is_corner[a], a, b), np.where(is_corner[a], b, a)  # (kept, dropped)
-                o = np.lexsort((np.linalg.norm(V[a] - V[b], axis=1), hs))
-                first = np.insert(hs[o][1:] != hs[o][:-1], 0, True)
-                a, b = a[o][first], b[o][first]
+                k = least_per_key(hs, np.linalg.norm(V[a] - V[b], axis=1))
+                a, b = a[k], b[k]
                 _, u = np.unique(b, return_index=True)
                 a, b = a[u], b[u]
                 keep = ~np.isin(a, b)

@@ -368,11 +368,9 @@ def _domain_faces(P, E, ring, node_loop):
     """
     F, area = planar_faces(P, E)
     N = len(P)
-    a, b = F, np.roll(F, -1, axis=1)
-    last = (F >= 0).sum(1) - 1
-    b[np.arange(len(F)), last] = F[:, 0]
+    face, a, b = cycle_edges(F)
     against = ring[_ring_next(ring, node_loop)] * N + ring  # directed (next -> node)
-    hole = (np.isin(a * N + b, against) & (a >= 0)).any(1)
+    hole = np.bincount(face, np.isin(a * N + b, against), minlength=len(F)) > 0
     return F[~hole], area[~hole]
 
 
@@ -412,6 +410,12 @@ def _cleanup(P, E, ring, node_loop, is_corner, min_area, merge, rounds: int = 8)
     return E, ring
 
 
+def least_per_key(key: np.ndarray, value: np.ndarray) -> np.ndarray:
+    """(u,) int: for each distinct ``key (k,)``, the position of its smallest ``value (k,)``."""
+    o = np.lexsort((value, key))
+    return o[np.insert(key[o][1:] != key[o][:-1], 0, True)]
+
+
 def cycle_edges(F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Directed edges of the ``-1`` padded cycles ``F (f, k)``: ``(cell (h,), a (h,), b (h,))``."""
     a, b = F, np.roll(F, -1, axis=1)
@@ -437,10 +441,9 @@ def _snap_small(P, E, cells, on_ring):
     i, r = i[pick], r[pick]
     if not len(i):
         return E, False
-    o = np.lexsort((np.linalg.norm(P[i] - P[r], axis=1), i))
-    first = np.insert(i[o][1:] != i[o][:-1], 0, True)
+    k = least_per_key(i, np.linalg.norm(P[i] - P[r], axis=1))
     rep = np.arange(len(P))
-    rep[i[o][first]] = r[o][first]
+    rep[i[k]] = r[k]
     E = rep[E]
     return np.unique(np.sort(E[E[:, 0] != E[:, 1]], axis=1), axis=0), True
 
@@ -456,6 +459,4 @@ def _merge_small(P, E, cells, ring, node_loop):
     if not len(key):
         return E
     length = np.linalg.norm(P[key // N] - P[key % N], axis=1)
-    o = np.lexsort((-length, fa))
-    first = np.insert(fa[o][1:] != fa[o][:-1], 0, True)
-    return E[~np.isin(E[:, 0] * N + E[:, 1], key[o][first])]
+    return E[~np.isin(E[:, 0] * N + E[:, 1], key[least_per_key(fa, -length)])]
