@@ -206,7 +206,7 @@ def comparison(args):
         # in-run baselines of our own: the previous defaults (SciPy SuperLU; for conical the
         # auxiliary-variable formulation) on the same mesh
         t = mesh.topology
-        irregular = bool(np.any(~t.is_boundary_vertex & (t.star_size != 4)))
+        irregular = bool(t.interior_irregular.size)
         base = [("ours-aux", dict(formulation="auxiliary"))] if target == "conical" else []
         if target == "conical" and irregular:  # nax: no node axes (cones at valence 4 only, beams twist)
             base.append(("ours-nax", dict(torsion_free_beams=False)))

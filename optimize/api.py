@@ -133,7 +133,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     if torsion_free_beams not in ("auto", True, False):
         raise ConfigError(f"torsion_free_beams: {torsion_free_beams!r}, expected 'auto', true or false")
     beams = (target == "conical" and unknowns == "vertices"
-             and (bool(np.any(~t.is_boundary_vertex & (t.star_size != 4))) if torsion_free_beams == "auto"
+             and (bool(t.interior_irregular.size) if torsion_free_beams == "auto"
                   else bool(torsion_free_beams)))
     form = Formulation(norm, target, unknowns, beams=beams)
     x0 = form.start(norm.V)

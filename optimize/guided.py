@@ -67,8 +67,8 @@ class Glide:
 
     vertices: np.ndarray
     curve: glide_mod.BoundaryCurve
-    edges: np.ndarray | None = None  # (e, 2) edges at gliding vertices, kept above ``floor (e,)``
-    floor: np.ndarray | None = None
+    edges: np.ndarray  # (e, 2) boundary edges at gliding vertices, kept above ``floor (e,)``
+    floor: np.ndarray
 
 
 @dataclass
@@ -182,7 +182,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             rg, Jg = glide_mod.terms(x, L, glide.vertices, glide.curve, gfoot)
             rs.append(rg)
             Js.append(Jg)
-            if glide.edges is not None and len(glide.edges):
+            if len(glide.edges):
                 re, Je = edgefloor.terms(x, L, glide.edges, glide.floor)
                 rs.append(re)
                 Js.append(Je)
@@ -198,7 +198,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         if glide is not None:
             Y, _ = glide.curve.closest(V[glide.vertices])
             out["glide"] = np.linalg.norm(V[glide.vertices] - Y, axis=1)  # mean edge length is 1
-            if glide.edges is not None and len(glide.edges):
+            if len(glide.edges):
                 out["short_edge"] = edgefloor.shortfall(V, glide.edges, glide.floor)
         timings["measure"] += time.perf_counter() - tm
         return out

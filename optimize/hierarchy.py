@@ -221,14 +221,13 @@ def _optimize_strips(mesh: Mesh, target: str, kwargs: dict):
 
 def _merge(mesh: Mesh, results: list, blocks: list, target: str, tol: Tolerances):
     """One OptimizeResult for a mesh whose components were optimized separately."""
-    from .result import OptimizeResult
+    from .result import STATUSES, OptimizeResult
 
     V = mesh.V.copy()
     for r, idx in zip(results, blocks):
         V[idx] = r.mesh.V
     out = mesh.with_vertices(V)
-    order = ("converged", "folded", "stalled", "max_iter", "diverged")
-    status = max((r.status for r in results), key=order.index)
+    status = max((r.status for r in results), key=STATUSES.index)  # the worst one
     timings: dict = {}
     for r in results:
         for key, val in r.timings.items():

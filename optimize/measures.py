@@ -114,14 +114,15 @@ def _vector_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
 COLLAPSED = 1e-3  # an edge shorter than this fraction of its start length has collapsed
 
 
-def corner_turns(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
+def corner_turns(mesh: Mesh, V: np.ndarray | None = None, normals: np.ndarray | None = None) -> np.ndarray:
     """(c,) float: signed sine of each corner angle about its face's normal (Newell):
-    positive at a convex corner, negative at a reflex one (topology corner order)."""
+    positive at a convex corner, negative at a reflex one (topology corner order).
+    ``normals (m, 3)``: the face normals at ``V`` when the caller has them already."""
     V = mesh.V if V is None else V
     t = mesh.topology
     P = V[t.corner_vertex]
     u, w = V[t.corner_next_vertex] - P, V[t.corner_prev_vertex] - P
-    N = face_normals(mesh, V)[t.corner_face]
+    N = (face_normals(mesh, V) if normals is None else normals)[t.corner_face]
     lengths = np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1), 1e-300)
     return np.einsum("ij,ij->i", np.cross(u, w), N) / lengths
 
@@ -135,14 +136,15 @@ def folded_faces(mesh: Mesh, V: np.ndarray, V0: np.ndarray | None = None, tol: f
     cannot be cut from glass, so the optimizer reports it."""
     V0 = mesh.V if V0 is None else V0
     t = mesh.topology
-    before, after = corner_turns(mesh, V0), corner_turns(mesh, V)
+    N0, N1 = face_normals(mesh, V0), face_normals(mesh, V)
+    before, after = corner_turns(mesh, V0, N0), corner_turns(mesh, V, N1)
     bad = np.zeros(mesh.n_faces, dtype=bool)
     np.logical_or.at(bad, t.corner_face, (before > -tol) & (after < -tol))
     nxt = t.corner_next_vertex
     l0 = np.linalg.norm(V0[nxt] - V0[t.corner_vertex], axis=1)
     l1 = np.linalg.norm(V[nxt] - V[t.corner_vertex], axis=1)
     np.logical_or.at(bad, t.corner_face, l1 < COLLAPSED * l0)
-    flipped = np.einsum("ij,ij->i", face_normals(mesh, V0), face_normals(mesh, V)) < 0
+    flipped = np.einsum("ij,ij->i", N0, N1) < 0
     return bad | flipped
 
 
@@ -231,7 +233,7 @@ def summary(mesh: Mesh, tol: Tolerances = DEFAULT) -> dict:
             "face_sizes": {str(k): int(c) for k, c in enumerate(sizes) if c},
             "edges": int(len(t.edges)), "boundary_loops": len(t.boundary_loops),
             "components": t.n_components, "orientable": t.orientable,
-            "irregular_vertices": int(np.sum(~t.is_boundary_vertex & (t.valence != 4))),
+            "irregular_vertices": int(t.interior_irregular.size),
             "bbox_diagonal": mesh.bbox_diagonal(),
         },
         "planarity": _stats(plan, tol.planarity),

@@ -201,6 +201,11 @@ class Topology:
         return np.nonzero(~self.is_boundary_vertex & (self.star_size == 4))[0]
 
     @cached_property
+    def interior_irregular(self) -> np.ndarray:
+        """(q,) int: interior vertices with other than four faces (valence 3, 5, ...: irregular nodes)."""
+        return np.nonzero(~self.is_boundary_vertex & (self.star_size != 4))[0]
+
+    @cached_property
     def fair_triples(self) -> np.ndarray:
         """(t, 3) int: straight continuations ``(a, v, b)`` of mesh polylines."""
         inner = self.interior_valence4
