@@ -96,14 +96,15 @@ class NormalSolver:
     blocks : (m, b) int or None
         For ``"eliminate"``: the unknowns forming independent diagonal blocks
         (``-1`` padded), e.g. each face's normal.
-    reuse : try CG preconditioned by the last factor before factoring anew.
+    reuse : try CG preconditioned by the last factor before factoring anew (default: yes,
+        except with PARDISO, whose numeric refactorization is cheap).
     cg_rtol : relative residual the CG solve must reach (an inexact Gauss-Newton
         step; the solver's acceptance test guards the outer iteration).
     cg_maxiter : CG step budget; None = about half the last factorization time.
     """
 
     def __init__(self, backend: str = "auto", blocks: np.ndarray | None = None,
-                 reuse: bool = True, cg_rtol: float = 1e-6, cg_maxiter: int | None = None):
+                 reuse: bool | None = None, cg_rtol: float = 1e-6, cg_maxiter: int | None = None):
         if backend not in BACKENDS:
             raise ValueError(f"linear solver backend {backend!r}, expected one of {BACKENDS}")
         backend = resolve_backend(backend)
@@ -111,8 +112,8 @@ class NormalSolver:
             backend = "superlu"
         self.backend = backend
         self._pardiso = None
-        if backend == "pardiso":  # a numeric refactorization costs only ~15 solves: CG rarely pays
-            reuse = False
+        if reuse is None:  # PARDISO: a numeric refactorization costs only ~15 solves, CG rarely pays
+            reuse = backend != "pardiso"
         self.blocks = blocks
         self._factor = None
         self.reuse = reuse

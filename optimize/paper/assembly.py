@@ -59,7 +59,7 @@ class GramBand:
         """:meth:`assemble` with ``H = w1 K^T K + w2 C^T C`` (closeness rows with unit normals
         ``N (n, 3)``; ``Problem.hessian_data``), without forming ``H`` on its pattern."""
         p = self.problem
-        if p is None or kernels.get() is None:
+        if kernels.get() is None:  # needs ``problem`` (given by gram_band)
             return self.assemble(a_data, p.hessian_data(w1, w2, N))
         out = w1 * self.fair_band
         if w2 > 0:
@@ -193,7 +193,6 @@ class BandKKT:
 
     def __init__(self, band: np.ndarray | None, order: BandOrder, norm1: float, lower=None, refill=None):
         self.band, self.order, self.norm1 = band, order, float(norm1)
-        self.ok = True
         self._ldl = self._lu = None
         self._refill = refill  # (KKTBand, its factor arguments): builds ``band`` when the LU is needed
         k = kernels.get()

@@ -96,7 +96,6 @@ def band_order(rows: np.ndarray, cols: np.ndarray, n: int, pivoting: bool = Fals
             best = order
     if best.bw > 2 * np.sqrt(n) and (pivoting or n * (best.bw + 1) ** 2 > BAND_FLOPS):
         return None
-    best.ext = np.full(n, best.bw, dtype=np.int64)
     best.set_envelope(S.row, S.col)
     return best
 

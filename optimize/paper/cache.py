@@ -82,8 +82,3 @@ def _take(mesh, target, reference, fixed, options):
         per_mesh[key] = (p, mesh.V.copy(), mesh.F.copy(), reference,
                          None if reference is None else reference.V.copy(), lock)
     return p, lock
-
-
-def clear(mesh: Mesh) -> None:
-    """Forget the problems kept for ``mesh``."""
-    vars(mesh).pop(SLOT, None)

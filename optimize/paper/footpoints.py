@@ -104,7 +104,7 @@ class Footpoints:
         self.tri = tri
         if k is not None:
             r = self.ref
-            return Y, k.interpolated_normals(Y, tri, r._A, r._B, r._C, self.T, r.vertex_normals, r.normals)
+            return Y, k.interpolated_normals(Y, tri, self.A, self.B, self.C, self.T, r.vertex_normals, r.normals)
         return Y, self.ref._interpolated_normals(Y, tri)
 
     def _pairs(self, P: np.ndarray, o: np.ndarray, f: np.ndarray):

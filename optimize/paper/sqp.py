@@ -146,7 +146,7 @@ class KKTFactor:
 
     def solve(self, b: np.ndarray) -> tuple[np.ndarray, str]:
         """``x (k + r,)`` and how it was solved: "banded", "lu" or "lsqr"."""
-        if self.lu is not None and self.lu.ok:
+        if self.lu is not None:
             bn = float(np.linalg.norm(b))
             if bn == 0.0:
                 return np.zeros_like(b), "banded"
