@@ -161,18 +161,14 @@ def main() -> None:
 
 def fine_surface(h: float) -> None:
     """A 15k-vertex dome: frames at sampled vertices (the default) against every vertex, same run."""
-    import optimize.remesh as rm
+    from optimize.remesh import SAMPLE
 
     surf = surfaces.height_field(turned_quadric(-0.10, -0.04, 30), n=(141, 106))
     rows = []
-    for label, sample in (("sampled", rm.SAMPLE), ("every vertex", 0.0)):
-        keep, rm.SAMPLE = rm.SAMPLE, sample
-        try:
-            t0 = time.perf_counter()
-            quads, rep = remesh(surf.mesh, h, side=surf.side, with_report=True)
-            dt = time.perf_counter() - t0
-        finally:
-            rm.SAMPLE = keep
+    for label, sample in (("sampled", SAMPLE), ("every vertex", 0.0)):
+        t0 = time.perf_counter()
+        quads, rep = remesh(surf.mesh, h, side=surf.side, sample=sample, with_report=True)
+        dt = time.perf_counter() - t0
         c0 = conical_defect(quads)
         rows.append(dt)
         print(f"fine dome ({surf.mesh.n_vertices} vertices), principal frames at {label}: "

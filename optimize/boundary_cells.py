@@ -19,7 +19,7 @@ import numpy as np
 
 from .errors import MeshError
 from .isolines import least_per_key
-from .measures import face_areas
+from .measures import edge_lengths, face_areas
 from .mesh import Mesh
 
 
@@ -60,7 +60,7 @@ def snap_slivers(mesh: Mesh, corners: np.ndarray, edge_length: float, *, min_are
         rep = np.arange(len(V))
         # 1. short boundary edges: the non-corner end goes to the other end
         be = t.edges[t.is_boundary_edge]
-        short = np.linalg.norm(V[be[:, 0]] - V[be[:, 1]], axis=1) < merge * edge_length
+        short = edge_lengths(current)[t.is_boundary_edge] < merge * edge_length
         be = be[short & ~(is_corner[be[:, 0]] & is_corner[be[:, 1]])]
         be = np.where(is_corner[be[:, 1:2]], be[:, ::-1], be)  # (kept, dropped)
         if len(be):

@@ -341,10 +341,10 @@ def _collapse_short(P, E, ring, node_loop, is_corner, merge):
     E = rep[E]
     E = np.unique(np.sort(E[E[:, 0] != E[:, 1]], axis=1), axis=0)
     ring = rep[ring]
-    return E, ring[ring != ring[_ring_next(ring, node_loop)]]
+    return E, ring[ring != ring[ring_next(ring, node_loop)]]
 
 
-def _ring_next(ring: np.ndarray, node_loop: np.ndarray) -> np.ndarray:
+def ring_next(ring: np.ndarray, node_loop: np.ndarray) -> np.ndarray:
     """(b,) position in ``ring`` of the next node along the same loop (rings are stored loop after loop)."""
     lab = node_loop[ring]
     k = np.arange(len(ring))
@@ -356,7 +356,7 @@ def _ring_next(ring: np.ndarray, node_loop: np.ndarray) -> np.ndarray:
 
 def _ring_edges(ring: np.ndarray, node_loop: np.ndarray) -> np.ndarray:
     """(b, 2) sorted edges between consecutive boundary nodes of every loop."""
-    E = np.sort(np.stack([ring, ring[_ring_next(ring, node_loop)]], 1), axis=1)
+    E = np.sort(np.stack([ring, ring[ring_next(ring, node_loop)]], 1), axis=1)
     return E[E[:, 0] != E[:, 1]]
 
 
@@ -369,7 +369,7 @@ def _domain_faces(P, E, ring, node_loop):
     F, area = planar_faces(P, E)
     N = len(P)
     face, a, b = cycle_edges(F)
-    against = ring[_ring_next(ring, node_loop)] * N + ring  # directed (next -> node)
+    against = ring[ring_next(ring, node_loop)] * N + ring  # directed (next -> node)
     hole = np.bincount(face, np.isin(a * N + b, against), minlength=len(F)) > 0
     return F[~hole], area[~hole]
 

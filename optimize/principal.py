@@ -111,10 +111,8 @@ def oriented_surface(V, T, side=None, name: str = "surface") -> tuple[Mesh, np.n
     comp = mesh.topology.component[F[:, 0]]
     if closed:
         score = np.bincount(comp, np.einsum("ij,ij->i", fn, P[F[:, 0]]))  # 6 x signed volume
-        total = np.bincount(comp, np.linalg.norm(fn, axis=1) * np.linalg.norm(P[F[:, 0]] - P.mean(0), axis=1))
     elif isinstance(side, str) and side == "keep":  # the file's orientation: normals point outside
         score = np.ones(comp.max() + 1)
-        total = score
     else:
         s = _unit_side(side)
         score = -np.bincount(comp, fn @ s)

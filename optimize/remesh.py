@@ -193,17 +193,15 @@ def as_triangles(surface) -> tuple[Mesh, int]:
     d13 = np.linalg.norm(V[q[:, 3]] - V[q[:, 1]], axis=1)
     a = d02 <= d13
     tris += [q[a][:, [0, 1, 2]], q[a][:, [0, 2, 3]], q[~a][:, [0, 1, 3]], q[~a][:, [1, 2, 3]]]
-    big = F[sizes > 4]
-    nb = sizes[sizes > 4]
-    for j in range(1, F.shape[1] - 1):  # fan of the larger polygons, one corner slot at a time
-        sel = nb > j + 1
-        tris.append(np.stack([big[sel, 0], big[sel, j], big[sel, j + 1]], axis=1))
+    if np.any(sizes > 4):  # larger polygons: the mesh's own fan triangulation
+        tris.append(Mesh(V, F[sizes > 4], name=mesh.name, check=False).triangulate())
     out = Mesh(V, np.concatenate(tris), name=mesh.name)
     return out, int(np.sum(sizes > 3))
 
 
 def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, side=None,
            smoothing: float = 1.0, singularities: str = "auto", irregular: str = "faces",
+           sample: float = SAMPLE,
            with_report: bool = False, name: str | None = None):
     """Quad-dominant mesh of a triangle surface (a disk, or a disk with holes) along its principal curvature lines.
 
@@ -226,6 +224,8 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
         five faces (measured, boundary free: the monkey saddle converges in 8
         iterations with faces, 25 with vertices; with a hole, 9 iterations
         against a stall).
+    sample : principal frames at vertices about ``sample * r`` apart on a finer surface
+        (:func:`sample_vertices`; 0: at every vertex).
     Returns the Mesh (faces counter-clockwise about the outward normal; the
     notes say what was approximated), or ``(Mesh, RemeshReport)`` with ``with_report``.
     Raises MeshError (closed, several components, or a folded seamless
@@ -253,7 +253,7 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
                         "(a disk, or a disk with holes); remesh each component on its own")
     r = default_radius(mesh, edge_length) if radius is None else float(radius)
     rep = RemeshReport(radius=r, edge_length_target=float(edge_length), triangulated=split)
-    at = sample_vertices(mesh, SAMPLE * r)
+    at = sample_vertices(mesh, sample * r)
     fr = principal_frames(mesh, None, r, side=side, at=at)
     rep.principal_samples = len(at)
     rep.timings["principal"] = time.perf_counter() - t0
@@ -263,12 +263,10 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
     conf[at] = confidence(fr.k1, fr.k2) * (mesh.n_vertices / len(at))
     dirs = tangent_frames(N)[0]
     dirs[at] = fr.k1dir
-    for grow in (1, 2, 4, 8):  # smooth harder until no singularity is left (or give up)
+    for grow in (1,) if singularities == "place" else (1, 2, 4, 8):  # smooth harder while singular
         arms = smooth_cross_field(mesh, N, dirs, conf, grow * smoothing * edge_length)
         X1, index = face_crosses(mesh, arms)
         if not index.any():
-            break
-        if singularities == "place":
             break
     rep.smoothing = grow * smoothing
     if index.any() and singularities != "smooth":

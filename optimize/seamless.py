@@ -43,7 +43,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import connected_components, dijkstra
 
-from .crossfield import face_frames
+from .crossfield import comb, face_frames
 from .errors import MeshError
 from .mesh import Mesh
 
@@ -301,8 +301,8 @@ def parametrize(mesh: Mesh, X1: np.ndarray, h: float, gradient, place: str = "ne
     vertices and their ``index (s,)`` (quarter turns), ``cut (c, 2)`` edges,
     ``mismatch`` (edges of the cut mesh where the combed field still jumps).
     """
-    from .crossfield import comb  # the combing sweep lives with the cross fields
-
+    if place not in ("nearest", "faces", "vertices"):
+        raise ValueError(f"place = {place!r}, expected 'nearest', 'faces' or 'vertices'")
     t = mesh.topology
     vi = vertex_indices(mesh, X1)
     singular = np.nonzero(vi)[0]
@@ -319,8 +319,6 @@ def parametrize(mesh: Mesh, X1: np.ndarray, h: float, gradient, place: str = "ne
     rot = np.concatenate([r[c], r[c]])
     group = np.concatenate([np.arange(len(c)), np.arange(len(c))])
     G, area = gradient(cm)
-    if place not in ("nearest", "faces", "vertices"):
-        raise ValueError(f"place = {place!r}, expected 'nearest', 'faces' or 'vertices'")
     parity = np.full(len(pairs), -1)
     if place != "nearest":  # the pairs of a singular vertex with itself: its own transition's fixed point
         parity[(pairs[:, 0] == pairs[:, 1]) & (rot % 2 == 1)] = 1 if place == "faces" else 0

@@ -31,7 +31,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from .errors import MeshError
-from .isolines import cycle_vertices, face_cycles
+from .isolines import ring_next, cycle_vertices, face_cycles
 from .mesh import Mesh
 from .seamless import rotation
 
@@ -47,13 +47,6 @@ def _bary(A: np.ndarray, Q: np.ndarray) -> np.ndarray:
     l1 = (q[:, 0] * e2[:, 1] - q[:, 1] * e2[:, 0]) / d
     l2 = (e1[:, 0] * q[:, 1] - e1[:, 1] * q[:, 0]) / d
     return np.stack([1 - l1 - l2, l1, l2], 1)
-
-
-def _jacobian(V3: np.ndarray, A: np.ndarray) -> np.ndarray:
-    """(k, 3, 2) map from parameter directions to 3D in triangles ``V3 (k, 3, 3)``, ``A (k, 3, 2)``."""
-    D3 = np.stack([V3[:, 1] - V3[:, 0], V3[:, 2] - V3[:, 0]], 2)  # (k, 3, 2)
-    D2 = np.stack([A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]], 2)  # (k, 2, 2)
-    return D3 @ np.linalg.inv(D2)
 
 
 def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray, *, corner_angle: float = 35.0,
@@ -150,7 +143,7 @@ def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray,
     sign = np.einsum("ij,ij->i", td, np.ones_like(td))
     nxt_int = np.where(sign > 0, np.floor(along_c + 1e-9) + 1, np.ceil(along_c - 1e-9) - 1)
     rem = np.abs(nxt_int - along_c)
-    end_face, end_p, end_kind, end_dir, left = _march(t, UVc, rot, shift, tf, tp, td, rem, max_steps)
+    end_face, end_p, end_kind, _, left = _march(t, UVc, rot, shift, tf, tp, td, rem, max_steps)
     end3 = _point(UVc, V3, end_face, end_p)
     # directions at both ends for the angular order around the nodes: chords to the points a
     # little way along the trace (a Jacobian at the node itself misleads where the parameters
@@ -182,10 +175,7 @@ def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray,
     # ring edges, loop by loop along the boundary direction
     o = np.lexsort((ring_pos, ring_lab))
     r_ids, r_lab = ring_ids[o], ring_lab[o]
-    nxt = np.arange(len(r_ids)) + 1
-    last = np.append(r_lab[1:] != r_lab[:-1], True)
-    firsts = np.maximum.accumulate(np.where(np.insert(r_lab[1:] != r_lab[:-1], 0, True), np.arange(len(r_ids)), 0))
-    nxt = np.where(last, firsts, nxt)
+    nxt = ring_next(np.arange(len(r_ids)), r_lab)  # the next node along the same loop
     if np.any(np.bincount(r_lab, minlength=len(loops)) < 3):
         raise MeshError(f"{mesh.name}: a boundary loop is crossed by fewer than 3 iso-lines (a hole inside "
                         "one cell); expected a smaller edge length")
@@ -277,10 +267,10 @@ def _march(t, UVc, rot, shift, f, p, d, rem, max_steps):
     return f, p, kind, d, rem
 
 
-def _prune_dangling(src: np.ndarray, dst: np.ndarray, n: int, keep: np.ndarray | None = None) -> np.ndarray:
-    """(e,) bool: the edges ``src -> dst`` (those in ``keep``, default all) left after repeatedly
+def _prune_dangling(src: np.ndarray, dst: np.ndarray, n: int, keep: np.ndarray) -> np.ndarray:
+    """(e,) bool: the edges ``src -> dst`` among ``keep (e,) bool`` left after repeatedly
     removing edges at nodes of degree 1."""
-    keep = np.ones(len(src), dtype=bool) if keep is None else keep.copy()
+    keep = keep.copy()
     while True:  # each pass removes the current dead ends; chains take a few passes
         deg = np.bincount(src[keep], minlength=n) + np.bincount(dst[keep], minlength=n)
         dead = keep & ((deg[src] == 1) | (deg[dst] == 1))

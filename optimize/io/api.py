@@ -138,7 +138,7 @@ def write_mesh(path: str | os.PathLike, mesh: Mesh, *, fmt: str | None = None,
         payload = format_ply(mesh, ENCODINGS[1] if binary else ENCODINGS[0], comments)
     else:
         text = format_obj(mesh, comments) if kind == "obj" else format_off(mesh, comments)
-        payload = text.encode("ascii", errors="replace")
+        payload = text.encode("ascii")  # numbers, and comments made ASCII by one_line
     try:
         with atomic_open(path, "wb") as fh:
             fh.write(payload)
