@@ -192,8 +192,8 @@ class Formulation:
         a = self.layout.view(x, "node_axes")
         unit_x = x.copy()
         self.layout.view(unit_x, "node_axes")[:] = a / np.linalg.norm(a, axis=1, keepdims=True)
-        rc, _ = nodeaxes.cone_terms(unit_x, self.layout, self.mesh, self.axis_vertices)
-        rb, _ = nodeaxes.beam_terms(unit_x, self.layout, self.beam_edges, self.axis_row)
+        rc, _ = nodeaxes.cone_terms(unit_x, self.layout, self.mesh, self.axis_vertices, jacobian=False)
+        rb, _ = nodeaxes.beam_terms(unit_x, self.layout, self.beam_edges, self.axis_row, jacobian=False)
         return {"node_cone": np.abs(rc), "beam": np.abs(rb)}
 
     def face_blocks(self) -> np.ndarray | None:

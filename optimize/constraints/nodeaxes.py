@@ -34,6 +34,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..measures import _vector_areas, face_normals
 from ..mesh import Mesh
 from ..variables import Layout
 
@@ -59,31 +60,32 @@ def _pairs(mesh: Mesh, cv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return owner, S[owner, slot]
 
 
-def _vector_areas(mesh: Mesh, V: np.ndarray, faces: np.ndarray):
-    """Newell vector areas ``N (r, 3)`` of ``faces (r,)`` and per corner ``w = v_(j+1) - v_(j-1)``
-    ``(r, k, 3)`` (zero in padded slots)."""
+def _corner_spans(mesh: Mesh, V: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """``w = v_(j+1) - v_(j-1)`` ``(r, k, 3)`` at every corner of ``faces (r,)`` (zero in padded
+    slots): the derivative of a face's vector area by its corner ``j`` is ``w_j x / 2``."""
     F = mesh.F[faces]
     valid = F >= 0
     size = valid.sum(axis=1)
     j = np.arange(F.shape[1])[None, :]
     nxt = np.take_along_axis(F, (j + 1) % size[:, None], axis=1)
     prv = np.take_along_axis(F, (j - 1) % size[:, None], axis=1)
-    P, Pn, Pp = V[np.maximum(F, 0)], V[np.maximum(nxt, 0)], V[np.maximum(prv, 0)]
-    o = P[:, :1]  # about the first vertex: no loss of precision far from the origin
-    N = 0.5 * np.where(valid[..., None], np.cross(P - o, Pn - o), 0.0).sum(axis=1)
-    return N, np.where(valid[..., None], Pn - Pp, 0.0)
+    return np.where(valid[..., None], V[np.maximum(nxt, 0)] - V[np.maximum(prv, 0)], 0.0)
 
 
-def cone_terms(x: np.ndarray, layout: Layout, mesh: Mesh, cv: np.ndarray):
-    """Cone rows: residual ``(r,)`` and Jacobian ``(r, layout.size)`` for the vertices ``cv``."""
+def cone_terms(x: np.ndarray, layout: Layout, mesh: Mesh, cv: np.ndarray, jacobian: bool = True):
+    """Cone rows: residual ``(r,)`` and Jacobian ``(r, layout.size)`` (None with ``jacobian=False``)
+    for the vertices ``cv``."""
     owner, faces = _pairs(mesh, cv)
     V = layout.view(x, "vertices")
     A, c = layout.view(x, "node_axes"), layout.view(x, "node_cos")
-    N, w = _vector_areas(mesh, V, faces)
+    N = 0.5 * _vector_areas(mesh, V)[faces]  # each face once, then one row per (vertex, face)
     length = np.maximum(np.linalg.norm(N, axis=1), 1e-300)
     n = N / length[:, None]
     a = A[owner]
     r = np.einsum("ij,ij->i", n, a) - c[owner]
+    if not jacobian:
+        return r, None
+    w = _corner_spans(mesh, V, faces)
     b = (a - np.einsum("ij,ij->i", a, n)[:, None] * n) / (2.0 * length[:, None])
     gv = np.cross(w, b[:, None, :])  # (r, k, 3)
     F = mesh.F[faces]
@@ -97,14 +99,17 @@ def cone_terms(x: np.ndarray, layout: Layout, mesh: Mesh, cv: np.ndarray):
     return r, sp.csr_matrix((vals, (rows, cols)), shape=(len(r), layout.size))
 
 
-def beam_terms(x: np.ndarray, layout: Layout, E: np.ndarray, pos: np.ndarray):
-    """Beam rows for edges ``E (k, 2)``; ``pos (n,)`` maps a vertex to its row of ``node_axes``."""
+def beam_terms(x: np.ndarray, layout: Layout, E: np.ndarray, pos: np.ndarray, jacobian: bool = True):
+    """Beam rows for edges ``E (k, 2)``; ``pos (n,)`` maps a vertex to its row of ``node_axes``.
+    Residual ``(k,)`` and Jacobian (None with ``jacobian=False``)."""
     V, A = layout.view(x, "vertices"), layout.view(x, "node_axes")
     v, w = E[:, 0], E[:, 1]
     e = V[w] - V[v]
     L = np.maximum(np.linalg.norm(e, axis=1), 1e-300)[:, None]
     av, aw = A[pos[v]], A[pos[w]]
     r = np.einsum("ij,ij->i", np.cross(e, av), aw) / L[:, 0]
+    if not jacobian:
+        return r, None
     ge = np.cross(av, aw) / L - (r[:, None] * e) / L ** 2
     iv, ia = layout.index("vertices"), layout.index("node_axes")
     cols = np.concatenate([iv[w], iv[v], ia[pos[v]], ia[pos[w]]], axis=1)
@@ -117,8 +122,7 @@ def start(mesh: Mesh, V: np.ndarray, cv: np.ndarray) -> tuple[np.ndarray, np.nda
     """Starting axes ``(p, 3)`` and cosines ``(p,)``: least squares ``N X = 1`` over the unit
     face normals at each vertex (regularized), ``a = X / |X|``, ``c`` the mean ``n . a``."""
     owner, faces = _pairs(mesh, cv)
-    N, _ = _vector_areas(mesh, V, faces)
-    n = N / np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
+    n = face_normals(mesh, V)[faces]  # unit
     M = np.zeros((len(cv), 3, 3))
     rhs = np.zeros((len(cv), 3))
     np.add.at(M, owner, np.einsum("ri,rj->rij", n, n))
