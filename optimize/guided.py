@@ -59,6 +59,14 @@ MU_START, MU_MIN, MU_MAX = 1e-3, 1e-12, 1e8
 FOOT_MARGIN = 0.1  # footpoint candidates renewed for vertices that moved this far (mean edge lengths;
 #                    0.3 made the candidate sets of a 10k-face dome too large: 1.1 s against 0.15 s)
 STAY = 1.0  # damping floor / fairness weight while the soft terms act
+FAST, SHRINK = 30.0, 3.0
+"""Damping divisors after a very well (rho > 0.9) and a well (rho > 0.75) predicted step.
+Measured in one run (iterations; railway station level 3 conical / halftunnel conical with
+node axes / 10k-face conical dome / remeshed dome, gliding boundary / 2,500-face circular
+dome): FAST 30: 4 / 66 / 8 / 104 / 6; FAST 3: 7 / 66 / 10 / 104 / 7; FAST 10: 5 / 111 / 8 /
+not converged in 200 / 6; FAST 100: 4 / 111 / 8 / not converged / 5; the earlier
+mu/10-and-2mu rule: - / 127 / 8 / not converged / 6.  The hard cases are sensitive to the
+path, so these figures are not a smooth function of the settings."""
 
 
 @dataclass
@@ -117,27 +125,17 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
           glide: Glide | None, fairness: float, closeness: float, tol: Tolerances,
           max_iter: int, callback=None, backend: str = "auto", patience: int = 10,
           decay: float = 0.5, finish: float = 2.0,
-          soft_iters: int = 10, shrink: float = 3.0, gain: bool = True, poor: float = 1.0,
-          fast: float = 30.0) -> RunState:
+          soft_iters: int = 10) -> RunState:
     """Run the iteration from ``x0 (layout.size,)`` (normalized coordinates).
 
     fixed : (k,) int vertices whose coordinates are not unknowns.
     decay : factor applied to the soft weights after each iteration; they are
         dropped once the worst defect is within ``10**finish`` of its tolerance
         or after ``soft_iters`` iterations (then ``0.5**10`` of their start).
-    gain, fast, shrink, poor : damping update.  With ``gain`` (default) an
-        accepted step's gain ratio ``rho`` (actual decrease of the objective over
-        the decrease the linearized, majorized model predicts) sets the damping:
-        ``mu / fast`` when ``rho > 0.9``, ``mu / shrink`` when ``rho > 0.75``,
-        ``mu * poor`` when ``rho < 0.25``, else unchanged.  Without it every
-        accepted step divides ``mu`` by ``shrink``.  Measured in one run
-        (iterations; railway station level 3 conical / halftunnel conical with
-        node axes / 10k-face conical dome / remeshed dome, gliding boundary /
-        2,500-face circular dome): these defaults 4 / 66 / 8 / 104 / 6; fast 3:
-        7 / 66 / 10 / 104 / 7; fast 10: 5 / 111 / 8 / not converged in 200 / 6;
-        fast 100: 4 / 111 / 8 / not converged / 5; the earlier mu/10-and-2mu
-        rule: - / 127 / 8 / not converged / 6.  The hard cases are sensitive
-        to the path, so these figures are not a smooth function of the settings.
+    The damping follows an accepted step's gain ratio ``rho`` (actual decrease of
+    the objective over the decrease the linearized, majorized model predicts):
+    ``mu / FAST`` when ``rho > 0.9``, ``mu / SHRINK`` when ``rho > 0.75``, else
+    unchanged (never below the floor); see ``FAST`` for the measurements.
     callback : called with each iteration's history dict (observes only).
     """
     t_start = time.perf_counter()
@@ -262,18 +260,15 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             merit1 = float(rn @ rn)
             if np.isfinite(merit1) and merit1 < merit0:
                 accepted = True
-                if gain:
-                    # gain ratio: actual decrease over the decrease the (majorized) model predicts
-                    pred = -(2.0 * float(g @ dx) + float(dx @ (JtJ @ dx)))
-                    rho = (merit0 - merit1) / pred if pred > 0 else 0.0
-                    if rho > 0.9:
-                        mu = max(mu / fast, mu_floor)
-                    elif rho > 0.75:
-                        mu = max(mu / shrink, mu_floor)
-                    elif rho < 0.25:
-                        mu = max(mu * poor, mu_floor)
-                else:
-                    mu = max(mu / shrink, mu_floor)
+                # gain ratio: actual decrease over the decrease the (majorized) model predicts
+                pred = -(2.0 * float(g @ dx) + float(dx @ (JtJ @ dx)))
+                rho = (merit0 - merit1) / pred if pred > 0 else 0.0
+                if rho > 0.9:
+                    mu = max(mu / FAST, mu_floor)
+                elif rho > 0.75:
+                    mu = max(mu / SHRINK, mu_floor)
+                elif rho < 0.25:  # a poorly predicted step keeps mu, raised to the floor if below
+                    mu = max(mu, mu_floor)
             else:
                 broken += not np.isfinite(merit1)
                 mu *= 10
