@@ -9,8 +9,13 @@ once from ``F`` and cached; positions never change it, so
 
 Construction validates everything a later stage relies on and raises
 :class:`MeshError` with the facts: NaN/inf coordinates, face indices out of
-range, repeated vertices in a face, zero-length edges, non-manifold edges and
-vertices, an empty mesh.  A fixable orientation inconsistency is fixed and
+range, repeated vertices in a face, zero-length edges (relative to the median
+edge, so one stray vertex far away does not make the others coincide), faces
+of zero area (collinear vertices, slivers, bow-ties: area at most
+:data:`ZERO_AREA` times the face's longest edge squared), non-manifold edges
+and vertices, an empty mesh.  Every check is scale-free (coordinates are
+scaled by a power of two first, which is exact), so a mesh in micrometres or
+at 1e300 is judged like the same mesh in metres.  A fixable orientation inconsistency is fixed and
 recorded in :attr:`Mesh.notes`.
 """
 from __future__ import annotations
@@ -24,6 +29,23 @@ import numpy as np
 from .errors import MeshError
 
 log = logging.getLogger(__name__)
+
+#: A face is degenerate (refused) when its area is at most this fraction of its longest edge
+#: squared: a 1 m panel narrower than 0.1 nm, or collinear corners up to rounding.
+ZERO_AREA = 1e-10
+#: An edge is zero-length when it is at most this fraction of the median edge length.
+ZERO_EDGE = 1e-14
+
+
+def unit_exponent(V: np.ndarray) -> int:
+    """``e`` such that ``np.ldexp(V, -e)`` has coordinates in [-1, 1] (exact: a power of two).
+
+    Scale-free computations (ratios, angles) on the scaled array give the same bits
+    as on ``V`` in the normal range, and neither overflow nor underflow at 1e300 or
+    1e-300.  ``V``: any float array (0 for an empty or all-zero one).
+    """
+    top = float(np.abs(V).max(initial=0.0))
+    return int(np.frexp(top)[1]) if np.isfinite(top) and top > 0 else 0
 
 
 def pad_faces(faces: Sequence[Sequence[int]]) -> np.ndarray:
@@ -125,7 +147,9 @@ class Mesh:
 
     def bbox_diagonal(self) -> float:
         """Length of the bounding-box diagonal (the scale used by relative measures)."""
-        return float(np.linalg.norm(self.V.max(axis=0) - self.V.min(axis=0)))
+        e = unit_exponent(self.V)
+        W = np.ldexp(self.V, -e)
+        return float(np.ldexp(np.linalg.norm(W.max(axis=0) - W.min(axis=0)), e))
 
     def with_vertices(self, V: np.ndarray, name: str | None = None) -> "Mesh":
         """A mesh with the same faces and topology and new positions ``V (n, 3)``.
@@ -191,15 +215,38 @@ def _validated(V: np.ndarray, F: np.ndarray, name: str) -> tuple[np.ndarray, np.
         f = int(np.argmax(rep))
         raise MeshError(f"{name}: face {f} repeats a vertex: {F[f][F[f] >= 0].tolist()}, "
                         "expected distinct vertices")
-    # zero-length edges
+    _check_degenerate(np.ldexp(V, -unit_exponent(V)), F, valid, name)
+    return np.ascontiguousarray(V), np.ascontiguousarray(F)
+
+
+def _check_degenerate(W: np.ndarray, F: np.ndarray, valid: np.ndarray, name: str) -> None:
+    """Zero-length edges and zero-area faces of positions ``W (n, 3)`` (scaled to [-1, 1]),
+    faces ``F (m, k)`` with slots ``valid (m, k)``.  Raises :class:`MeshError` naming the face."""
     nxt = np.where(np.roll(valid, -1, axis=1), np.roll(F, -1, axis=1), F[:, :1])
     a, b = F[valid], nxt[valid]
-    scale = max(float(np.ptp(V, axis=0).max()), 1e-300)
-    length = np.linalg.norm((V[a] - V[b]) / scale, axis=1)  # scaled first: no underflow
-    zero = length <= 1e-14
+    length = np.linalg.norm(W[a] - W[b], axis=1)
+    median = float(np.median(length))
+    zero = length <= ZERO_EDGE * median
     if zero.any():
         i = int(np.argmax(zero))
         f = int(np.nonzero(valid)[0][i])
-        raise MeshError(f"{name}: face {f} has a zero-length edge {int(a[i])}-{int(b[i])}, "
+        rel = f" ({length[i] / median:.1e} of the median edge)" if length[i] > 0 else ""
+        raise MeshError(f"{name}: face {f} has a zero-length edge {int(a[i])}-{int(b[i])}{rel}, "
                         "expected distinct vertex positions")
-    return np.ascontiguousarray(V), np.ascontiguousarray(F)
+    corner = np.where(valid, F, F[:, :1])  # padding: the first corner again, adds nothing below
+    o = W[F[:, 0]][:, None, :]
+    A = np.cross(W[corner] - o, W[nxt] - o).sum(axis=1)  # (m, 3) twice the vector area (Newell)
+    L = np.zeros(F.shape)
+    L[valid] = length
+    longest = L.max(axis=1)
+    ratio = 0.5 * np.linalg.norm(A, axis=1) / longest ** 2
+    flat = ratio <= ZERO_AREA
+    if flat.any():
+        f = int(np.argmax(flat))
+        j = int(np.argmax(L[f]))
+        msg = (f"{name}: face {f} {F[f][valid[f]].tolist()} has zero area ({ratio[f]:.1e} of its longest "
+               f"edge squared: collinear corners, a sliver or a bow-tie), expected at least {ZERO_AREA:g}")
+        if longest[f] > 1e6 * median:
+            msg += (f"; its edge {int(F[f, j])}-{int(nxt[f, j])} is {longest[f] / median:.1e} median edge "
+                    "lengths long (a stray vertex?)")
+        raise MeshError(msg)

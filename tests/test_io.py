@@ -315,12 +315,17 @@ MALFORMED = {
                              [":12:", "'one' is not a number", "vertex 2"]),
     "ply-ascii-bad-count": ("ac.ply", PLY_QUAD.replace("4 0 1 2 3", "four 0 1 2 3"),
                             [":14:", "'four' starts the 'vertex_indices' list"]),
-    "ply-ascii-truncated": ("at.ply", PLY_HEAD + "0 0 0\n1 0 0\n1 1 0\n", [":12:", "file ends after 3 of 4",
-                                                                           "'vertex'"]),
+    "ply-ascii-truncated": ("at.ply", PLY_HEAD + "0 0 0\n1 0 0\n1 1 0\n",
+                            [":3:", "element 'vertex': 4 records", "only 19 bytes follow the header"]),
+    "ply-ascii-data-after-records": ("asf.ply", PLY_QUAD + "3 0 1 2\n",
+                                     [":15:", "'3' after the last record of element 'face'",
+                                      "1 face as declared"]),
+    "off-data-after-faces": ("after.off", QUAD_OFF + "4 0 1 2 3\n3 0 1 2\n",
+                             [":8:", "'3' after the last face", "1 faces as declared on line 2"]),
     "ply-ascii-truncated-face": ("atf.ply", PLY_HEAD + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1",
                                  [":14:", "file ends inside 'face' record 0"]),
-    "ply-binary-truncated-vertices": ("btv.ply", _bin_quad(cut=240), ["byte 240", "element 'vertex' record 1 "
-                                                                      "of 4"]),
+    "ply-binary-truncated-vertices": ("btv.ply", _bin_quad(cut=240), [":4:", "element 'vertex': 4 records",
+                                                                      "only 37 bytes follow the header"]),
     "ply-binary-truncated-faces": ("btf.ply", _bin_quad(cut=-3), ["byte", "element 'face' record 0 of 1"]),
     "ply-binary-index-out-of-range": ("bir.ply", _bin_quad(index=9), ["byte", "face 0", "vertex 9",
                                                                       "expected 0..3"]),
@@ -479,12 +484,12 @@ def test_stl_errors_name_the_line_or_say_what_was_expected(tmp_path):
     text = four.read_text().splitlines()
     text.insert(5, "      vertex 2 2 0")  # a fourth vertex in the first facet
     four.write_text("\n".join(text) + "\n")
-    with pytest.raises(MeshError, match=r"four.stl:3: facet 0 has 4 vertices, expected 3"):
+    with pytest.raises(MeshError, match=r"four.stl:7: facet 0 has more than 3 vertices, expected 3"):
         read_mesh(four)
     nan = tmp_path / "word.stl"
     _stl_ascii(nan, tri)
     nan.write_text(nan.read_text().replace("vertex 1 1 0", "vertex 1 one 0"))
-    with pytest.raises(MeshError, match=r"word.stl:\d+: vertex coordinate 'one' is not a number"):
+    with pytest.raises(MeshError, match=r"word.stl:\d+: 'one' is not a number, expected a vertex coordinate"):
         read_mesh(nan)
     sliver = tmp_path / "sliver.stl"
     _stl_binary(sliver, tri + [[[0, 0, 0], [0, 0, 0], [1, 0, 0]]])  # a corner repeated

@@ -17,7 +17,7 @@ import numpy as np
 from ..atomic import atomic_open
 from ..errors import ExportError, MeshError
 from ..mesh import Mesh
-from .common import Parsed, decode, pad, where
+from .common import BOM, Parsed, decode, pad, read_bytes, where
 from .obj import format_obj, parse_obj
 from .off import format_off, parse_off
 from .ply import ENCODINGS, format_ply, parse_ply
@@ -48,15 +48,8 @@ def read_mesh(path: str | os.PathLike, *, fmt: str | None = None) -> Mesh:
     """
     name = str(path)
     kind = detect_format(path, fmt)
-    try:
-        data = Path(path).read_bytes()
-    except FileNotFoundError:
-        raise MeshError(f"{name}: no such file, expected an existing .{kind} mesh file") from None
-    except IsADirectoryError:
-        raise MeshError(f"{name}: is a folder, expected a .{kind} mesh file") from None
-    except OSError as exc:
-        raise MeshError(f"{name}: cannot be read ({exc.strerror}), expected a readable file") from None
-    if not data.strip():
+    data = read_bytes(path, kind)
+    if not data.strip() or data.strip() == BOM:
         raise MeshError(f"{name}:1: empty file, expected a {kind.upper()} mesh")
     if kind == "obj":
         parsed = parse_obj(decode(data), name)
@@ -92,8 +85,9 @@ def build_mesh(parsed: Parsed, name: str) -> Mesh:
         b = parsed.index_base
         raise MeshError(f"{at(parsed.face_loc[f])}: face {f} refers to vertex {int(flat[k]) + b}, "
                         f"expected {b}..{len(V) - 1 + b} ({len(V)} vertices)")
+    F = pad(flat, sizes, lambda f: at(parsed.face_loc[f]))
     try:
-        mesh = Mesh(V, pad(flat, sizes), name=name)
+        mesh = Mesh(V, F, name=name)
     except MeshError as exc:
         raise _located(exc, parsed, name) from None
     mesh.notes.extend(parsed.notes)

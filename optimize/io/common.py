@@ -4,9 +4,20 @@ Every reader turns a file into a :class:`Parsed` (arrays plus where each
 vertex and face came from); :mod:`optimize.io.api` checks it and builds the
 :class:`~optimize.mesh.Mesh`.  Messages read ``path:line: what was found,
 what was expected`` (``path: byte N: ...`` in binary files).
+
+Bounded time and memory, whatever the bytes: :func:`read_bytes` reads only a
+regular file of at most :data:`MAX_FILE_BYTES`; :func:`declared` checks every
+count a file declares against the bytes actually present *before* anything is
+allocated for it; :func:`pad` refuses a padded face array more than
+:data:`PAD_FACTOR` times the indices in the file; no reader builds fixed-width
+string arrays (their size is the longest token times the token count).  So a
+reader's memory is proportional to the file's size, and every refusal names
+the limit.
 """
 from __future__ import annotations
 
+import os
+import stat
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,8 +67,72 @@ def fail(path: str, loc: int | None, message: str, kind: str = "line") -> MeshEr
     return MeshError(f"{where(path, loc, kind)}: {message}")
 
 
+#: Largest mesh file read (bytes): the readers need a few times the file size in memory.
+MAX_FILE_BYTES = 4 << 30
+#: A padded face array (faces x largest face) may hold at most this many times the indices
+#: in the file (or PAD_FLOOR slots): one huge polygon among small faces would otherwise
+#: blow up to faces x its size.
+PAD_FACTOR = 16
+PAD_FLOOR = 1 << 22
+BOM = b"\xef\xbb\xbf"
+
+
+def read_bytes(path, kind: str) -> bytes:
+    """The bytes of the mesh file ``path`` (format name ``kind`` for messages).
+
+    Refuses, with a :class:`MeshError` naming the path: a missing file, a folder,
+    anything not a regular file (a device such as ``/dev/zero``, a pipe, a socket:
+    they may never end), a file over :data:`MAX_FILE_BYTES`, an unreadable file.
+    """
+    name = str(path)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise MeshError(f"{name}: no such file, expected an existing .{kind} mesh file") from None
+    except OSError as exc:
+        raise MeshError(f"{name}: cannot be read ({exc.strerror or exc}), expected a readable "
+                        f".{kind} file") from None
+    if stat.S_ISDIR(st.st_mode):
+        raise MeshError(f"{name}: is a folder, expected a .{kind} mesh file")
+    if not stat.S_ISREG(st.st_mode):
+        raise MeshError(f"{name}: is not a regular file (a device, pipe or socket), expected a "
+                        f".{kind} mesh file")
+    if st.st_size > MAX_FILE_BYTES:
+        raise MeshError(f"{name}: {st.st_size} bytes, expected at most {MAX_FILE_BYTES} bytes "
+                        "(the reader's limit)")
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(st.st_size + 1)  # never more than the size stat reported, plus one
+    except OSError as exc:
+        raise MeshError(f"{name}: cannot be read ({exc.strerror or exc}), expected a readable "
+                        f".{kind} file") from None
+    if len(data) > st.st_size:
+        raise MeshError(f"{name}: grew while being read (past {st.st_size} bytes), expected a "
+                        "finished file")
+    return data
+
+
+def declared(path: str, loc: int | None, what: str, count: int, unit: int, available: int,
+             kind: str = "line", where_from: str = "follow") -> None:
+    """Check a count a file declares before allocating for it.
+
+    ``count`` records of at least ``unit`` bytes each must fit in the
+    ``available`` bytes of the file; otherwise a :class:`MeshError` at ``loc``
+    says how many bytes the count implies and how many there are.
+    """
+    if count < 0:
+        raise fail(path, loc, f"{what}: count {count}, expected a count >= 0", kind)
+    if unit > 0 and count * unit > available:
+        raise fail(path, loc, f"{what}: {count} records of at least {unit} byte(s) need "
+                              f"{count * unit} bytes, but only {available} bytes {where_from}; "
+                              "expected a count the file holds (is it truncated?)", kind)
+
+
 def decode(data: bytes) -> str:
-    """Text of a mesh file; undecodable bytes become U+FFFD and fail where they are used."""
+    """Text of a mesh file, without a leading UTF-8 byte order mark; undecodable bytes become
+    U+FFFD and fail where they are used."""
+    if data.startswith(BOM):
+        data = data[len(BOM):]
     return data.decode("utf-8", errors="replace")
 
 
@@ -183,10 +258,23 @@ def to_ints(strings: list[str], locate, what: str) -> np.ndarray:
     raise MeshError(f"{loc}: an index does not fit in 64 bits, expected {what}{context}")
 
 
-def pad(flat: np.ndarray, sizes: np.ndarray) -> np.ndarray:
-    """(m, k) int64: faces padded with -1 from concatenated indices ``flat (c,)`` and ``sizes (m,)``."""
+def pad(flat: np.ndarray, sizes: np.ndarray, at=None) -> np.ndarray:
+    """(m, k) int64: faces padded with -1 from concatenated indices ``flat (c,)`` and ``sizes (m,)``.
+
+    Refuses (:class:`MeshError`) a padded array of more than ``PAD_FACTOR * c``
+    slots (and more than ``PAD_FLOOR``): one huge polygon among many small faces.
+    ``at``: function ``face -> "path:line"`` for the message.
+    """
     m = len(sizes)
     k = int(sizes.max()) if m else 3
+    limit = max(PAD_FACTOR * len(flat), PAD_FLOOR)
+    if m * k > limit:
+        f = int(np.argmax(sizes))
+        head = at(f) if at is not None else "mesh"
+        raise MeshError(f"{head}: face {f} has {k} vertices; the {m} faces padded to that size need "
+                        f"{m * k} index slots, over the limit of {limit} ({PAD_FACTOR} x the {len(flat)} "
+                        "indices in the file); expected polygons of comparable size (split or "
+                        "triangulate the large one)")
     F = np.full((m, max(k, 1)), -1, dtype=np.int64)
     rows = np.repeat(np.arange(m), sizes)
     cols = np.arange(len(flat)) - np.repeat(np.cumsum(sizes) - sizes, sizes)

@@ -3,7 +3,8 @@
 Read: an optional header keyword (``OFF``, ``COFF``, ``NOFF``, ``CNOFF``,
 ``STOFF``, ... ), the counts ``nv nf [ne]`` on the header line or after it,
 ``nv`` vertex records and ``nf`` face records ``k i1 .. ik [colour]``, ``#``
-comments.  A record may wrap across lines: a record is the tokens it needs,
+comments.  Data after the last declared face is refused (a count too small
+would silently drop faces).  A record may wrap across lines: a record is the tokens it needs,
 and whatever follows its last token on the same line (colours, normals,
 texture coordinates) is skipped.  Binary OFF and 4D/nD variants are refused.
 
@@ -56,6 +57,9 @@ def parse_off(text: str, path: str) -> Parsed:
     if done < nf:
         raise fail(path, tk.line_of(len(toks)), f"file ends after {done} of {nf} faces, "
                                                 f"expected {declared}")
+    if p < len(toks):
+        raise fail(path, tk.line_of(p), f"'{show(toks[p])}' after the last face, expected the end of "
+                                        f"the file ({declared}: is a count too small?)")
     fstart = np.asarray(fstart, dtype=np.int64)
     sizes = np.asarray([int(toks[i]) for i in fstart.tolist()], dtype=np.int64)
     first = np.repeat(fstart + 1, sizes)

@@ -20,7 +20,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MeshError
-from .common import Parsed, Tokens, face_lists, fail, is_count, one_line, show, to_floats, to_ints, where
+from .common import (BOM, Parsed, Tokens, declared, face_lists, fail, is_count, one_line, show, to_floats,
+                     to_ints, where)
 
 ENCODINGS = ("ascii", "binary_little_endian", "binary_big_endian")
 _TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
@@ -54,13 +55,13 @@ class Element:
 # -- header -------------------------------------------------------------------
 def parse_header(data: bytes, path: str) -> tuple[str, list[Element], int, int]:
     """(encoding, elements, byte offset of the body, line number of the first body line)."""
-    first = data[:64].split(b"\n", 1)[0].strip()
+    first = data[:64].removeprefix(BOM).split(b"\n", 1)[0].strip()
     if first != b"ply":
         raise fail(path, 1, f"found {first[:20]!r}, expected 'ply' on the first line")
     m = _END.search(data)
     if m is None:
         raise fail(path, None, "no 'end_header' line, expected the header to end with it")
-    lines = data[: m.start()].decode("ascii", errors="replace").splitlines()
+    lines = data[: m.start()].decode("utf-8", errors="replace").splitlines()
     encoding, elements = None, []
     for no, line in enumerate(lines[1:], start=2):
         w = line.split()
@@ -72,7 +73,7 @@ def parse_header(data: bytes, path: str) -> tuple[str, list[Element], int, int]:
                                      "binary_big_endian 1.0'")
             encoding = w[1]
         elif w[0] == "element":
-            if len(w) != 3 or not w[2].isdigit():
+            if len(w) != 3 or not is_count(w[2]):
                 raise fail(path, no, f"'{line.strip()}', expected 'element NAME COUNT'")
             elements.append(Element(w[1], int(w[2]), no))
         elif w[0] == "property":
@@ -85,7 +86,23 @@ def parse_header(data: bytes, path: str) -> tuple[str, list[Element], int, int]:
     if encoding is None:
         raise fail(path, 2, "no 'format' line, expected 'format ascii 1.0' or a binary format")
     body_line = data[: m.end()].count(b"\n") + 1
+    _check_counts(elements, encoding, len(data) - m.end(), path)
     return encoding, elements, m.end(), body_line
+
+
+def _check_counts(elements: list[Element], encoding: str, available: int, path: str) -> None:
+    """Every element count against the bytes after the header, before anything is allocated:
+    a binary record takes at least its scalars and list counts, an ascii record at least two
+    bytes (a digit and a separator) per property."""
+    need = 0
+    for el in elements:
+        if encoding == "ascii":
+            unit = 2 * len(el.props)
+        else:
+            unit = sum(np.dtype(p.count_code or p.code).itemsize for p in el.props)
+        declared(path, el.line, f"element '{el.name}'", el.count, unit, available - need + (encoding == "ascii"),
+                 where_from="follow the header (after the elements before it)" if need else "follow the header")
+        need += el.count * unit
 
 
 def _prop(w: list[str], line: str, no: int, path: str) -> Prop:
@@ -131,10 +148,17 @@ def parse_ply(data: bytes, path: str) -> Parsed:
     endian = "<" if encoding == "binary_little_endian" else ">"
     pos, got = body, {}
     for el in elements:
+        if not el.props:
+            continue  # records of zero bytes: nothing to read
         if el is ve or el is fe:
             got[el.name], pos = _binary_element(data, pos, el, endian, path)
         else:
             pos = _binary_element(data, pos, el, endian, path)[1]
+    rest = data[pos:]
+    if rest.strip():
+        raise fail(path, pos, f"{len(rest)} byte(s) after the last record of element "
+                              f"'{elements[-1].name}' ({_declared(elements)}), expected the end of the "
+                              "file (a count in the header too small?)", "byte")
     cols, vstart = got["vertex"]
     V = np.stack([cols[j].astype(np.float64) for j in xyz], axis=1) if ve.count else np.zeros((0, 3))
     fcols, fstart = got["face"]
@@ -197,8 +221,8 @@ def _first_record_lengths(data, pos, el, endian) -> list | None:
         if pos + size > len(data) or el.count == 0:
             return None
         k = int(np.frombuffer(data, endian + p.count_code, 1, pos)[0])
-        if k < 0:
-            return None
+        if k < 0 or pos + size + k * np.dtype(p.code).itemsize > len(data):
+            return None  # read record by record: it names the bad record
         lengths.append(k)
         pos += size + k * np.dtype(p.code).itemsize
     return lengths
@@ -264,6 +288,8 @@ def _parse_ascii(text, body_line, elements, ve, fe, xyz, slot, path) -> Parsed:
     flat = sizes = np.zeros(0, dtype=np.int64)
     vstart = fstart = np.zeros(0, dtype=np.int64)
     for el in elements:
+        if not el.props:
+            continue  # records without tokens
         if not any(q.count_code for q in el.props):
             width = len(el.props)
             if p + el.count * width > len(toks):
@@ -289,7 +315,16 @@ def _parse_ascii(text, body_line, elements, ve, fe, xyz, slot, path) -> Parsed:
             flat = to_ints([toks[i] for i in idx], lambda i, idx=idx: (where(path, tk.line_of(idx[i])), ""),
                            "a vertex index")
             fstart = starts
+    if p < len(toks):
+        raise fail(path, tk.line_of(p), f"'{show(toks[p])}' after the last record of element "
+                                        f"'{elements[-1].name}' ({_declared(elements)}), expected the end "
+                                        "of the file (a count in the header too small?)")
     return Parsed(V, flat, sizes, tk.line[vstart], tk.line[fstart], "line", 0)
+
+
+def _declared(elements: list[Element]) -> str:
+    """``"4 vertex, 1 face as declared"`` for messages."""
+    return ", ".join(f"{el.count} {el.name}" for el in elements) + " as declared"
 
 
 def _ascii_records(tk: Tokens, p: int, el: Element, path: str):

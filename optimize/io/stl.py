@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .common import Parsed, Tokens, fail
+from .common import Parsed, Tokens, fail, show, to_floats, where
 
 _RECORD = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 
@@ -37,39 +37,51 @@ def _binary(data: bytes, n: int, path: str) -> Parsed:
     return _weld(corners, loc, "byte", path)
 
 
+#: One ASCII facet: 21 tokens, keywords where given, numbers (None) elsewhere.
+_FACET = ("facet", "normal", None, None, None, "outer", "loop", "vertex", None, None, None,
+          "vertex", None, None, None, "vertex", None, None, None, "endloop", "endfacet")
+_KEYWORDS = np.array([j for j, w in enumerate(_FACET) if w])
+_CORNERS = np.array([8, 9, 10, 12, 13, 14, 16, 17, 18])
+_GRAMMAR = "'facet normal nx ny nz', 'outer loop', three 'vertex x y z', 'endloop', 'endfacet'"
+
+
 def _ascii(text: str, path: str) -> Parsed:
+    """Facets read by their grammar, 21 tokens each; 'solid' and 'endsolid' lines (whose names may
+    be any words, 'loop' or 'vertex' too) are skipped, so several solids in one file are read."""
     tk = Tokens(text, comments=False)
-    words = np.char.lower(np.asarray(tk.tokens, dtype=str))
-    at = np.nonzero(words == "vertex")[0]
-    loops = np.nonzero(words == "loop")[0]  # "outer loop": one per facet
-    if not len(at):
-        raise fail(path, 1, "ASCII STL without any 'vertex' line, expected facets of three vertices")
-    # every facet must have exactly three vertices: count the vertices after each 'loop'
-    owner = np.searchsorted(loops, at) - 1
-    if len(loops) and (owner < 0).any():
-        raise fail(path, int(tk.line[at[np.argmax(owner < 0)]]), "'vertex' before any 'outer loop'")
-    per = np.bincount(owner, minlength=len(loops)) if len(loops) else np.array([len(at)])
-    bad = np.nonzero(per != 3)[0]
-    if len(bad):
-        k = int(bad[0])
-        line = int(tk.line[loops[k]]) if len(loops) else 1
-        raise fail(path, line, f"facet {k} has {int(per[k])} vertices, expected 3 (STL facets are triangles)")
-    idx = at[:, None] + np.arange(1, 4)
-    if idx.max() >= len(words):
-        raise fail(path, int(tk.line[at[-1]]), "the last 'vertex' has fewer than 3 coordinates")
-    raw = np.asarray(tk.tokens, dtype=object)[idx]
-    try:
-        corners = np.array(raw.tolist(), dtype=np.float64)
-    except ValueError:
-        for i, row in enumerate(raw.tolist()):  # find the culprit for the message
-            for tok in row:
-                try:
-                    float(tok)
-                except ValueError:
-                    raise fail(path, int(tk.line[at[i]]), f"vertex coordinate {tok!r} is not a number, "
-                                                          "expected 'vertex x y z'") from None
-        raise
-    return _weld(corners, tk.line[at[0::3]], "line", path)
+    toks = tk.tokens
+    line = tk.line
+    first = np.flatnonzero(np.r_[True, line[1:] != line[:-1]]) if len(toks) else np.zeros(0, int)
+    names = [i for i in first.tolist() if toks[i].lower() in ("solid", "endsolid")]
+    keep = np.ones(len(toks), dtype=bool)
+    keep[np.isin(line, line[names])] = False
+    idx = np.flatnonzero(keep)
+    if not len(idx):
+        raise fail(path, 1, f"ASCII STL without any facet, expected facets of {_GRAMMAR}")
+    n = -(-len(idx) // 21)  # facets, the last one perhaps cut short
+    cols = np.tile(np.arange(21), n)[: len(idx)]
+    kw = np.isin(cols, _KEYWORDS)
+    found = [toks[i].lower() for i in idx[kw].tolist()]
+    want = [_FACET[j] for j in cols[kw].tolist()]
+    bad = next((k for k, (a, b) in enumerate(zip(found, want)) if a != b), None)
+    if bad is not None:
+        pos = int(np.flatnonzero(kw)[bad])
+        f, j, tok = pos // 21, int(cols[pos]), toks[idx[pos]]
+        at = int(line[idx[pos]])
+        if _FACET[j] == "endloop" and found[bad] == "vertex":
+            raise fail(path, at, f"facet {f} has more than 3 vertices, expected 3 (STL facets are triangles)")
+        if _FACET[j] == "vertex" and found[bad] == "endloop":
+            raise fail(path, at, f"facet {f} has {(j - 7) // 4} vertices, expected 3 (STL facets are "
+                                 "triangles)")
+        raise fail(path, at, f"found '{show(tok)}' in facet {f}, expected '{_FACET[j]}' (a facet is "
+                             f"{_GRAMMAR})")
+    if len(idx) % 21:
+        raise fail(path, int(line[idx[-1]]), f"file ends inside facet {n - 1}, expected {_GRAMMAR}")
+    corner = idx.reshape(-1, 21)[:, _CORNERS].ravel().tolist()
+    corners = to_floats([toks[i] for i in corner],
+                        lambda i: (where(path, int(line[corner[i]])), f" (facet {i // 9})"),
+                        "a vertex coordinate 'vertex x y z'").reshape(-1, 3)
+    return _weld(corners, line[idx[0::21]], "line", path)
 
 
 def _weld(corners: np.ndarray, loc: np.ndarray, kind: str, path: str) -> Parsed:
