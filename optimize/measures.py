@@ -14,19 +14,32 @@ Definitions shared by the whole package (code, reports, tests):
   hyperbolic (-), parabolic (below tolerance);
 - fairness: second differences ``a - 2 v + b`` along mesh polylines, divided
   by the mean edge length.
+
+Scale-free by construction: every function first scales the positions by a
+power of two (exact, :func:`optimize.mesh.unit_exponent`) so that they lie in
+[-1, 1]; ratios and angles are then the same bits as without scaling, and
+neither overflow nor underflow for a mesh at 1e300 or 1e-300.  Lengths and
+areas are scaled back at the end (an area beyond 1.8e308 is ``inf``: float64
+cannot hold it).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .mesh import Mesh
+from .mesh import Mesh, unit_exponent
 from .tolerances import DEFAULT, Tolerances
+
+
+def _unit(V: np.ndarray) -> tuple[np.ndarray, int]:
+    """(W, e): ``V`` scaled exactly into [-1, 1] (``V = W * 2**e``)."""
+    e = unit_exponent(V)
+    return (np.ldexp(V, -e) if e else V), e
 
 
 def corner_angles(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(c,) float: interior angle at every corner (radians), topology corner order."""
     t = mesh.topology
-    V = mesh.V if V is None else V
+    V = _unit(mesh.V if V is None else V)[0]
     p = V[t.corner_vertex]
     u = V[t.corner_next_vertex] - p
     w = V[t.corner_prev_vertex] - p
@@ -36,6 +49,7 @@ def corner_angles(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
 
 def quad_planarity(Q: np.ndarray) -> np.ndarray:
     """Planarity of quads ``Q (q, 4, 3)``: diagonal-line distance / mean diagonal length."""
+    Q = _unit(Q)[0]
     d1 = Q[:, 2] - Q[:, 0]
     d2 = Q[:, 3] - Q[:, 1]
     n = np.cross(d1, d2)
@@ -51,6 +65,7 @@ def quad_planarity(Q: np.ndarray) -> np.ndarray:
 
 def ngon_planarity(P: np.ndarray) -> np.ndarray:
     """Planarity of k-gons ``P (q, k, 3)``: max distance to the least-squares plane / mean edge length."""
+    P = _unit(P)[0]
     c = P - P.mean(axis=1, keepdims=True)
     _, _, vt = np.linalg.svd(c, full_matrices=False)
     normal = vt[:, -1, :]
@@ -95,20 +110,26 @@ def circular_defect(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
 
 def face_normals(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(m, 3) float: unit face normals (Newell's method, orientation of the face order)."""
-    n = _vector_areas(mesh, V)
+    n = _scaled_areas(mesh, V)[0]
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
 def _vector_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(m, 3) float: twice the vector area of each face (Newell), taken about the face's
     first vertex so that far-from-origin coordinates lose no precision."""
-    V = mesh.V if V is None else V
+    n, e = _scaled_areas(mesh, V)
+    return np.ldexp(n, 2 * e) if e else n
+
+
+def _scaled_areas(mesh: Mesh, V: np.ndarray | None = None) -> tuple[np.ndarray, int]:
+    """(A, e): :func:`_vector_areas` of the positions scaled into [-1, 1], area unit ``4**e``."""
+    V, e = _unit(mesh.V if V is None else V)
     t = mesh.topology
     o = V[mesh.F[t.corner_face, 0]]
     cr = np.cross(V[t.corner_vertex] - o, V[t.corner_next_vertex] - o)
     n = np.zeros((mesh.n_faces, 3))
     np.add.at(n, t.corner_face, cr)
-    return n
+    return n, e
 
 
 COLLAPSED = 1e-3  # an edge shorter than this fraction of its start length has collapsed
@@ -118,7 +139,7 @@ def corner_turns(mesh: Mesh, V: np.ndarray | None = None, normals: np.ndarray | 
     """(c,) float: signed sine of each corner angle about its face's normal (Newell):
     positive at a convex corner, negative at a reflex one (topology corner order).
     ``normals (m, 3)``: the face normals at ``V`` when the caller has them already."""
-    V = mesh.V if V is None else V
+    V = _unit(mesh.V if V is None else V)[0]
     t = mesh.topology
     P = V[t.corner_vertex]
     u, w = V[t.corner_next_vertex] - P, V[t.corner_prev_vertex] - P
@@ -141,8 +162,10 @@ def folded_faces(mesh: Mesh, V: np.ndarray, V0: np.ndarray | None = None, tol: f
     bad = np.zeros(mesh.n_faces, dtype=bool)
     np.logical_or.at(bad, t.corner_face, (before > -tol) & (after < -tol))
     nxt = t.corner_next_vertex
-    l0 = np.linalg.norm(V0[nxt] - V0[t.corner_vertex], axis=1)
-    l1 = np.linalg.norm(V[nxt] - V[t.corner_vertex], axis=1)
+    e = max(unit_exponent(V0), unit_exponent(V))  # one scale for both: the lengths are compared
+    W0, W1 = np.ldexp(V0, -e), np.ldexp(V, -e)
+    l0 = np.linalg.norm(W0[nxt] - W0[t.corner_vertex], axis=1)
+    l1 = np.linalg.norm(W1[nxt] - W1[t.corner_vertex], axis=1)
     np.logical_or.at(bad, t.corner_face, l1 < COLLAPSED * l0)
     flipped = np.einsum("ij,ij->i", N0, N1) < 0
     return bad | flipped
@@ -150,7 +173,9 @@ def folded_faces(mesh: Mesh, V: np.ndarray, V0: np.ndarray | None = None, tol: f
 
 def face_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(m,) float: vector area of each face (exact for planar faces)."""
-    return 0.5 * np.linalg.norm(_vector_areas(mesh, V), axis=1)
+    n, e = _scaled_areas(mesh, V)
+    with np.errstate(over="ignore"):  # an area beyond float64 is inf
+        return np.ldexp(0.5 * np.linalg.norm(n, axis=1), 2 * e)
 
 
 def gauss_image_area(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
@@ -185,14 +210,14 @@ def vertex_types(mesh: Mesh, V: np.ndarray | None = None, tol: float = 1e-9) -> 
 
 def edge_lengths(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(e,) float: length of every edge."""
-    V = mesh.V if V is None else V
+    W, k = _unit(mesh.V if V is None else V)
     e = mesh.topology.edges
-    return np.linalg.norm(V[e[:, 1]] - V[e[:, 0]], axis=1)
+    return np.ldexp(np.linalg.norm(W[e[:, 1]] - W[e[:, 0]], axis=1), k)
 
 
 def fairness(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(t,) float: ``|a - 2 v + b|`` / mean edge length along mesh polylines."""
-    V = mesh.V if V is None else V
+    V = _unit(mesh.V if V is None else V)[0]
     T = mesh.topology.fair_triples
     d = V[T[:, 0]] - 2 * V[T[:, 1]] + V[T[:, 2]]
     return np.linalg.norm(d, axis=1) / edge_lengths(mesh, V).mean()

@@ -219,6 +219,26 @@ def _validated(V: np.ndarray, F: np.ndarray, name: str) -> tuple[np.ndarray, np.
     return np.ascontiguousarray(V), np.ascontiguousarray(F)
 
 
+def area_ratio(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """(m,) float: area of each face of ``V (n, 3)``, ``F (m, k)`` (padded with -1) divided by its
+    longest edge squared; scale-free (0 for collinear corners; a face is degenerate at
+    ``<= ZERO_AREA``).  Faces must have distinct, in-range indices."""
+    W = np.ldexp(np.asarray(V, dtype=np.float64), -unit_exponent(V))
+    valid = F >= 0
+    nxt = np.where(np.roll(valid, -1, axis=1), np.roll(F, -1, axis=1), F[:, :1])
+    L = np.zeros(F.shape)
+    L[valid] = np.linalg.norm(W[F[valid]] - W[nxt[valid]], axis=1)
+    return _area_ratio(W, F, valid, nxt, L.max(axis=1))
+
+
+def _area_ratio(W, F, valid, nxt, longest) -> np.ndarray:
+    corner = np.where(valid, F, F[:, :1])  # padding: the first corner again, adds nothing below
+    o = W[F[:, 0]][:, None, :]
+    A = np.cross(W[corner] - o, W[nxt] - o).sum(axis=1)  # (m, 3) twice the vector area (Newell)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.nan_to_num(0.5 * np.linalg.norm(A, axis=1) / longest ** 2)
+
+
 def _check_degenerate(W: np.ndarray, F: np.ndarray, valid: np.ndarray, name: str) -> None:
     """Zero-length edges and zero-area faces of positions ``W (n, 3)`` (scaled to [-1, 1]),
     faces ``F (m, k)`` with slots ``valid (m, k)``.  Raises :class:`MeshError` naming the face."""
@@ -233,13 +253,10 @@ def _check_degenerate(W: np.ndarray, F: np.ndarray, valid: np.ndarray, name: str
         rel = f" ({length[i] / median:.1e} of the median edge)" if length[i] > 0 else ""
         raise MeshError(f"{name}: face {f} has a zero-length edge {int(a[i])}-{int(b[i])}{rel}, "
                         "expected distinct vertex positions")
-    corner = np.where(valid, F, F[:, :1])  # padding: the first corner again, adds nothing below
-    o = W[F[:, 0]][:, None, :]
-    A = np.cross(W[corner] - o, W[nxt] - o).sum(axis=1)  # (m, 3) twice the vector area (Newell)
     L = np.zeros(F.shape)
     L[valid] = length
     longest = L.max(axis=1)
-    ratio = 0.5 * np.linalg.norm(A, axis=1) / longest ** 2
+    ratio = _area_ratio(W, F, valid, nxt, longest)
     flat = ratio <= ZERO_AREA
     if flat.any():
         f = int(np.argmax(flat))

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import json
+import math
 
 
 def register(sub) -> None:
@@ -22,7 +23,11 @@ def run(args) -> int:
     for note in mesh.notes:
         s.setdefault("notes", []).append(note)
     if not args.table:
-        print(json.dumps(s, indent=2))
+        notes: list[str] = []
+        out = _finite(s, notes)
+        if notes:
+            out.setdefault("notes", []).extend(notes)
+        print(json.dumps(out, indent=2, allow_nan=False))
         return 0
     from rich.console import Console
     from rich.table import Table
@@ -41,3 +46,16 @@ def run(args) -> int:
     for note in s.get("notes", []):
         print(f"note: {note}")
     return 0
+
+
+def _finite(value, notes: list, key: str = ""):
+    """``value`` with every non-finite float replaced by ``null`` and a line in ``notes``: JSON has
+    no NaN or Infinity (an area of a mesh at 1e200 is beyond float64)."""
+    if isinstance(value, dict):
+        return {k: _finite(v, notes, f"{key}.{k}" if key else str(k)) for k, v in list(value.items())}
+    if isinstance(value, list):
+        return [_finite(v, notes, f"{key}[{i}]") for i, v in enumerate(value)]
+    if isinstance(value, float) and not math.isfinite(value):
+        notes.append(f"{key} is {value} (beyond float64), written as null")
+        return None
+    return value

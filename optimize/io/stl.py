@@ -3,8 +3,9 @@
 STL stores every triangle with its own three corners and no connectivity.
 Corners with bit-identical coordinates are welded into one vertex (a
 modeller writes a shared corner the same way every time); triangles that
-welding leaves with a repeated vertex (zero-area slivers) are dropped, with
-a note.  Binary files are recognised by their size (``84 + 50 n`` bytes for
+welding leaves with a repeated vertex, or with collinear corners (area at most
+:data:`optimize.mesh.ZERO_AREA` of the longest edge squared, as CAD exporters
+write to close T-junctions), are dropped, with a note.  Binary files are recognised by their size (``84 + 50 n`` bytes for
 ``n`` triangles, whatever the header says: some exporters start a binary
 header with ``solid``); anything else must be ASCII (``solid ... facet normal
 ... outer loop vertex x y z ... endloop endfacet ... endsolid``).
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..mesh import ZERO_AREA, area_ratio
 from .common import Parsed, Tokens, fail, show, to_floats, where
 
 _RECORD = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
@@ -57,7 +59,7 @@ def _ascii(text: str, path: str) -> Parsed:
     keep[np.isin(line, line[names])] = False
     idx = np.flatnonzero(keep)
     if not len(idx):
-        raise fail(path, 1, f"ASCII STL without any facet, expected facets of {_GRAMMAR}")
+        raise fail(path, 1, f"ASCII STL without any 'vertex' line (no facet), expected facets of {_GRAMMAR}")
     n = -(-len(idx) // 21)  # facets, the last one perhaps cut short
     cols = np.tile(np.arange(21), n)[: len(idx)]
     kw = np.isin(cols, _KEYWORDS)
@@ -89,11 +91,13 @@ def _weld(corners: np.ndarray, loc: np.ndarray, kind: str, path: str) -> Parsed:
     V, inv = np.unique(corners, axis=0, return_inverse=True)
     T = inv.reshape(-1, 3)
     degenerate = (T[:, 0] == T[:, 1]) | (T[:, 1] == T[:, 2]) | (T[:, 0] == T[:, 2])
+    degenerate[~degenerate] = area_ratio(V, T[~degenerate]) <= ZERO_AREA  # collinear corners
     notes = [f"{path}: {len(corners)} triangle corners welded into {len(V)} vertices (bit-identical "
              "coordinates)"]
     if degenerate.any():
         first = int(np.argmax(degenerate))
-        notes.append(f"{path}: {int(degenerate.sum())} degenerate triangle(s) dropped (a repeated corner; the "
+        notes.append(f"{path}: {int(degenerate.sum())} degenerate triangle(s) dropped (a repeated corner or "
+                     "zero area; the "
                      f"first at {'line' if kind == 'line' else 'byte'} {int(loc[first])})")
     keep = ~degenerate
     T, loc = T[keep], np.asarray(loc)[keep]
