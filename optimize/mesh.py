@@ -35,6 +35,16 @@ log = logging.getLogger(__name__)
 ZERO_AREA = 1e-10
 #: An edge is zero-length when it is at most this fraction of the median edge length.
 ZERO_EDGE = 1e-14
+#: Padded arrays (faces x largest face, vertices x largest star) may hold at most PAD_FACTOR
+#: times the mesh's face corners, or PAD_FLOOR slots: one 5000-gon among small faces, or a fan
+#: of 5000 triangles around one vertex, would otherwise cost (faces or vertices) x 5000.
+PAD_FACTOR = 8
+PAD_FLOOR = 1 << 20
+
+
+def padding_limit(corners: int) -> int:
+    """Largest padded face or star array allowed for a mesh of ``corners`` face corners."""
+    return max(PAD_FACTOR * corners, PAD_FLOOR)
 
 
 def unit_exponent(V: np.ndarray) -> int:
@@ -215,6 +225,19 @@ def _validated(V: np.ndarray, F: np.ndarray, name: str) -> tuple[np.ndarray, np.
         f = int(np.argmax(rep))
         raise MeshError(f"{name}: face {f} repeats a vertex: {F[f][F[f] >= 0].tolist()}, "
                         "expected distinct vertices")
+    used = np.bincount(F[valid], minlength=V.shape[0])
+    limit = padding_limit(int(valid.sum()))
+    if F.size > limit:
+        f = int(np.argmax(sizes))
+        raise MeshError(f"{name}: face {f} has {sizes[f]} vertices; the {F.shape[0]} faces padded to that "
+                        f"size need {F.size} slots, over the limit of {limit} ({PAD_FACTOR} x the "
+                        f"{int(valid.sum())} face corners); expected polygons of comparable size")
+    if V.shape[0] * (int(used.max()) + 1) > limit:
+        v = int(np.argmax(used))
+        raise MeshError(f"{name}: vertex {v} is a corner of {int(used[v])} faces; the {V.shape[0]} vertex "
+                        f"stars padded to that size need {V.shape[0] * (int(used[v]) + 1)} slots, over the "
+                        f"limit of {limit} ({PAD_FACTOR} x the {int(valid.sum())} face corners); expected "
+                        "vertices of comparable valence (a fan of triangles around one point?)")
     _check_degenerate(np.ldexp(V, -unit_exponent(V)), F, valid, name)
     return np.ascontiguousarray(V), np.ascontiguousarray(F)
 
@@ -224,46 +247,51 @@ def area_ratio(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     longest edge squared; scale-free (0 for collinear corners; a face is degenerate at
     ``<= ZERO_AREA``).  Faces must have distinct, in-range indices."""
     W = np.ldexp(np.asarray(V, dtype=np.float64), -unit_exponent(V))
+    return _edges_and_areas(W, F)[3]
+
+
+def _edges_and_areas(W: np.ndarray, F: np.ndarray):
+    """Per corner (valid slots of ``F (m, k)`` in row order): face ``rows (c,)``, start and end
+    vertex ``a, b (c,)``, and per face the area ratio ``(m,)``, edge ``length (c,)``, longest
+    edge ``(m,)``.  Work is per corner, never per padded slot (one big face among many small
+    ones costs its own size only)."""
     valid = F >= 0
-    nxt = np.where(np.roll(valid, -1, axis=1), np.roll(F, -1, axis=1), F[:, :1])
-    L = np.zeros(F.shape)
-    L[valid] = np.linalg.norm(W[F[valid]] - W[nxt[valid]], axis=1)
-    return _area_ratio(W, F, valid, nxt, L.max(axis=1))
-
-
-def _area_ratio(W, F, valid, nxt, longest) -> np.ndarray:
-    corner = np.where(valid, F, F[:, :1])  # padding: the first corner again, adds nothing below
-    o = W[F[:, 0]][:, None, :]
-    A = np.cross(W[corner] - o, W[nxt] - o).sum(axis=1)  # (m, 3) twice the vector area (Newell)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.nan_to_num(0.5 * np.linalg.norm(A, axis=1) / longest ** 2)
+    sizes = valid.sum(axis=1)
+    rows = np.repeat(np.arange(len(F)), sizes)
+    a = F[valid]
+    starts = np.cumsum(sizes) - sizes
+    pos = np.arange(len(a)) - np.repeat(starts, sizes)  # slot of each corner in its face
+    b = a[np.where(pos + 1 < np.repeat(sizes, sizes), np.arange(len(a)) + 1, np.repeat(starts, sizes))]
+    length = np.linalg.norm(W[a] - W[b], axis=1)
+    o = W[F[rows, 0]]
+    with np.errstate(invalid="ignore", over="ignore"):
+        cr = np.cross(W[a] - o, W[b] - o)  # Newell about the first corner: twice the vector area
+        A = np.stack([np.bincount(rows, cr[:, j], minlength=len(F)) for j in range(3)], axis=1)
+        longest = np.zeros(len(F))
+        np.maximum.at(longest, rows, length)
+        ratio = np.nan_to_num(0.5 * np.linalg.norm(A, axis=1) / longest ** 2)
+    return rows, a, b, ratio, length, longest
 
 
 def _check_degenerate(W: np.ndarray, F: np.ndarray, valid: np.ndarray, name: str) -> None:
     """Zero-length edges and zero-area faces of positions ``W (n, 3)`` (scaled to [-1, 1]),
-    faces ``F (m, k)`` with slots ``valid (m, k)``.  Raises :class:`MeshError` naming the face."""
-    nxt = np.where(np.roll(valid, -1, axis=1), np.roll(F, -1, axis=1), F[:, :1])
-    a, b = F[valid], nxt[valid]
-    length = np.linalg.norm(W[a] - W[b], axis=1)
+    faces ``F (m, k)``.  Raises :class:`MeshError` naming the face."""
+    rows, a, b, ratio, length, longest = _edges_and_areas(W, F)
     median = float(np.median(length))
     zero = length <= ZERO_EDGE * median
     if zero.any():
         i = int(np.argmax(zero))
-        f = int(np.nonzero(valid)[0][i])
         rel = f" ({length[i] / median:.1e} of the median edge)" if length[i] > 0 else ""
-        raise MeshError(f"{name}: face {f} has a zero-length edge {int(a[i])}-{int(b[i])}{rel}, "
+        raise MeshError(f"{name}: face {int(rows[i])} has a zero-length edge {int(a[i])}-{int(b[i])}{rel}, "
                         "expected distinct vertex positions")
-    L = np.zeros(F.shape)
-    L[valid] = length
-    longest = L.max(axis=1)
-    ratio = _area_ratio(W, F, valid, nxt, longest)
     flat = ratio <= ZERO_AREA
     if flat.any():
         f = int(np.argmax(flat))
-        j = int(np.argmax(L[f]))
+        mine = np.flatnonzero(rows == f)
+        j = int(mine[np.argmax(length[mine])])
         msg = (f"{name}: face {f} {F[f][valid[f]].tolist()} has zero area ({ratio[f]:.1e} of its longest "
                f"edge squared: collinear corners, a sliver or a bow-tie), expected at least {ZERO_AREA:g}")
         if longest[f] > 1e6 * median:
-            msg += (f"; its edge {int(F[f, j])}-{int(nxt[f, j])} is {longest[f] / median:.1e} median edge "
+            msg += (f"; its edge {int(a[j])}-{int(b[j])} is {longest[f] / median:.1e} median edge "
                     "lengths long (a stray vertex?)")
         raise MeshError(msg)

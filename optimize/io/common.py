@@ -9,7 +9,8 @@ Bounded time and memory, whatever the bytes: :func:`read_bytes` reads only a
 regular file of at most :data:`MAX_FILE_BYTES`; :func:`declared` checks every
 count a file declares against the bytes actually present *before* anything is
 allocated for it; :func:`pad` refuses a padded face array more than
-:data:`PAD_FACTOR` times the indices in the file; no reader builds fixed-width
+:data:`optimize.mesh.PAD_FACTOR` times the indices in the file (the mesh does the
+same for vertex stars); no reader builds fixed-width
 string arrays (their size is the longest token times the token count).  So a
 reader's memory is proportional to the file's size, and every refusal names
 the limit.
@@ -23,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MeshError
+from ..mesh import PAD_FACTOR, padding_limit
 
 
 @dataclass
@@ -69,11 +71,6 @@ def fail(path: str, loc: int | None, message: str, kind: str = "line") -> MeshEr
 
 #: Largest mesh file read (bytes): the readers need a few times the file size in memory.
 MAX_FILE_BYTES = 4 << 30
-#: A padded face array (faces x largest face) may hold at most this many times the indices
-#: in the file (or PAD_FLOOR slots): one huge polygon among small faces would otherwise
-#: blow up to faces x its size.
-PAD_FACTOR = 16
-PAD_FLOOR = 1 << 22
 BOM = b"\xef\xbb\xbf"
 
 
@@ -261,13 +258,13 @@ def to_ints(strings: list[str], locate, what: str) -> np.ndarray:
 def pad(flat: np.ndarray, sizes: np.ndarray, at=None) -> np.ndarray:
     """(m, k) int64: faces padded with -1 from concatenated indices ``flat (c,)`` and ``sizes (m,)``.
 
-    Refuses (:class:`MeshError`) a padded array of more than ``PAD_FACTOR * c``
-    slots (and more than ``PAD_FLOOR``): one huge polygon among many small faces.
+    Refuses (:class:`MeshError`) a padded array over :func:`optimize.mesh.padding_limit`
+    (``PAD_FACTOR * c`` slots, at least ``PAD_FLOOR``): one huge polygon among many small faces.
     ``at``: function ``face -> "path:line"`` for the message.
     """
     m = len(sizes)
     k = int(sizes.max()) if m else 3
-    limit = max(PAD_FACTOR * len(flat), PAD_FLOOR)
+    limit = padding_limit(len(flat))
     if m * k > limit:
         f = int(np.argmax(sizes))
         head = at(f) if at is not None else "mesh"

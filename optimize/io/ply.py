@@ -27,7 +27,7 @@ ENCODINGS = ("ascii", "binary_little_endian", "binary_big_endian")
 _TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
           "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
           "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}
-_END = re.compile(rb"(?m)^end_header[ \t]*(\r\n|\n|\r|$)")
+_END = re.compile(rb"(?m)^[ \t]*end_header[ \t]*(\r\n|\n|\r|$)")
 _FACE_LISTS = ("vertex_indices", "vertex_index")
 
 

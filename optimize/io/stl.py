@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..mesh import ZERO_AREA, area_ratio
-from .common import Parsed, Tokens, fail, show, to_floats, where
+from .common import BOM, Parsed, Tokens, fail, show, to_floats, where
 
 _RECORD = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 
@@ -26,6 +26,8 @@ def parse_stl(data: bytes, path: str) -> Parsed:
         n = int(np.frombuffer(data, "<u4", 1, 80)[0])
         if 84 + 50 * n == len(data):
             return _binary(data, n, path)
+    if data.startswith(BOM):
+        data = data[len(BOM):]
     if not data.lstrip()[:5].lower() == b"solid":
         raise fail(path, None, f"{len(data)} bytes: neither a binary STL (84 + 50 n bytes) nor an "
                                "ASCII STL (starting 'solid')")
