@@ -41,7 +41,7 @@ import pytest
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "40"))
 MEM_CAP = 768 << 20  # address space a worker may add to its size at start (bytes)
-TIME_CAP = 5.0  # seconds per case
+TIME_CAP = 10.0  # seconds per case (traced: tracemalloc slows parsing several times)
 PER_BYTE, BASE = 128, 24 << 20  # traced peak allowed: PER_BYTE x file size + BASE
 CLEAN = ("mesh", "mesh_error")
 
@@ -162,7 +162,8 @@ def _stl_ascii(tris) -> bytes:
 
 
 def _stl_binary(tris) -> bytes:
-    tris = np.asarray(tris, dtype="<f4").reshape(-1, 9)
+    with np.errstate(over="ignore"):  # 1e308 becomes inf in float32, as a modeller would write it
+        tris = np.asarray(tris, dtype="<f4").reshape(-1, 9)
     rec = np.zeros(len(tris), dtype=[("n", "<f4", 3), ("v", "<f4", 9), ("a", "<u2")])
     rec["v"] = tris
     return b"seed".ljust(80, b" ") + struct.pack("<I", len(tris)) + rec.tobytes()
@@ -300,7 +301,7 @@ def soup(draw):
         faces.append(list(range(n, n + 200)))
         n += 200
     if "huge polygon" in features:  # one big face among many triangles: padding would blow up
-        k, m = draw(st.integers(300, 6000)), draw(st.integers(100, 3000))
+        k, m = draw(st.integers(300, 3000)), draw(st.integers(100, 1500))
         t = np.linspace(0, 2 * np.pi, k, endpoint=False)
         V = np.r_[V, np.c_[np.cos(t), np.sin(t), np.zeros(k)] * 50 + [200, 0, 0]]
         faces.append(list(range(n, n + k)))
