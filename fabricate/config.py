@@ -245,6 +245,8 @@ class OutputsSection(Section):
     bom: bool = True
     ifc: bool = True
     rhino: bool = Field(default=True, alias="3dm")
+    nc1: bool = True
+    step_schema: Literal["AP214", "AP242"] = "AP214"
     pictures: bool = True
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"

@@ -180,7 +180,7 @@ def count_parts(parts) -> int:
 EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl"),
            ("three_mf", "model.3mf", "write_3mf"), ("dxf", "outlines.dxf", "write_dxf"),
            ("svg", "outlines.svg", "write_svg"), ("bom", "bom.csv", "write_bom"),
-           ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"))
+           ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"), ("nc1", "nc1", "write_nc1"))
 
 
 def stage_exports(ctx) -> str:
@@ -215,7 +215,8 @@ def stage_exports(ctx) -> str:
     for key, fname, fn in wanted:
         ctx.progress.advance("exports", 1, fname)
         try:
-            extra = {"structure": structure} if key == "rhino" else {}
+            extra = {"rhino": {"structure": structure}, "nc1": {"order": cfg.name or "roof"},
+                     "step": {"schema": cfg.outputs.step_schema}}.get(key, {})
             facts = getattr(export, fn)(ctx["parts"], out / fname, **extra)
         except ExportError:
             raise

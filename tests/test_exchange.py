@@ -6,6 +6,7 @@ from cad_fixtures import dome_structure
 
 from fabricate.cad import PartSpec, build_parts
 from fabricate.export import write_3dm, write_bom, write_ifc
+from fabricate.export.nc1 import write_nc1
 from fabricate.export.bom import read_bom
 from optimize.errors import MeshError
 from optimize.io import read_mesh
@@ -184,3 +185,92 @@ def test_a_3dm_quad_mesh_runs_through_fabricate_run_to_cut_files(tmp_path):
     assert ids <= set(read_3dm_parts(out / "model.3dm"))
     (tmp_path / "bad.yaml").write_text("input: {mesh: roof.3dm, layer: Steel}\n")
     assert main(["run", str(tmp_path / "bad.yaml"), "--out", str(tmp_path / "out"), "-q"]) == 2
+
+
+def _rigid_equal(A, B, tol):
+    """Outlines ``A``, ``B (k, 2)`` equal up to where they are put on the sheet: same corners in order,
+    up to a rotation by a multiple of 90 degrees, a translation and the starting corner."""
+    for turn in range(4):
+        R = np.linalg.matrix_power(np.array([[0.0, -1.0], [1.0, 0.0]]), turn)
+        C = B @ R.T
+        C = C - C.min(axis=0)
+        for shift in range(len(A)):
+            if np.abs(np.roll(A - A.min(axis=0), shift, axis=0) - C).max() <= tol:
+                return True
+    return False
+
+
+def test_nc1_per_beam_reads_back_to_the_dxf_contour_and_the_bom(parts, bom, tmp_path):
+    from dstv_reader import read_nc1
+
+    from fabricate.export import write_dxf
+    from fabricate.export.dxf import read_outlines
+
+    facts = write_nc1(parts, tmp_path / "nc1", order="dome")
+    write_dxf(parts, tmp_path / "outlines.dxf")
+    outlines, _ = read_outlines(tmp_path / "outlines.dxf")
+    rows = {row["id"]: row for row in bom if row["kind"] == "beam"}
+    files = sorted((tmp_path / "nc1").glob("*.nc1"))
+    assert facts["files"] == len(files) == len(rows)
+    for path in files:
+        nc = read_nc1(path)
+        h, row = nc["header"], rows[path.stem]
+        assert h["piece"] == path.stem and h["code"] == "B" and h["grade"] == "S355" and h["quantity"] == 1
+        (face, pts), = nc["contours"]
+        assert face == "v" and np.abs(pts[0] - pts[-1]).max() == 0  # closed
+        assert _rigid_equal(pts[:-1], outlines[path.stem], 0.01), path.stem
+        extent = np.sort(np.ptp(outlines[path.stem], axis=0))
+        assert (h["height"], h["length"]) == pytest.approx(tuple(extent), abs=0.01)
+        # the stock rectangle of the BOM also holds the bevel face
+        assert h["height"] <= float(row["rect_h_mm"]) + 0.01 and h["length"] <= float(row["rect_w_mm"]) + 0.01
+        assert h["web_thickness"] == pytest.approx(float(row["thickness_mm"]), abs=1e-3)
+        assert h["weight_per_m"] * h["length"] * 1e-3 == pytest.approx(float(row["weight_kg"]), rel=1e-3)
+        for key in ("web_start_cut", "web_end_cut", "flange_start_cut", "flange_end_cut"):
+            assert 0.0 <= h[key] < 90.0
+
+
+def test_nc1_cut_angles_of_a_known_plate():
+    """A plate 1000 x 200 x 20 whose end faces lean 30 deg in its plane at the start and are bevelled
+    45 deg across the thickness at the end: the header says so."""
+    from types import SimpleNamespace
+
+    from fabricate.export.nc1 import _bevels, _end_angles, contour
+
+    t30 = 200.0 * np.tan(np.radians(30.0))
+    Q = np.array([[0.0, 0.0], [1000.0, 0.0], [1000.0, 200.0], [t30, 200.0]])
+    assert _end_angles(Q) == pytest.approx((30.0, 0.0), abs=1e-9)
+    # the same plate in space: front face z = 0 (outline), back face z = -20; end at x = 1000 bevelled 45 deg
+    front = np.column_stack([Q, np.zeros(4)])
+    back = front + [0.0, 0.0, -20.0]
+    back[1:3, 0] -= 20.0  # the end face leans 45 deg across the thickness
+    V = np.vstack([front, back])
+    faces = ((3, 2, 1, 0), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7))
+    normals = []
+    for f in faces:
+        P = V[list(f)]
+        n = np.cross(P[1] - P[0], P[2] - P[0])
+        normals.append(n / np.linalg.norm(n))
+    g = SimpleNamespace(vertices=V[None], normals=np.array(normals)[None], faces=faces, outline_face=0,
+                        bevel_face=1, flat=Q[None])
+    start, end = _bevels(g, 0)
+    assert start == pytest.approx(0.0, abs=1e-9) and end == pytest.approx(45.0, abs=1e-9)
+    np.testing.assert_allclose(contour(g, 0), Q)
+
+
+@pytest.mark.parametrize("engine", ["direct", "occ"])
+def test_step_ap242_reads_back_with_the_same_solids(parts, tmp_path, engine):
+    from fabricate.export import write_step
+    from fabricate.export.brep import solid_facts
+    from fabricate.export.step_read import read_step
+
+    path = tmp_path / "model.step"
+    facts = write_step(parts, path, schema="AP242", engine=engine)
+    assert facts["schema"].startswith("AP242")
+    head = path.read_text()[:3000]
+    assert "AP242_MANAGED_MODEL_BASED_3D_ENGINEERING" in head and "AUTOMOTIVE_DESIGN" not in head
+    solids, _ = read_step(path)
+    volumes = {p.id: p.volume_mm3 for p in parts}
+    assert sorted(n for n, _ in solids) == sorted(volumes)
+    for name, shape in solids:
+        f = solid_facts(shape)
+        assert f["valid"] and f["volume_mm3"] == pytest.approx(volumes[name], rel=1e-9)
