@@ -246,6 +246,7 @@ class OutputsSection(Section):
     ifc: bool = True
     rhino: bool = Field(default=True, alias="3dm")
     nc1: bool = True
+    gltf: bool = True
     step_schema: Literal["AP214", "AP242"] = "AP214"
     pictures: bool = True
     html: bool = True

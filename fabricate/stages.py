@@ -180,7 +180,8 @@ def count_parts(parts) -> int:
 EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl"),
            ("three_mf", "model.3mf", "write_3mf"), ("dxf", "outlines.dxf", "write_dxf"),
            ("svg", "outlines.svg", "write_svg"), ("bom", "bom.csv", "write_bom"),
-           ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"), ("nc1", "nc1", "write_nc1"))
+           ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"), ("nc1", "nc1", "write_nc1"),
+           ("gltf", "parts.glb", "write_parts_gltf"))
 
 
 def stage_exports(ctx) -> str:

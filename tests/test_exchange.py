@@ -274,3 +274,27 @@ def test_step_ap242_reads_back_with_the_same_solids(parts, tmp_path, engine):
     for name, shape in solids:
         f = solid_facts(shape)
         assert f["valid"] and f["volume_mm3"] == pytest.approx(volumes[name], rel=1e-9)
+
+
+def test_parts_gltf_has_one_node_per_part_named_by_id(parts, tmp_path):
+    """Read with pygltflib (not the project's reader): names, and each node's volume in metres."""
+    import pygltflib
+
+    from fabricate.export import write_parts_gltf
+
+    path = tmp_path / "parts.glb"
+    facts = write_parts_gltf(parts, path)
+    doc = pygltflib.GLTF2().load(str(path))
+    blob = doc.binary_blob()
+    assert [n.name for n in doc.nodes] == [p.id for p in parts] and facts["nodes"] == len(parts)
+    for node in doc.nodes:
+        prim = doc.meshes[node.mesh].primitives[0]
+        acc = doc.accessors[prim.attributes.POSITION]
+        view = doc.bufferViews[acc.bufferView]
+        P = np.frombuffer(blob, np.float32, acc.count * 3, view.byteOffset).reshape(-1, 3).astype(float)
+        acc = doc.accessors[prim.indices]
+        view = doc.bufferViews[acc.bufferView]
+        T = np.frombuffer(blob, np.uint32, acc.count, view.byteOffset).reshape(-1, 3)
+        a, b, c = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
+        volume_m3 = np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0
+        assert volume_m3 * 1e9 == pytest.approx(parts.by_id[node.name].volume_mm3, rel=1e-4)

@@ -3,6 +3,7 @@
 IFC and .3dm load their libraries (ifcopenshell, rhino3dm) only when called."""
 from .bom import write_bom
 from .dxf import write_dxf
+from .gltf import write_parts_gltf
 from .nc1 import write_nc1
 from .nesting import Layout, layout
 from .step import write_step
@@ -26,4 +27,4 @@ def write_3dm(parts, path, **kwargs) -> dict:
     return write(parts, path, **kwargs)
 
 
-__all__ = ["write_ifc", "write_3dm", "write_nc1", "Layout", "layout", "write_3mf", "write_bom", "write_dxf", "write_step", "write_stl", "write_svg"]
+__all__ = ["write_ifc", "write_3dm", "write_nc1", "write_parts_gltf", "Layout", "layout", "write_3mf", "write_bom", "write_dxf", "write_step", "write_stl", "write_svg"]
