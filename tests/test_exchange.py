@@ -21,6 +21,12 @@ def parts():
 
 
 @pytest.fixture(scope="module")
+def small_parts():
+    """A few parts of every kind, for the checks that cost seconds per hundred parts."""
+    return build_parts(dome_structure(n_around=4, k=2), PartSpec(node_radius=40.0))
+
+
+@pytest.fixture(scope="module")
 def bom(parts, tmp_path_factory):
     path = tmp_path_factory.mktemp("bom") / "bom.csv"
     write_bom(parts, path)
@@ -34,11 +40,12 @@ def ifc_file(parts, tmp_path_factory):
     return path, facts
 
 
-def test_ifc_is_valid_ifc4_with_the_express_rules(ifc_file):
+def test_ifc_is_valid_ifc4_with_the_express_rules(small_parts, tmp_path):
     import ifcopenshell.validate
 
-    path, facts = ifc_file
-    assert facts["schema"] == "IFC4"
+    path = tmp_path / "model.ifc"
+    facts = write_ifc(small_parts, path)
+    assert facts["schema"] == "IFC4" and min(facts["elements"].values()) > 0
     log = ifcopenshell.validate.json_logger()
     ifcopenshell.validate.validate(ifcopenshell.open(str(path)), log, express_rules=True)
     assert log.statements == []
@@ -201,10 +208,9 @@ def _rigid_equal(A, B, tol):
 
 
 def test_nc1_per_beam_reads_back_to_the_dxf_contour_and_the_bom(parts, bom, tmp_path):
-    from dstv_reader import read_nc1
-
     from fabricate.export import write_dxf
     from fabricate.export.dxf import read_outlines
+    from fabricate.export.nc1_read import read_nc1
 
     facts = write_nc1(parts, tmp_path / "nc1", order="dome")
     write_dxf(parts, tmp_path / "outlines.dxf")
@@ -258,12 +264,13 @@ def test_nc1_cut_angles_of_a_known_plate():
 
 
 @pytest.mark.parametrize("engine", ["direct", "occ"])
-def test_step_ap242_reads_back_with_the_same_solids(parts, tmp_path, engine):
+def test_step_ap242_reads_back_with_the_same_solids(small_parts, tmp_path, engine):
     from fabricate.export import write_step
     from fabricate.export.brep import solid_facts
     from fabricate.export.step_read import read_step
 
     path = tmp_path / "model.step"
+    parts = small_parts
     facts = write_step(parts, path, schema="AP242", engine=engine)
     assert facts["schema"].startswith("AP242")
     head = path.read_text()[:3000]
@@ -298,3 +305,20 @@ def test_parts_gltf_has_one_node_per_part_named_by_id(parts, tmp_path):
         a, b, c = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
         volume_m3 = np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0
         assert volume_m3 * 1e9 == pytest.approx(parts.by_id[node.name].volume_mm3, rel=1e-4)
+
+
+def test_exchange_checks_pass_on_good_files_and_fail_on_a_wrong_one(parts, bom, ifc_file, tmp_path):
+    from fabricate.export.exchange_check import check_3dm, check_ifc, check_nc1
+
+    assert check_ifc(ifc_file[0], bom)["pass"]
+    write_3dm(parts, tmp_path / "model.3dm")
+    write_nc1(parts, tmp_path / "nc1")
+    assert check_3dm(tmp_path / "model.3dm", bom)["pass"] and check_nc1(tmp_path / "nc1", bom)["pass"]
+    wrong = [dict(r) for r in bom]
+    wrong[0]["volume_mm3"] = repr(float(wrong[0]["volume_mm3"]) * (1 + 1e-5))
+    result = check_ifc(ifc_file[0], wrong)
+    assert not result["pass"] and result["bad_volume"] == [wrong[0]["id"]]
+    assert not check_3dm(tmp_path / "model.3dm", wrong)["pass"]
+    (tmp_path / "nc1" / f"{parts.beams[0].id}.nc1").unlink()
+    result = check_nc1(tmp_path / "nc1", bom)
+    assert not result["pass"] and result["missing"] == [parts.beams[0].id]

@@ -1,7 +1,10 @@
-"""A DSTV NC1 reader for the tests, written from the DSTV description independently of
-``fabricate.export.nc1`` (it shares no code with the writer): blocks start with a two-letter
-keyword at the start of a line; ``ST`` holds 24 header lines after optional ``**`` comments;
-``AK`` lines are ``[face] x y radius ...``, the face flag present on the first line only."""
+"""A DSTV NC1 reader, written from the DSTV description apart from the writer
+(:mod:`fabricate.export.nc1`; the two share no code), used by ``fabricate check`` and the tests.
+
+Blocks start with a two-letter keyword alone at the start of a line; ``ST`` holds 24 header lines
+after optional ``**`` comments; ``AK`` lines are ``[face] x y radius ...``, the face flag present on
+a contour's first line (and wherever the face changes).  Raises ValueError naming the file and what
+is wrong."""
 from __future__ import annotations
 
 import numpy as np
@@ -15,6 +18,7 @@ FACES = {"v", "o", "u", "h"}
 
 
 def read_nc1(path) -> dict:
+    """``{"header": {field: value}, "contours": [(face, (k, 2) points)], "blocks": [names]}``."""
     blocks: list[tuple[str, list[str]]] = []
     for raw in open(path, encoding="ascii", newline="").read().splitlines():
         if raw.startswith("**"):
