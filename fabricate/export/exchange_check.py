@@ -41,9 +41,10 @@ def check_ifc(path: Path, bom, *, full: bool = True) -> dict:
         ifcopenshell.validate.validate(f, log)
         extra["bad_schema"] = [str(s.get("message", s))[:200] for s in log.statements[:10]]
         volumes = read_ifc(path)
-        extra["bad_volume"] = sorted(
-            pid for pid, item in volumes.items() if pid in rows
-            and abs(item["volume_mm3"] / float(rows[pid]["volume_mm3"]) - 1.0) > VOLUME_REL_TOL)[:20]
+        errors = {pid: abs(item["volume_mm3"] / float(rows[pid]["volume_mm3"]) - 1.0)
+                  for pid, item in volumes.items() if pid in rows}
+        extra["volume_rel_error_max"] = max(errors.values(), default=0.0)
+        extra["bad_volume"] = sorted(pid for pid, e in errors.items() if e > VOLUME_REL_TOL)[:20]
     return _ids_result(set(rows), set(elements), extra)
 
 
