@@ -44,7 +44,8 @@ def check_ifc(path: Path, bom, *, full: bool = True) -> dict:
         errors = {pid: abs(item["volume_mm3"] / float(rows[pid]["volume_mm3"]) - 1.0)
                   for pid, item in volumes.items() if pid in rows}
         extra["volume_rel_error_max"] = max(errors.values(), default=0.0)
-        extra["bad_volume"] = sorted(pid for pid, e in errors.items() if e > VOLUME_REL_TOL)[:20]
+        # no shape (NaN) is as bad as a wrong volume
+        extra["bad_volume"] = sorted(pid for pid, e in errors.items() if not e <= VOLUME_REL_TOL)[:20]
     return _ids_result(set(rows), set(elements), extra)
 
 

@@ -25,6 +25,7 @@ ifcopenshell is imported here only: the rest of the pipeline starts without it.
 """
 from __future__ import annotations
 
+import os
 import time
 from pathlib import Path
 
@@ -205,13 +206,22 @@ def read_ifc(path) -> dict[str, dict]:
     import ifcopenshell.util.shape
 
     f = ifcopenshell.open(str(path))
-    settings = ifcopenshell.geom.settings()
+    elements = {e.GlobalId: e for e in f.by_type("IfcElement") if not e.is_a("IfcCurtainWall")}
     out: dict[str, dict] = {}
-    for el in f.by_type("IfcElement"):
-        if el.is_a("IfcCurtainWall"):
-            continue
-        shape = ifcopenshell.geom.create_shape(settings, el)
-        # geometry comes back in metres (SI) whatever the file's length unit
-        out[el.Name] = {"class": el.is_a(), "predefined": el.PredefinedType, "tag": el.Tag,
-                        "volume_mm3": float(ifcopenshell.util.shape.get_volume(shape.geometry)) * 1e9}
+    if not elements:
+        return out
+    settings = ifcopenshell.geom.settings()
+    it = ifcopenshell.geom.iterator(settings, f, max(1, os.cpu_count() or 1), include=list(elements.values()))
+    if it.initialize():
+        while True:
+            shape = it.get()
+            el = elements[shape.guid]
+            # geometry comes back in metres (SI) whatever the file's length unit
+            out[el.Name] = {"class": el.is_a(), "predefined": el.PredefinedType, "tag": el.Tag,
+                            "volume_mm3": float(ifcopenshell.util.shape.get_volume(shape.geometry)) * 1e9}
+            if not it.next():
+                break
+    for el in elements.values():  # an element the kernel could not make a shape of: no volume
+        out.setdefault(el.Name, {"class": el.is_a(), "predefined": el.PredefinedType, "tag": el.Tag,
+                                 "volume_mm3": float("nan")})
     return out
