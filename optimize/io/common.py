@@ -58,8 +58,9 @@ class Parsed:
 
 
 def where(path: str, loc: int | None, kind: str = "line") -> str:
-    """``path:line`` or ``path: byte N`` (``path`` alone when ``loc`` is None)."""
-    if loc is None:
+    """``path:line`` or ``path: byte N`` (``path`` alone when ``loc`` is None or the file has no
+    positions: ``kind`` ``object``, a .3dm file)."""
+    if loc is None or kind == "object":
         return path
     return f"{path}:{loc}" if kind == "line" else f"{path}: byte {loc}"
 
@@ -77,10 +78,28 @@ BOM = b"\xef\xbb\xbf"
 def read_bytes(path, kind: str) -> bytes:
     """The bytes of the mesh file ``path`` (format name ``kind`` for messages).
 
-    Refuses, with a :class:`MeshError` naming the path: a missing file, a folder,
-    anything not a regular file (a device such as ``/dev/zero``, a pipe, a socket:
-    they may never end), a file over :data:`MAX_FILE_BYTES`, an unreadable file.
+    Refuses, with a :class:`MeshError` naming the path, what :func:`check_file`
+    refuses and a file that cannot be read or grows while being read.
     """
+    name = str(path)
+    st = check_file(path, kind)
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read(st.st_size + 1)  # never more than the size stat reported, plus one
+    except OSError as exc:
+        raise MeshError(f"{name}: cannot be read ({exc.strerror or exc}), expected a readable "
+                        f".{kind} file") from None
+    if len(data) > st.st_size:
+        raise MeshError(f"{name}: grew while being read (past {st.st_size} bytes), expected a "
+                        "finished file")
+    return data
+
+
+def check_file(path, kind: str) -> os.stat_result:
+    """``os.stat`` of ``path`` once it is known to be a regular file of at most
+    :data:`MAX_FILE_BYTES`; refuses (:class:`MeshError` naming the path) a missing file, a
+    folder, anything not a regular file (a device such as ``/dev/zero``, a pipe, a socket:
+    they may never end) and a larger file."""
     name = str(path)
     try:
         st = os.stat(path)
@@ -97,16 +116,7 @@ def read_bytes(path, kind: str) -> bytes:
     if st.st_size > MAX_FILE_BYTES:
         raise MeshError(f"{name}: {st.st_size} bytes, expected at most {MAX_FILE_BYTES} bytes "
                         "(the reader's limit)")
-    try:
-        with open(path, "rb") as fh:
-            data = fh.read(st.st_size + 1)  # never more than the size stat reported, plus one
-    except OSError as exc:
-        raise MeshError(f"{name}: cannot be read ({exc.strerror or exc}), expected a readable "
-                        f".{kind} file") from None
-    if len(data) > st.st_size:
-        raise MeshError(f"{name}: grew while being read (past {st.st_size} bytes), expected a "
-                        "finished file")
-    return data
+    return st
 
 
 def declared(path: str, loc: int | None, what: str, count: int, unit: int, available: int,
