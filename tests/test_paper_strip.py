@@ -12,7 +12,9 @@ from optimize.paper.strip import strip_mesh, trefoil_band
 def rails(m=8):
     t = np.linspace(0, 1.5, m)
     a = np.stack([np.cos(t), np.sin(t), 0 * t], axis=1)
-    return a, a * 1.3 + np.array([0, 0, 0.4])
+    # the second rail rises along the arc: a scaled copy would make the half-twisted closing quad
+    # a bow-tie (parallel diagonals, zero area), which Mesh refuses
+    return a, a * 1.3 + np.array([0, 0, 0.4]) + 0.2 * t[:, None] * np.array([0, 0, 1])
 
 
 @pytest.mark.parametrize("closed,faces,loops,orientable", [("open", 7, 1, True), ("closed", 8, 2, True),
