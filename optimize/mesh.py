@@ -10,9 +10,10 @@ once from ``F`` and cached; positions never change it, so
 Construction validates everything a later stage relies on and raises
 :class:`MeshError` with the facts: NaN/inf coordinates, face indices out of
 range, repeated vertices in a face, zero-length edges (relative to the median
-edge, so one stray vertex far away does not make the others coincide), faces
-of zero area (collinear vertices, slivers, bow-ties: area at most
-:data:`ZERO_AREA` times the face's longest edge squared), non-manifold edges
+edge, so one stray vertex far away does not make the others coincide), quads
+and polygons of zero area (collinear vertices, slivers, bow-ties: area at most
+:data:`ZERO_AREA` times the face's longest edge squared: a panel that cannot be
+cut; a zero-area triangle is only noted), non-manifold edges
 and vertices, an empty mesh.  Every check is scale-free (coordinates are
 scaled by a power of two first, which is exact), so a mesh in micrometres or
 at 1e300 is judged like the same mesh in metres.  A fixable orientation inconsistency is fixed and
@@ -93,7 +94,10 @@ class Mesh:
         self.name = name
         self.notes: list[str] = []
         if check:
-            V, F = _validated(V, F, name)
+            V, F, notes = _validated(V, F, name)
+            for msg in notes:
+                log.warning(msg)
+            self.notes.extend(notes)
         self.V = V
         self.F = F
         self.V.setflags(write=False)
@@ -192,8 +196,8 @@ class Mesh:
         return f"Mesh({self.name!r}: {self.n_vertices} vertices, {desc})"
 
 
-def _validated(V: np.ndarray, F: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray]:
-    """Check arrays; return contiguous copies.  Raises MeshError with the facts."""
+def _validated(V: np.ndarray, F: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Check arrays; return contiguous copies and notes.  Raises MeshError with the facts."""
     if V.ndim != 2 or V.shape[1] != 3:
         raise MeshError(f"{name}: vertices have shape {V.shape}, expected (n, 3)")
     if F.ndim != 2:
@@ -238,8 +242,8 @@ def _validated(V: np.ndarray, F: np.ndarray, name: str) -> tuple[np.ndarray, np.
                         f"stars padded to that size need {V.shape[0] * (int(used[v]) + 1)} slots, over the "
                         f"limit of {limit} ({PAD_FACTOR} x the {int(valid.sum())} face corners); expected "
                         "vertices of comparable valence (a fan of triangles around one point?)")
-    _check_degenerate(np.ldexp(V, -unit_exponent(V)), F, valid, name)
-    return np.ascontiguousarray(V), np.ascontiguousarray(F)
+    notes = _check_degenerate(np.ldexp(V, -unit_exponent(V)), F, valid, name)
+    return np.ascontiguousarray(V), np.ascontiguousarray(F), notes
 
 
 def area_ratio(V: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -300,9 +304,12 @@ def _cross(u: np.ndarray, w: np.ndarray) -> np.ndarray:
     return out
 
 
-def _check_degenerate(W: np.ndarray, F: np.ndarray, valid: np.ndarray, name: str) -> None:
+def _check_degenerate(W: np.ndarray, F: np.ndarray, valid: np.ndarray, name: str) -> list[str]:
     """Zero-length edges and zero-area faces of positions ``W (n, 3)`` (scaled to [-1, 1]),
-    faces ``F (m, k)``.  Raises :class:`MeshError` naming the face."""
+    faces ``F (m, k)``.  Raises :class:`MeshError` naming the face for a zero-length edge and
+    for a zero-area quad or polygon (a panel that cannot be cut); a zero-area triangle (a
+    modeller's sliver in a triangulated surface, harmless to a reference or remeshing input)
+    is returned as a note."""
     rows, a, b, ratio, length, longest = _edges_and_areas(W, F)
     median = float(np.median(length))
     zero = length <= ZERO_EDGE * median
@@ -312,13 +319,16 @@ def _check_degenerate(W: np.ndarray, F: np.ndarray, valid: np.ndarray, name: str
         raise MeshError(f"{name}: face {int(rows[i])} has a zero-length edge {int(a[i])}-{int(b[i])}{rel}, "
                         "expected distinct vertex positions")
     flat = ratio <= ZERO_AREA
-    if flat.any():
-        f = int(np.argmax(flat))
-        mine = np.flatnonzero(rows == f)
-        j = int(mine[np.argmax(length[mine])])
-        msg = (f"{name}: face {f} {F[f][valid[f]].tolist()} has zero area ({ratio[f]:.1e} of its longest "
-               f"edge squared: collinear corners, a sliver or a bow-tie), expected at least {ZERO_AREA:g}")
-        if longest[f] > 1e6 * median:
-            msg += (f"; its edge {int(a[j])}-{int(b[j])} is {longest[f] / median:.1e} median edge "
-                    "lengths long (a stray vertex?)")
-        raise MeshError(msg)
+    if not flat.any():
+        return []
+    panels = flat & (valid.sum(axis=1) > 3)
+    f = int(np.argmax(panels)) if panels.any() else int(np.argmax(flat))
+    mine = np.flatnonzero(rows == f)
+    j = int(mine[np.argmax(length[mine])])
+    what = (f"face {f} {F[f][valid[f]].tolist()} has zero area ({ratio[f]:.1e} of its longest edge squared: "
+            f"collinear corners, a sliver or a bow-tie)")
+    hint = (f"; its edge {int(a[j])}-{int(b[j])} is {longest[f] / median:.1e} median edge lengths long "
+            "(a stray vertex?)") if longest[f] > 1e6 * median else ""
+    if panels.any():
+        raise MeshError(f"{name}: {what}, expected at least {ZERO_AREA:g}{hint}")
+    return [f"{name}: {int(flat.sum())} zero-area triangle(s), the first: {what}{hint}"]

@@ -200,6 +200,13 @@ def test_a_zero_area_face_is_refused_before_any_optimization(tmp_path, V, what):
     assert r.returncode == 2 and "has zero area" in r.stderr and "Traceback" not in r.stderr, r.stderr
 
 
+def test_a_zero_area_triangle_is_noted_not_refused():
+    """A sliver triangle in a surface to remesh is harmless; it is said, not refused."""
+    flat = Mesh([[0, 0, 0], [1, 0, 0], [2, 0, 0], [1, 1, 0]], [[0, 1, 3], [1, 2, 3], [0, 2, 1]])
+    assert any("1 zero-area triangle(s), the first: face 2 [0, 2, 1]" in n for n in flat.notes), flat.notes
+    assert not Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0]], [[0, 1, 2]]).notes
+
+
 def test_a_thin_but_real_panel_is_accepted():
     Mesh([[0, 0, 0], [1, 0, 0], [1, 1e-6, 0], [0, 1e-6, 0]], [[0, 1, 2, 3]])  # 1 m x 1 micrometre
 
