@@ -64,6 +64,9 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                              np.zeros(len(f)), nb, spec))
     beams = beam_solids(structure, P0, spec.beam_width, spec.node_radius, s_beam)
     e = np.arange(len(topo.edges))
+    Qb = bp["quad"]  # the beam's edge at the last layer as a fraction of it at the first (< 0: reversed)
+    shrink = dot(Qb[:, 2] - Qb[:, 3], Qb[:, 1] - Qb[:, 0]) / np.maximum(dot(Qb[:, 1] - Qb[:, 0],
+                                                                            Qb[:, 1] - Qb[:, 0]), 1e-300)
     X = beams["vertices"]
     along = unit(X[:, 1] - X[:, 0])
     proj = dot(X, along[:, None, :])
@@ -73,7 +76,8 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
         nb.append(tuple(pid[sorted({fp, fm})]) + tuple(bid[sorted(set(others))])
                   + (tuple(nid[topo.edges[i]]) if with_nodes else ()))
     _validate("beam", bid, e, X, FACES, beams["normals"],
-              lambda i: beam_hint(float(beams["planarity_mm"][i]), spec.beam_width))
+              lambda i: beam_hint(float(beams["planarity_mm"][i]), spec.beam_width, float(shrink[i]),
+                                  abs(d[-1] - d[0])))
     groups.append(_group("beam", bid, e, X, FACES, beams["normals"], OUTLINE_FACE, BEVEL_FACE,
                          beams["planarity_mm"], np.full(len(e), spec.beam_width),
                          proj.max(axis=1) - proj.min(axis=1), nb, spec))
