@@ -136,7 +136,8 @@ class ShapeInput(Section):
         try:
             design = check_design(self.name, self.params)
         except DesignParamError as exc:
-            raise PydanticCustomError("design_value", "{err}", {"err": str(exc)}) from None
+            ctx = {"err": str(exc), **({"param": exc.key} if exc.key else {})}  # the param's line
+            raise PydanticCustomError("design_value", "{err}", ctx) from None
         except ImportError as exc:  # the modelling package is not installed
             raise PydanticCustomError("designs", "built-in designs are not available ({err})",
                                       {"err": str(exc)}) from None
