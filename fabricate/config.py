@@ -106,6 +106,8 @@ def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
         return None
     if not isinstance(value, (str, Path)) or not str(value).strip() or "\0" in str(value):
         raise PydanticCustomError("path", "expected a file path (a string)")
+    if len(str(value)) > 1024:
+        raise PydanticCustomError("path", "expected a file path of at most 1024 characters")
     base = Path((info.context or {}).get("base_dir", "."))
     try:
         path = Path(value).expanduser()

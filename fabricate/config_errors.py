@@ -95,7 +95,7 @@ def format_errors(exc: ValidationError, source: Path, lines: dict[tuple, int],
         seen.add(key)
         line = next((lines[at[:i]] for i in range(len(at), 0, -1) if at[:i] in lines), None)
         where = f"{source}:{line}" if line else str(source)
-        via = next((f" (from --set {k}={v!r})" for k, v in overrides.items()
+        via = next((f" (from --set {k}={short(v)})" for k, v in overrides.items()
                     if tuple(k.split(".")) == loc[:len(k.split("."))]), "")
         messages.append((line or 0, f"{where}: {key}: {_message(err, loc, root)}{via}"))
     messages = [m for _, m in sorted(messages, key=lambda m: m[0])]
