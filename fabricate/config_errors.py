@@ -161,10 +161,15 @@ def field_range(root: type[BaseModel], loc: tuple) -> str | None:
         return None
     integer = int in _annotations(field.annotation)
     if integer and lo and hi and lo[1] == "[" and hi[1] == "]":
-        return f"an integer in {lo[0]:g}..{hi[0]:g}"
-    left = f"{lo[1]}{lo[0]:g}" if lo else "(-inf"
-    right = f"{hi[0]:g}{hi[1]}" if hi else "inf)"
+        return f"an integer in {number(lo[0])}..{number(hi[0])}"
+    left = f"{lo[1]}{number(lo[0])}" if lo else "(-inf"
+    right = f"{number(hi[0])}{hi[1]}" if hi else "inf)"
     return f"{'an integer' if integer else 'a number'} in {left}, {right}"
+
+
+def number(x: float) -> str:
+    """``1e-12``, ``1e6``, ``200``: a bound as a person writes it."""
+    return f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
 
 
 def _annotations(annotation) -> list:

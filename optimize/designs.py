@@ -83,8 +83,9 @@ def _pos(design: str, key: str, value, zero: bool = False, hi: float = MAX_SIZE_
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
         and bool(np.isfinite(value)) and (value >= 0 if zero else value > 0) and value <= hi
     if not ok:
+        top = f"{hi:g}".replace("e+0", "e").replace("e+", "e")
         raise ConfigError(f"design {design}: parameter {key}={value!r}, expected a number in "
-                          f"{'[0' if zero else '(0'}, {hi:g}]")
+                          f"{'[0' if zero else '(0'}, {top}]")
     return float(value)
 
 

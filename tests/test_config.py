@@ -126,7 +126,7 @@ CASES = {
     "zero side": ("input: {surface: ../data/grid.obj, edge_length: 2, side: [0, 0, 0]}\n",
                   ["input", "side [0.0, 0.0, 0.0]", "nonzero"]),
     "negative radius": ("input: {surface: ../data/grid.obj, edge_length: 2, radius: -1}\n",
-                        ["input.radius", "value -1", "a number in (0, 1e+07]"]),
+                        ["input.radius", "value -1", "a number in (0, 1e7]"]),
     "side without surface": ("input: {mesh: ../data/grid.obj, side: keep}\n",
                              ["input", "side applies only to a surface"]),
     "irregular without surface": ("input: {mesh: ../data/grid.obj, irregular: faces}\n",
@@ -199,3 +199,26 @@ def test_override_errors_name_the_set_option(folder):
     assert "from --set parts.glas_thickness=8" in message
     message = error_of(path, overrides={"input.mesh.x": 1})
     assert "input.mesh is" in message and "not a section" in message
+
+
+def test_reference_config_states_every_range():
+    """Every key with a range has it on its line of configs/reference.yaml, as the messages write it."""
+    from fabricate.config_errors import field_range
+    lines = (REPO / "configs" / "reference.yaml").read_text().splitlines()
+    checked = 0
+    for section, field in RunConfig.model_fields.items():
+        model = next((a for a in getattr(field.annotation, "__args__", (field.annotation,))
+                      if hasattr(a, "model_fields")), None)
+        keys = [(section, k.alias or n) for n, k in model.model_fields.items()] if model else [(section,)]
+        for loc in keys:
+            allowed = field_range(RunConfig, loc) or field_range(RunConfig, loc + (0,))
+            if allowed is None:
+                continue
+            text = allowed.split(" in ", 1)[1]
+            start = next(i for i, ln in enumerate(lines) if ln.startswith(f"{loc[0]}:"))
+            at = start if len(loc) == 1 else next(
+                i for i in range(start + 1, len(lines)) if lines[i].lstrip("# ").startswith(f"{loc[1]}:"))
+            block = " ".join(lines[at:at + 2])
+            assert text in block, (loc, text, block)
+            checked += 1
+    assert checked >= 20
