@@ -42,9 +42,9 @@ from optimize.errors import ConfigError
 from optimize.tolerances import Tolerances
 
 from .config_design import DesignParamError, check_design, subdivided_faces
-from .config_errors import format_errors, short
+from .config_errors import format_errors
+from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
 from .config_yaml import MAX_DEPTH, read_config
-from .config_yaml import parse_value
 
 UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
@@ -433,65 +433,3 @@ def _copy(data: Any, source: Path | str, depth: int = 0) -> Any:
     if isinstance(data, (list, tuple)):
         return [_copy(v, source, depth + 1) for v in data]
     return data
-
-
-def set_key(data: dict[str, Any], dotted: str, value: Any, *, source: str | Path = "--set") -> None:
-    """Set ``data["a"]["b"] = value`` for ``dotted = "a.b"``, creating sections as needed."""
-    parts = [p for p in dotted.split(".")]
-    if not dotted or any(not p for p in parts) or len(parts) > MAX_DEPTH:
-        raise ConfigError(f"{source}: --set {short(dotted)}={short(value)}: expected a key path like "
-                          "parts.glass_thickness")
-    node = data
-    for i, key in enumerate(parts[:-1]):
-        child = node.get(key)
-        if child is None:
-            child = node[key] = {}
-        if not isinstance(child, dict):
-            raise ConfigError(f"{source}: --set {dotted}: {'.'.join(parts[:i + 1])} is {short(child)}, "
-                              "not a section with keys")
-        node = child
-    node[parts[-1]] = value
-
-
-def takes_list(dotted: str) -> bool:
-    """Whether the config key ``dotted`` (``offset.distances``) takes a list of values."""
-    cls: Any = RunConfig
-    parts = dotted.split(".")
-    for i, key in enumerate(parts):
-        fields = cls.model_fields
-        name = next((n for n, f in fields.items() if key in (n, f.alias)), None)
-        if name is None:
-            return False
-        annotation = fields[name].annotation
-        if i == len(parts) - 1:
-            return _has_list(annotation)
-        cls = next((a for a in _flatten(annotation) if isinstance(a, type) and issubclass(a, BaseModel)), None)
-        if cls is None:
-            return False
-    return False
-
-
-def _flatten(annotation) -> list:
-    out, stack = [], [annotation]
-    while stack:
-        a = stack.pop()
-        out.append(a)
-        stack.extend(get_args(a))
-    return out
-
-
-def _has_list(annotation) -> bool:
-    return any(a in (list, tuple) or get_origin(a) in (list, tuple) for a in _flatten(annotation))
-
-
-def override_values(key: str, texts: list[str]) -> list[Any]:
-    """The values of ``--set key=a,b,...`` (``texts``: the comma-separated parts, unparsed).
-
-    A key that takes a list and parts that are not themselves lists in brackets:
-    one value, the list (``offset.distances=0,-200`` -> ``[[0, -200]]``).
-    Otherwise one value per part (``parts.glass_thickness=8,10`` -> ``[8, 10]``:
-    a sweep, which ``fabricate batch`` runs and ``fabricate run`` refuses).
-    """
-    if len(texts) > 1 and takes_list(key) and not any(t.strip().startswith(("[", "(")) for t in texts):
-        return [[parse_value(t) for t in texts]]
-    return [parse_value(t) for t in texts]

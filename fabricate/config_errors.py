@@ -1,9 +1,10 @@
 """Config error messages: ``file:line: key.path: value ...: what is allowed``.
 
 Turns a pydantic ``ValidationError`` into one line per problem (sorted by
-line), naming the YAML line of the key (found with ``yaml.compose``: the node
-tree only, no objects are built), the dotted key path, the value given, what
-is allowed, and a did-you-mean (difflib) for misspelt keys and choices.
+line), naming the YAML line of the key (from :mod:`fabricate.config_yaml`),
+the dotted key path, the value given (cut to :data:`SHORT` characters), what
+is allowed (a number key's range, from its schema field: :func:`field_range`),
+and a did-you-mean (difflib) for misspelt keys and choices.
 """
 from __future__ import annotations
 
@@ -12,7 +13,6 @@ from pathlib import Path
 from typing import Any, get_args, get_origin
 
 import annotated_types as at
-import yaml
 from pydantic import BaseModel, ValidationError
 
 SHORT = 60
