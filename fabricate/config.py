@@ -112,10 +112,14 @@ def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
     try:
         path = Path(value).expanduser()
         full = (path if path.is_absolute() else base / path).resolve()
-        found = full.is_file()
+        found, exists = full.is_file(), full.exists()
     except (OSError, RuntimeError) as exc:  # a name too long, a symlink loop, no home folder
         raise PydanticCustomError("path", "cannot use this path ({err})",
                                   {"err": getattr(exc, "strerror", None) or str(exc)}) from None
+    if not found and exists:
+        what = "a folder" if full.is_dir() else "not a regular file (a device, a pipe, ...)"
+        raise PydanticCustomError("path_kind", "{full} is {what}; expected a mesh file",
+                                  {"full": str(full), "what": what})
     if not found:
         raise PydanticCustomError("path_missing", "file not found: {full} (resolved relative to {base})",
                                   {"full": str(full), "base": str(base.resolve())})

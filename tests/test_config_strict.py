@@ -283,3 +283,9 @@ def _load_capped(path: str, q) -> None:
         q.put("ConfigError")
     except MemoryError:
         q.put("MemoryError")
+
+
+def test_a_folder_or_a_device_as_mesh_path_is_named_as_such(tmp_path):
+    assert "is a folder; expected a mesh file" in error_of(tmp_path, f"input: {{mesh: {tmp_path}}}\n")
+    assert "not a regular file" in error_of(tmp_path, "input: {mesh: /dev/zero}\n")
+    assert "expected a file path of at most 1024" in error_of(tmp_path, "input: {mesh: " + "a" * 2000 + "}\n")
