@@ -221,8 +221,10 @@ class OptimizeSection(Section):
     @field_validator("fixed")
     @classmethod
     def _indices(cls, v):
-        if isinstance(v, list) and any(i < 0 for i in v):
-            raise PydanticCustomError("fixed", "vertex indices must be >= 0")
+        bad = [i for i in v if not 0 <= i < 2 ** 31] if isinstance(v, list) else []
+        if bad:  # whether an index is below the vertex count is checked once the mesh is read
+            raise PydanticCustomError("fixed", "vertex index {i}: vertex indices must be >= 0 and below 2^31",
+                                      {"i": bad[0]})
         return v
 
 
