@@ -41,7 +41,7 @@ from pydantic_core import PydanticCustomError
 from optimize.errors import ConfigError
 from optimize.tolerances import Tolerances
 
-from .config_design import DesignParamError, check_design, subdivided_faces
+from .config_design import MAX_FACES, DesignParamError, check_design, subdivided_faces
 from .config_errors import format_errors
 from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
 from .config_yaml import MAX_DEPTH, read_config
@@ -50,8 +50,6 @@ UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
 
 
-MAX_FACES = 250_000
-"""Most faces a built-in design may have after subdivision (the message names this limit)."""
 MAX_MM = 10_000.0
 """Largest layer distance, beam depth and part dimension (mm): 10 m."""
 MAX_ITER = 10_000

@@ -13,7 +13,8 @@ then builds the control mesh, which the design's own ranges keep small
 ...; every length is at most :data:`optimize.designs.MAX_SIZE_MM`), turning
 any arithmetic failure into a ConfigError, and returns the design.
 :func:`subdivided_faces` then bounds what the subdivision will make of it
-(``fabricate.config`` refuses more than ``MAX_FACES``).
+(``fabricate.config`` and ``fabricate shapes --refined`` refuse more than
+:data:`MAX_FACES`).
 """
 from __future__ import annotations
 
@@ -26,6 +27,9 @@ import numpy as np
 from optimize.errors import ConfigError
 
 from .config_errors import did_you_mean, short
+
+MAX_FACES = 250_000
+"""Most faces a built-in design may have after subdivision (the message names this limit)."""
 
 GROWTH = {"catmull_clark": 4, "doo_sabin": 4, "chaikin": 2, "lane_riesenfeld": 2}
 """Faces per face and subdivision round (Doo-Sabin adds vertex and edge faces: about 4 on quads)."""

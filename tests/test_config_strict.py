@@ -289,3 +289,9 @@ def test_a_folder_or_a_device_as_mesh_path_is_named_as_such(tmp_path):
     assert "is a folder; expected a mesh file" in error_of(tmp_path, f"input: {{mesh: {tmp_path}}}\n")
     assert "not a regular file" in error_of(tmp_path, "input: {mesh: /dev/zero}\n")
     assert "expected a file path of at most 1024" in error_of(tmp_path, "input: {mesh: " + "a" * 2000 + "}\n")
+
+
+def test_shapes_refined_is_bounded_like_a_config(capsys):
+    from fabricate.cli import main
+    assert main(["shapes", "railway_station", "--refined", "--param", "nu=300", "--param", "nv=300"]) == 2
+    assert f"more than {MAX_FACES:,}" in capsys.readouterr().err
