@@ -9,6 +9,7 @@ and a did-you-mean (difflib) for misspelt keys and choices.
 from __future__ import annotations
 
 import difflib
+import re
 from pathlib import Path
 from typing import Any, get_args, get_origin
 
@@ -23,6 +24,13 @@ def short(value: Any, limit: int = SHORT) -> str:
     """``repr(value)``, cut to ``limit`` characters (a message quotes a value, not a file)."""
     text = repr(value) if len(str(value)) <= 4 * limit else repr(str(value)[:limit])
     return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def printable(text: str) -> str:
+    """``text`` with every character that would break or hide a line escaped (``\\x1e``, ``\\u2028``)."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
 
 
 def did_you_mean(word: str, allowed) -> str:
@@ -84,7 +92,7 @@ def format_errors(exc: ValidationError, source: Path, lines: dict[tuple, int],
     errors = [dict(e, loc=_clean_loc(e["loc"])) for e in exc.errors(include_url=False)]
     for err in errors:
         loc = err["loc"]
-        key = ".".join(str(p) for p in loc) or "(top level)"
+        key = printable(".".join(str(p) for p in loc)) or "(top level)"
         param = (err.get("ctx") or {}).get("param")
         at = loc + ("params", param) if param else loc  # a design parameter: its own line
         if key in seen:  # one message per key (a union reports each alternative)
@@ -97,7 +105,7 @@ def format_errors(exc: ValidationError, source: Path, lines: dict[tuple, int],
         where = f"{source}:{line}" if line else str(source)
         via = next((f" (from --set {k}={short(v)})" for k, v in overrides.items()
                     if tuple(k.split(".")) == loc[:len(k.split("."))]), "")
-        messages.append((line or 0, f"{where}: {key}: {_message(err, loc, root)}{via}"))
+        messages.append((line or 0, printable(f"{where}: {key}: {_message(err, loc, root)}{via}")))
     messages = [m for _, m in sorted(messages, key=lambda m: m[0])]
     if len(messages) == 1:
         return messages[0]
@@ -122,6 +130,7 @@ def _message(err: dict, loc: tuple, root: type[BaseModel]) -> str:
     for a, b in (("Input should be", "expected"), ("List should have", "expected"),
                  ("Value error, ", ""), (" after validation", "")):
         msg = msg.replace(a, b)
+    msg = re.sub(r" or instance of \w+", "", msg)  # pydantic's words for a section given as a value
     allowed = field_range(root, loc)
     if allowed and kind in _RANGE_ERRORS:
         msg = f"expected {allowed}"

@@ -21,7 +21,7 @@ from pydantic import BaseModel
 
 from optimize.errors import ConfigError
 
-from .config_errors import short
+from .config_errors import printable, short
 from .config_yaml import MAX_DEPTH, parse_value
 
 
@@ -37,7 +37,7 @@ def set_key(data: dict[str, Any], dotted: str, value: Any, *, source: str | Path
         if child is None:
             child = node[key] = {}
         if not isinstance(child, dict):
-            raise ConfigError(f"{source}: --set {dotted}: {'.'.join(parts[:i + 1])} is {short(child)}, "
+            raise ConfigError(f"{source}: --set {short(dotted)}: {printable('.'.join(parts[:i + 1]))[:200]} is {short(child)}, "
                               "not a section with keys")
         node = child
     node[parts[-1]] = value

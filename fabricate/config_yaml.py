@@ -35,6 +35,8 @@ from yaml.resolver import Resolver
 
 from optimize.errors import ConfigError
 
+from .config_errors import printable
+
 MAX_BYTES = 1 << 20
 """Largest config file read (1 MiB; the longest shipped config is about 6 kB)."""
 MAX_DEPTH = 32
@@ -162,7 +164,7 @@ def _check_tree(root, where: str) -> dict[tuple, int]:
                 if isinstance(k, yaml.ScalarNode) and k.tag != _MERGE:
                     ident = (k.tag, k.value)
                     if ident in seen:
-                        name = ".".join(str(p) for p in path + (k.value,))
+                        name = printable(".".join(str(p) for p in path + (k.value,)))
                         raise ConfigError(f"{where}:{line}: {name}: duplicate key (also at line {seen[ident]}); "
                                           "expected each key once per section (YAML would keep the last "
                                           "silently)")
@@ -180,7 +182,7 @@ def _check_tree(root, where: str) -> dict[tuple, int]:
 
 
 def _one_line(text: str) -> str:
-    return " ".join(text.split())[:300]
+    return printable(" ".join(text.split())[:300])
 
 
 def _yaml_message(exc: yaml.YAMLError, where: str, text: str) -> str:
@@ -195,7 +197,7 @@ def _yaml_message(exc: yaml.YAMLError, where: str, text: str) -> str:
         context = getattr(exc, "context", None)
         if context and "constructor" in problem:
             problem = f"{context}: {problem}"
-    return f"{where}{line}: not valid YAML: {_one_line(problem)}"
+    return printable(f"{where}{line}: not valid YAML: {_one_line(problem)}")
 
 
 def parse_value(text: str) -> Any:

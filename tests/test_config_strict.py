@@ -295,3 +295,10 @@ def test_shapes_refined_is_bounded_like_a_config(capsys):
     from fabricate.cli import main
     assert main(["shapes", "railway_station", "--refined", "--param", "nu=300", "--param", "nv=300"]) == 2
     assert f"more than {MAX_FACES:,}" in capsys.readouterr().err
+
+
+def test_keys_with_control_characters_keep_the_message_on_its_lines(tmp_path):
+    message = error_of(tmp_path, DOME + 'offset: {"\\x1e\\u2028": 1}\n')
+    assert "offset.\\x1e\\u2028: unknown key" in message and len(message.splitlines()) == 1
+    message = error_of(tmp_path, DOME + 'parts: {"a\\x1e": 1, "a\\x1e": 2}\n')
+    assert "parts.a\\x1e: duplicate key" in message and len(message.splitlines()) == 1
