@@ -182,7 +182,7 @@ def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 
     if w >= 1.2 * s:
         raise ConfigError(f"design {name}: parameter width={width!r}, expected less than 1.2 x scale "
                           f"= {1.2 * s:g} mm (wider bands run through the neighbouring strand)")
-    r = _int(name, "rulings", rulings, 6, 10000)
+    r = _int(name, "rulings", rulings, 6, 2000)
     levels = _int(name, "levels", levels, 0, 8)
     t = np.linspace(0.0, 2 * np.pi, r, endpoint=False)
     c, N, B, D = _frenet(t, s)
