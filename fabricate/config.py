@@ -51,7 +51,7 @@ INPUT_KINDS = ("shape", "mesh", "control", "surface")
 
 
 MAX_MM = 10_000.0
-"""Largest layer distance, beam depth and part dimension (mm): 10 m."""
+"""Largest |layer distance| and beam depth (mm): 10 m."""
 MAX_ITER = 10_000
 """Largest ``optimize.max_iter``."""
 
