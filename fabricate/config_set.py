@@ -8,7 +8,9 @@ How each command treats commas (documented in the README and configs/reference.y
 - any other key: the commas separate the values of a sweep
   (``parts.glass_thickness=8,10,12``), which ``fabricate batch`` runs as one job
   per value and ``fabricate run`` refuses naming batch;
-- a sweep of a list key brackets each list: ``offset.distances=[0,-200],[0,-300]``.
+- a sweep of a list key brackets each list: ``offset.distances=[0,-200],[0,-300]``;
+- ``KEY=null`` removes the key: its default applies (``--set parts.beam_depth=null`` while
+  sweeping ``offset.distances``).
 
 Values are YAML (:func:`fabricate.config_yaml.parse_value`), as strict as a file's.
 """
@@ -26,7 +28,8 @@ from .config_yaml import MAX_DEPTH, parse_value
 
 
 def set_key(data: dict[str, Any], dotted: str, value: Any, *, source: str | Path = "--set") -> None:
-    """Set ``data["a"]["b"] = value`` for ``dotted = "a.b"``, creating sections as needed."""
+    """Set ``data["a"]["b"] = value`` for ``dotted = "a.b"``, creating sections as needed;
+    ``value = None`` removes the key (every key's ``null`` means its default)."""
     parts = [p for p in dotted.split(".")]
     if not dotted or any(not p for p in parts) or len(parts) > MAX_DEPTH:
         raise ConfigError(f"{source}: --set {short(dotted)}={short(value)}: expected a key path like "
@@ -40,7 +43,10 @@ def set_key(data: dict[str, Any], dotted: str, value: Any, *, source: str | Path
             raise ConfigError(f"{source}: --set {short(dotted)}: {printable('.'.join(parts[:i + 1]))[:200]} is {short(child)}, "
                               "not a section with keys")
         node = child
-    node[parts[-1]] = value
+    if value is None:  # --set KEY=null: as if the file did not give the key (its default applies)
+        node.pop(parts[-1], None)
+    else:
+        node[parts[-1]] = value
 
 
 def takes_list(dotted: str) -> bool:

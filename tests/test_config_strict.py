@@ -302,3 +302,12 @@ def test_keys_with_control_characters_keep_the_message_on_its_lines(tmp_path):
     assert "offset.\\x1e\\u2028: unknown key" in message and len(message.splitlines()) == 1
     message = error_of(tmp_path, DOME + 'parts: {"a\\x1e": 1, "a\\x1e": 2}\n')
     assert "parts.a\\x1e: duplicate key" in message and len(message.splitlines()) == 1
+
+
+def test_set_null_removes_the_key(tmp_path):
+    path = tmp_path / "a.yaml"
+    path.write_text(DOME + "parts: {beam_depth: 250}\nsubdivision: {levels: 0}\n")
+    sets = parse_sets(["offset.distances=0,-200", "parts.beam_depth=null", "subdivision.levels=null"])
+    cfg = load_config(path, overrides={k: v[0] for k, v in sets.items()})
+    assert cfg.layer_distances() == [0.0, -200.0] and cfg.parts.beam_depth == 200.0  # the default
+    assert cfg.subdivision.levels is None
