@@ -235,6 +235,7 @@ class OutputsSection(Section):
     three_mf: bool = Field(default=True, alias="3mf")
     dxf: bool = True
     svg: bool = True
+    flat: bool = True
     bom: bool = True
     pictures: bool = True
     html: bool = True

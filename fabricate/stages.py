@@ -179,7 +179,8 @@ def count_parts(parts) -> int:
 # -- exports -------------------------------------------------------------------------
 EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl"),
            ("three_mf", "model.3mf", "write_3mf"), ("dxf", "outlines.dxf", "write_dxf"),
-           ("svg", "outlines.svg", "write_svg"), ("bom", "bom.csv", "write_bom"))
+           ("svg", "outlines.svg", "write_svg"), ("flat", "flat.json", "write_flat"),
+           ("bom", "bom.csv", "write_bom"))
 
 
 def stage_exports(ctx) -> str:

@@ -120,7 +120,7 @@ def test_3mf_round_trip_names_and_vertices(parts, tmp_path):
         assert len(T) == sum(len(f) - 2 for f in p.faces)
 
 
-def test_dxf_outlines_equal_the_step_faces(parts, step_file, tmp_path):
+def test_dxf_outlines_are_the_flat_outlines_and_the_step_faces_lie_in_them(parts, step_file, tmp_path):
     facts = write_dxf(parts, tmp_path / "o.dxf")
     assert facts["outlines"] == len(parts.panels) + len(parts.beams) and "audit clean" in facts["audit"]
     outlines, info = read_outlines(tmp_path / "o.dxf")
@@ -128,10 +128,18 @@ def test_dxf_outlines_equal_the_step_faces(parts, step_file, tmp_path):
     assert sorted(outlines) == sorted(p.id for p in parts.panels + parts.beams)
     solids = dict(read_step(step_file[0])[0])
     for pid, Q in outlines.items():
-        fi, rel, err = match_outline(Q, face_polygons(solids[pid]))
         part = parts.by_id[pid]
-        assert fi >= 0 and rel < 1e-12 and err < 1e-9
-        assert len(Q) == len(part.faces[part.group.outline_face])
+        flat3 = np.concatenate([part.flat, np.zeros((len(part.flat), 1))], axis=1)
+        fi, rel, err = match_outline(Q, [flat3])
+        assert fi == 0 and rel < 1e-12 and err < 1e-9
+        # every corner of the STEP solid, seen in the part frame, lies inside the cut outline
+        M = part.transform
+        X = np.concatenate(face_polygons(solids[pid]))
+        local = (X - M[:3, 3]) @ M[:3, :3]
+        F = part.flat
+        E = np.roll(F, -1, axis=0) - F
+        cross = E[:, None, 0] * (local[None, :, 1] - F[:, None, 1]) - E[:, None, 1] * (local[None, :, 0] - F[:, None, 0])
+        assert (cross / np.linalg.norm(E, axis=1)[:, None]).min() > -1e-6
 
 
 @pytest.mark.parametrize("sheet", [(7000.0, 3000.0), (3000.0, 7000.0)])
