@@ -201,6 +201,15 @@ class OffsetSection(Section):
         return v
 
 
+class LimitsSection(Section):
+    """What the shops can make; parts beyond it are flagged by id (see ``fabricate.cad.spec.Limits``)."""
+
+    min_corner_deg: float = Field(default=30.0, ge=0, lt=180)
+    min_edge_mm: float = Field(default=50.0, ge=0)
+    sheet_mm: tuple[float, float] = (6000.0, 3210.0)
+    max_panel_kg: float = Field(default=250.0, gt=0)
+
+
 class PartsSection(Section):
     """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
 
@@ -213,6 +222,8 @@ class PartsSection(Section):
     density_glass: float = Field(default=2500.0, gt=0)
     density_steel: float = Field(default=7850.0, gt=0)
     node_sides: int = Field(default=24, ge=6)
+    steel_grade: str = Field(default="S355", min_length=1, max_length=40)
+    limits: LimitsSection = Field(default_factory=LimitsSection)
 
 
 CHECK_AUTO_MAX_PARTS = 3000
@@ -236,6 +247,7 @@ class OutputsSection(Section):
     dxf: bool = True
     svg: bool = True
     flat: bool = True
+    schedules: bool = True
     bom: bool = True
     pictures: bool = True
     html: bool = True

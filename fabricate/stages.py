@@ -180,7 +180,9 @@ def count_parts(parts) -> int:
 EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl"),
            ("three_mf", "model.3mf", "write_3mf"), ("dxf", "outlines.dxf", "write_dxf"),
            ("svg", "outlines.svg", "write_svg"), ("flat", "flat.json", "write_flat"),
-           ("bom", "bom.csv", "write_bom"))
+           ("schedules", "glass_schedule.csv", "write_glass_schedule"),
+           ("schedules", "steel_cut_list.csv", "write_steel_cut_list"),
+           ("schedules", "node_schedule.csv", "write_node_schedule"), ("bom", "bom.csv", "write_bom"))
 
 
 def stage_exports(ctx) -> str:

@@ -18,6 +18,7 @@ from optimize.errors import ConfigError, MeshError
 from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, RING, beam_planes, beam_solids
 from .diagnose import CONVEX_MIN, beam_hint, min_turn, panel_failure
 from .flat import flat_data
+from .limits import check_limits
 from .geometry import dot, polygon_area_2d, unit, volumes
 from .nodes import node_solids
 from .parts import PartGroup, Parts, part_ids
@@ -91,6 +92,7 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                              np.zeros(len(v)), np.full(len(v), 2 * spec.node_radius), nodes["length"], nb, spec))
         node_facts = {"theta_max_deg": float(np.degrees(nodes["theta_max"].max()))}
     report = _report(groups, spec, mode, s_beam, d, beams, node_facts)
+    report["limits"] = check_limits(groups, spec)
     return Parts(groups=tuple(groups), spec=spec, edge_mode=mode, report=report, mesh=mesh)
 
 
