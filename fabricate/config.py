@@ -170,6 +170,9 @@ class OptimizeSection(Section):
 
 
 _TOL = Tolerances()
+MEASURE_NAMES = ("planarity", "folded", "conical", "circular", "closeness", "offset_distance", "beam_planarity",
+                 "beam_planarity_boundary", "beam_twist", "axis_defect")
+"""What ``tolerances.requirements`` may name (``fabricate.requirements.MEASURES``)."""
 
 
 class TolerancesSection(Section):
@@ -182,9 +185,11 @@ class TolerancesSection(Section):
     beam_planarity: float = Field(default=_TOL.beam_planarity, gt=0)
     cad_linear_mm: float = Field(default=_TOL.cad_linear_mm, gt=0)
     closeness: float = Field(default=_TOL.closeness, gt=0)
+    beam_twist_mm: float = Field(default=_TOL.beam_twist_mm, gt=0)
+    requirements: list[Literal[MEASURE_NAMES]] | None = None
 
     def to_tolerances(self) -> Tolerances:
-        return Tolerances(**self.model_dump())
+        return Tolerances(**self.model_dump(exclude={"requirements"}))
 
 
 class OffsetSection(Section):
@@ -246,12 +251,20 @@ class OutputsSection(Section):
     three_mf: bool = Field(default=True, alias="3mf")
     dxf: bool = True
     svg: bool = True
-    flat: bool = True
-    schedules: bool = True
+    flat: bool | None = None
+    schedules: bool | None = None
     bom: bool = True
     pictures: bool = True
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"
+
+    def wanted(self, key: str) -> bool:
+        """Whether the file of ``key`` is written: ``flat`` follows ``dxf`` and ``schedules`` follows
+        ``bom`` unless set."""
+        value = getattr(self, key)
+        if value is None:
+            return bool(getattr(self, {"flat": "dxf", "schedules": "bom"}[key]))
+        return bool(value)
 
     def check_mode(self, parts: int) -> str:
         """``full`` | ``fast`` | ``off`` for a model of ``parts`` parts (``auto`` resolved)."""

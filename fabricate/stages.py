@@ -213,7 +213,7 @@ def stage_exports(ctx) -> str:
     if ctx.get("parts") is None:  # the CAD stage built nothing (folded panels): meshes only
         ctx.values["check"] = {"pass": None, "mode": "off", "checks": {}, "skipped": ctx.get("cad_skipped")}
         return f"{len(ctx.files)} files (no CAD files: {ctx.get('cad_skipped')})"
-    wanted = [(key, fname, fn) for key, fname, fn in EXPORTS if getattr(cfg.outputs, key)]
+    wanted = [(key, fname, fn) for key, fname, fn in EXPORTS if cfg.outputs.wanted(key)]
     for key, fname, fn in wanted:
         ctx.progress.advance("exports", 1, fname)
         try:
