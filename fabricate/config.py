@@ -231,6 +231,25 @@ class PartsSection(Section):
     limits: LimitsSection = Field(default_factory=LimitsSection)
 
 
+class SheetSection(Section):
+    """Stock sheets of one material for the nested cut files (mm)."""
+
+    sheet_mm: tuple[float, float]
+    margin_mm: float = Field(default=10.0, ge=0)
+    kerf_mm: float = Field(default=3.0, ge=0)
+    rotation: bool = True
+
+
+class NestingSection(Section):
+    """Stock sheets per material: glass (jumbo 6000 x 3210, trimmed edges, room to grind between parts)
+    and steel plate (12000 x 2500, plasma or laser kerf)."""
+
+    glass: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(6000.0, 3210.0), margin_mm=20.0,
+                                                                     kerf_mm=10.0))
+    steel: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(12000.0, 2500.0), margin_mm=10.0,
+                                                                     kerf_mm=3.0))
+
+
 CHECK_AUTO_MAX_PARTS = 3000
 """``outputs.check: auto`` runs the full check up to this many parts, the fast one above."""
 
@@ -253,17 +272,22 @@ class OutputsSection(Section):
     svg: bool = True
     flat: bool | None = None
     schedules: bool | None = None
+    cut_files: bool | None = None
+    stl_parts: bool = False
+    layout_plan: bool | None = None
+    nesting: NestingSection = Field(default_factory=NestingSection)
     bom: bool = True
     pictures: bool = True
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"
 
     def wanted(self, key: str) -> bool:
-        """Whether the file of ``key`` is written: ``flat`` follows ``dxf`` and ``schedules`` follows
-        ``bom`` unless set."""
+        """Whether the file of ``key`` is written: ``flat``, ``cut_files`` and ``layout_plan`` follow
+        ``dxf`` and ``schedules`` follows ``bom`` unless set."""
         value = getattr(self, key)
         if value is None:
-            return bool(getattr(self, {"flat": "dxf", "schedules": "bom"}[key]))
+            return bool(getattr(self, {"flat": "dxf", "schedules": "bom", "cut_files": "dxf",
+                                       "layout_plan": "dxf"}[key]))
         return bool(value)
 
     def check_mode(self, parts: int) -> str:

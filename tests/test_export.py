@@ -145,7 +145,7 @@ def test_dxf_outlines_are_the_flat_outlines_and_the_step_faces_lie_in_them(parts
 @pytest.mark.parametrize("sheet", [(7000.0, 3000.0), (3000.0, 7000.0)])
 def test_nesting_packs_parts_on_sheets_without_overlap(parts, sheet):
     lay = layout(parts, sheet=sheet, spacing=15.0)
-    assert lay.rotated.any() == (sheet[0] < sheet[1])
+    assert "rectpack" in lay.algorithm
     W, H = lay.size
     assert lay.sheets >= 1 and np.all((lay.utilisation > 0) & (lay.utilisation <= 1))
     rect = np.array([parts.by_id[i].rect for i in lay.ids])
@@ -159,10 +159,26 @@ def test_nesting_packs_parts_on_sheets_without_overlap(parts, sheet):
         apart = ((x1[:, None] + 15 <= x0[None, :] + 1e-9) | (x1[None, :] + 15 <= x0[:, None] + 1e-9)
                  | (y1[:, None] + 15 <= y0[None, :] + 1e-9) | (y1[None, :] + 15 <= y0[:, None] + 1e-9))
         assert np.all(apart | np.eye(len(i), dtype=bool))
+    assert np.all(lay.rotated[rect[:, 0] > W - 30])  # too long for the sheet: turned
     area = sum(parts.by_id[i].area_mm2 for i in lay.ids)
     assert lay.utilisation.sum() * W * H == pytest.approx(area)
     with pytest.raises(ConfigError, match="does not fit"):
         layout(parts, sheet=(500.0, 400.0))
+
+
+def test_nesting_keeps_the_kerf_and_turns_no_part_when_rotation_is_off(parts):
+    lay = layout(parts, sheet=(7000.0, 3000.0), spacing=20.0, kerf=4.0, rotation=False)
+    assert not lay.rotated.any() and lay.facts()["kerf_mm"] == 4.0
+    rect = np.array([parts.by_id[i].rect for i in lay.ids])
+    for s in range(lay.sheets):
+        i = np.nonzero(lay.sheet == s)[0]
+        x0, y0, x1, y1 = lay.x[i], lay.y[i], lay.x[i] + rect[i, 0], lay.y[i] + rect[i, 1]
+        apart = ((x1[:, None] + 4 <= x0[None, :] + 1e-9) | (x1[None, :] + 4 <= x0[:, None] + 1e-9)
+                 | (y1[:, None] + 4 <= y0[None, :] + 1e-9) | (y1[None, :] + 4 <= y0[:, None] + 1e-9))
+        assert np.all(apart | np.eye(len(i), dtype=bool))
+    assert [f["id"] for f in lay.facts()["per_sheet"]][:1] == ["S-S01"]
+    with pytest.raises(ConfigError, match="rotation not allowed"):
+        layout(parts, sheet=(3000.0, 7000.0), rotation=False)
 
 
 def test_svg_has_one_group_per_flat_part(parts, tmp_path):

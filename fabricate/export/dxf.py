@@ -33,7 +33,8 @@ from optimize.errors import ExportError
 from .flat import flat_group
 from .nesting import Layout, layout as make_layout, sheet_gap
 
-LAYERS = {"CUT": 1, "BEVEL": 3, "ETCH": 5, "SHEET": 8}
+LAYERS = {"CUT": 1, "INNER": 2, "BEVEL": 3, "ETCH": 5, "SHEET": 8}
+"""INNER holds inner contours (holes); the parts built today have none, the layer is there for CAM set-ups."""
 APPID = "CONICAL_FAB"
 AUDIT_SAMPLE = 24
 
@@ -56,7 +57,8 @@ def _skeleton(lay: Layout):
             x0 = s * step
             msp.add_lwpolyline([(x0, 0), (x0 + W, 0), (x0 + W, H), (x0, H)], close=True,
                                dxfattribs={"layer": "SHEET"})
-            msp.add_text(f"sheet {s + 1}: {W:g} x {H:g} mm, {100 * lay.utilisation[s]:.1f} % used",
+            msp.add_text(f"{lay.sheet_id(s)}: {W:g} x {H:g} mm, margin {lay.margin:g} mm, kerf {lay.kerf:g} mm, "
+                         f"{int((lay.sheet == s).sum())} parts, yield {100 * lay.utilisation[s]:.1f} %",
                          height=0.01 * W, dxfattribs={"layer": "SHEET", "insert": (x0, H + 0.01 * W)})
     return doc
 

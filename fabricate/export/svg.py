@@ -39,8 +39,8 @@ def write_svg(parts, path, *, sheet: tuple[float, float] | None = None, spacing:
     where = {pid: k for k, pid in enumerate(lay.ids)}
     body = []
     for gi, g in enumerate(parts.groups):
-        if g.kind not in ("panel", "beam") or not len(g):
-            continue
+        if g.kind not in ("panel", "beam") or not len(g) or g.ids[0] not in where:
+            continue  # a layout of some groups only (one material and thickness)
         fg = flat_group(g)
         k_out = fg.outline.shape[1]
         pts = " ".join(["%.4f,%.4f"] * k_out)
