@@ -80,3 +80,13 @@ def test_one_stl_per_part_stays_one_piece_when_welded(parts, tmp_path):
                                                 tri_verts=T.reshape(-1, 3).astype(np.uint32)))
         assert m.status().name == "NoError" and m.genus() == 0
         assert m.volume() == pytest.approx(p.volume_mm3, rel=1e-5) and head["parts"] == 1
+
+
+def test_to_build123d_is_a_labelled_assembly_of_the_exact_solids(parts):
+    model = parts.to_build123d()
+    assert model.label == "model" and [c.label for c in model.children] == ["panels", "beams"]
+    by_label = {s.label: s for c in model.children for s in c.children}
+    assert set(by_label) == {p.id for p in parts}
+    for p in list(parts)[::9]:
+        s = by_label[p.id]
+        assert s.is_valid and s.volume == pytest.approx(p.volume_mm3, rel=1e-9)

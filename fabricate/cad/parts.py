@@ -206,6 +206,27 @@ class Parts:
         hi = np.max([g.vertices.reshape(-1, 3).max(axis=0) for g in self.groups], axis=0)
         return np.stack([lo, hi])
 
+    def to_build123d(self, kinds=KINDS):
+        """A labelled build123d assembly to continue modelling with: a ``Compound`` labelled ``model``
+        with one child ``Compound`` per kind (``panels``, ``beams``, ``nodes``) holding one
+        ``Solid`` per part, labelled with its id and coloured by kind (the same exact B-rep solids
+        as ``model.step``: one plane per face, shared edges)."""
+        from build123d import Color, Compound, Solid
+
+        from fabricate.export.brep import group_solids
+
+        children = []
+        for kind in kinds:
+            solids = []
+            for g in self.of_kind(kind):
+                for pid, shape in zip(g.ids, group_solids(g)):  # one wrapper per part
+                    solid = Solid(shape)
+                    solid.label, solid.color = pid, Color(*COLOURS[kind])
+                    solids.append(solid)
+            if solids:
+                children.append(Compound(label=kind + "s", children=solids))
+        return Compound(label="model", children=children)
+
     def local_origin(self) -> np.ndarray:
         """(3,) float: an offset that brings a far-from-origin model near the origin.
 
