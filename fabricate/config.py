@@ -239,6 +239,9 @@ class OptimizeSection(Section):
 
 
 _TOL = Tolerances()
+MEASURE_NAMES = ("planarity", "folded", "conical", "circular", "closeness", "offset_distance", "beam_planarity",
+                 "beam_planarity_boundary", "beam_twist", "axis_defect")
+"""What ``tolerances.requirements`` may name (``fabricate.requirements.MEASURES``)."""
 
 
 class TolerancesSection(Section):
@@ -252,9 +255,11 @@ class TolerancesSection(Section):
     beam_planarity: float = Field(default=_TOL.beam_planarity, ge=1e-12, le=1.0)
     cad_linear_mm: float = Field(default=_TOL.cad_linear_mm, ge=1e-7, le=1.0)  # OpenCASCADE: 1e-7 mm
     closeness: float = Field(default=_TOL.closeness, ge=1e-12, le=1.0)
+    beam_twist_mm: float = Field(default=_TOL.beam_twist_mm, ge=1e-9, le=1000.0)
+    requirements: list[Literal[MEASURE_NAMES]] | None = None
 
     def to_tolerances(self) -> Tolerances:
-        return Tolerances(**self.model_dump())
+        return Tolerances(**self.model_dump(exclude={"requirements"}))
 
 
 class OffsetSection(Section):
@@ -272,6 +277,15 @@ class OffsetSection(Section):
         return v
 
 
+class LimitsSection(Section):
+    """What the shops can make; parts beyond it are flagged by id (see ``fabricate.cad.spec.Limits``)."""
+
+    min_corner_deg: float = Field(default=30.0, ge=0, lt=180)
+    min_edge_mm: float = Field(default=50.0, ge=0, le=10000.0)
+    sheet_mm: tuple[float, float] = (6000.0, 3210.0)
+    max_panel_kg: float = Field(default=250.0, gt=0, le=100000.0)
+
+
 class PartsSection(Section):
     """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
 
@@ -284,6 +298,27 @@ class PartsSection(Section):
     density_glass: float = Field(default=2500.0, gt=0, le=25000.0)
     density_steel: float = Field(default=7850.0, gt=0, le=25000.0)
     node_sides: int = Field(default=24, ge=6, le=256)
+    steel_grade: str = Field(default="S355", min_length=1, max_length=40)
+    limits: LimitsSection = Field(default_factory=LimitsSection)
+
+
+class SheetSection(Section):
+    """Stock sheets of one material for the nested cut files (mm)."""
+
+    sheet_mm: tuple[float, float]
+    margin_mm: float = Field(default=10.0, ge=0, le=1000.0)
+    kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
+    rotation: bool = True
+
+
+class NestingSection(Section):
+    """Stock sheets per material: glass (jumbo 6000 x 3210, trimmed edges, room to grind between parts)
+    and steel plate (12000 x 2500, plasma or laser kerf)."""
+
+    glass: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(6000.0, 3210.0), margin_mm=20.0,
+                                                                     kerf_mm=10.0))
+    steel: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(12000.0, 2500.0), margin_mm=10.0,
+                                                                     kerf_mm=3.0))
 
 
 CHECK_AUTO_MAX_PARTS = 3000
@@ -306,6 +341,12 @@ class OutputsSection(Section):
     three_mf: bool = Field(default=True, alias="3mf")
     dxf: bool = True
     svg: bool = True
+    flat: bool | None = None
+    schedules: bool | None = None
+    cut_files: bool | None = None
+    stl_parts: bool = False
+    layout_plan: bool | None = None
+    nesting: NestingSection = Field(default_factory=NestingSection)
     bom: bool = True
     ifc: bool = True
     rhino: bool = Field(default=True, alias="3dm")
@@ -315,6 +356,15 @@ class OutputsSection(Section):
     pictures: bool = True
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"
+
+    def wanted(self, key: str) -> bool:
+        """Whether the file of ``key`` is written: ``flat``, ``cut_files`` and ``layout_plan`` follow
+        ``dxf`` and ``schedules`` follows ``bom`` unless set."""
+        value = getattr(self, key)
+        if value is None:
+            return bool(getattr(self, {"flat": "dxf", "schedules": "bom", "cut_files": "dxf",
+                                       "layout_plan": "dxf"}[key]))
+        return bool(value)
 
     def check_mode(self, parts: int) -> str:
         """``full`` | ``fast`` | ``off`` for a model of ``parts`` parts (``auto`` resolved)."""
