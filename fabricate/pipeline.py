@@ -28,6 +28,7 @@ from . import stages
 from .config import RunConfig
 from .progress import NullProgress
 from .report.measures import collect_measures
+from .requirements import apply_requirements, warnings
 
 log = logging.getLogger(__name__)
 
@@ -104,7 +105,9 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
         ctx = RunContext(config=config, workdir=Path(tmp), progress=progress)
         for name in STAGES[:-1]:
             _run_stage(ctx, name)
-        ctx.values["measures"] = collect_measures(ctx)
+        tol = config.tolerances
+        ctx.values["measures"] = apply_requirements(collect_measures(ctx), ctx.get("structure"), tol.requirements,
+                                                    ctx["plan"]["target"], tol.beam_twist_mm)
         ctx.values["outcome"] = outcome(ctx)
         ctx.timings["before_report"] = time.perf_counter() - t_start
         _run_stage(ctx, "report")
@@ -163,7 +166,10 @@ def outcome(ctx: RunContext) -> dict[str, Any]:
         if ctx.get("cad_skipped"):
             message += "; " + ctx.get("cad_skipped")
     else:
-        status, message = "ok", "every tolerance reached"
+        parts = ctx.get("parts")
+        warn = warnings(measures, parts.report.get("limits") if parts is not None else None)
+        status, message = "ok", "every requirement met" + (f"; {len(warn)} warning(s): " + "; ".join(warn)
+                                                           if warn else ", every tolerance reached")
     return {"status": status, "exit_code": EXIT_CODES[status], "failed": failed, "message": message}
 
 
