@@ -285,6 +285,8 @@ class LimitsSection(Section):
     sheet_mm: tuple[float, float] = (6000.0, 3210.0)
     max_panel_kg: float = Field(default=250.0, gt=0, le=100000.0)
 
+    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+
 
 class PartsSection(Section):
     """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
@@ -309,6 +311,8 @@ class SheetSection(Section):
     margin_mm: float = Field(default=10.0, ge=0, le=1000.0)
     kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
     rotation: bool = True
+
+    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
 
 
 class NestingSection(Section):
