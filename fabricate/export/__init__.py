@@ -1,10 +1,17 @@
-"""Exporters: parts in, files out (STEP, STL, 3MF, DXF, SVG, bill of materials); all atomic."""
-from .bom import write_bom
-from .dxf import write_dxf
-from .nesting import Layout, layout
-from .step import write_step
-from .stl import write_stl
-from .svg import write_svg
-from .threemf import write_3mf
+"""Exporters: parts in, files out (STEP, STL, 3MF, DXF, SVG, bill of materials); all atomic.
 
-__all__ = ["Layout", "layout", "write_3mf", "write_bom", "write_dxf", "write_step", "write_stl", "write_svg"]
+Names load on first use (PEP 562), so importing one stage does not load the others.
+"""
+from optimize._lazy import lazy_exports
+
+_EXPORTS = {
+    "write_bom": ".bom",
+    "write_dxf": ".dxf",
+    "Layout": ".nesting", "layout": ".nesting",
+    "write_step": ".step",
+    "write_stl": ".stl",
+    "write_svg": ".svg",
+    "write_3mf": ".threemf",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
