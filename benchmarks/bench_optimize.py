@@ -44,7 +44,7 @@ sys.path.insert(0, str(ROOT))
 from optimize import measures, optimize_mesh, shapes  # noqa: E402
 from optimize.closeness import Reference  # noqa: E402
 
-DATA = ROOT.parent / "shared" / "data"
+TUNNEL = ROOT / "configs" / "meshes" / "tunnel.off"  # the built-in design tunnel, in metres
 
 
 # -- meshes -------------------------------------------------------------------
@@ -78,10 +78,11 @@ def revolution(faces: int, noise: float = 0.005):
     return shapes.perturbed(base, noise, seed=1, name=f"dome{n * n}+noise")
 
 
-def halftunnel():
+def real_mesh(path=None):
+    """The shipped forking tunnel (784 quads, irregular vertices, three loops), or ``--mesh PATH``."""
     from optimize.io import read_mesh
 
-    return read_mesh(DATA / "halftunnel.off")
+    return read_mesh(path or TUNNEL)
 
 
 # -- measuring ----------------------------------------------------------------
@@ -190,7 +191,7 @@ def comparison(args):
         igl = ensure("igl", "libigl", not args.no_install)
         mpfp = ensure("mpfp", "mpfp", not args.no_install)
     cases = [(height_field(900, "conjugate"), "pq"), (height_field(900), "pq"), (height_field(900, "hypar"), "pq"),
-             (halftunnel(), "pq"), (halftunnel(), "conical"), (halftunnel(), "circular"),
+             (real_mesh(args.mesh), "pq"), (real_mesh(args.mesh), "conical"), (real_mesh(args.mesh), "circular"),
              (revolution(10000), "pq"), (revolution(10000), "conical"), (revolution(2500), "circular"),
              (height_field(10000), "pq")]
     if args.quick:
@@ -331,6 +332,7 @@ def linalg(args):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="small cases only")
+    ap.add_argument("--mesh", metavar="PATH", help="a quad mesh to use instead of configs/meshes/tunnel.off")
     ap.add_argument("--large", action="store_true", help="scaling curve up to 100k faces")
     ap.add_argument("--full", action="store_true", help="run mpfp on the large meshes too (minutes)")
     ap.add_argument("--no-peers", action="store_true")

@@ -1,6 +1,6 @@
 """Offset stage: exact constant-distance layers, conical offsets, planar beams, invariance.
 
-Meshes that are conical by construction (surfaces of revolution, the shared
+Meshes that are conical by construction (surfaces of revolution, the capped
 cylinder), conical meshes from the optimizer, and a translational surface
 (PQ, not conical).  Model units are mm (meshes a few metres across).
 """

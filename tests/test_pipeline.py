@@ -313,15 +313,14 @@ def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
 
 
 def test_a_tube_from_a_real_mesh_through_the_pipeline(tmp_path):
-    """cylinder.obj without its caps, in metres, as a surface with ``side: keep``: remeshed along its
+    """shapes.capped_cylinder() without its caps, in metres, as a surface with ``side: keep``: remeshed along its
     circles and rulings, conical, offset and built into panels and beams (exit 0)."""
     import numpy as np
 
-    from conftest import shared_file
-    from optimize import Mesh
+    from optimize import Mesh, shapes
     from optimize.io import write_mesh
 
-    m = read_mesh(shared_file("cylinder.obj"))
+    m = shapes.capped_cylinder()
     quads = m.F[m.face_sizes == 4][:, :4]
     used = np.unique(quads)
     remap = np.full(m.n_vertices, -1)
