@@ -25,7 +25,9 @@ with it:
 - ``svg``: parses, one group per panel and beam.
 
 A check whose file was not written is reported with ``pass: None`` and the
-reason, never silently left out.
+reason, never silently left out; a file the run wrote (listed in its
+``report.json``) that is gone fails, ``missing``.  Every failed check carries
+``why``: the plain reasons, from its figures.
 """
 from __future__ import annotations
 
@@ -41,6 +43,7 @@ from optimize.tolerances import DEFAULT, Tolerances
 log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
          "dxf": "outlines.dxf", "svg": "outlines.svg"}
+REPORT = "report.json"
 VOLUME_REL_TOL = 1e-6
 AREA_REL_TOL = 1e-9
 EDGE_TOL_MM = 1e-6
@@ -65,6 +68,7 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
     if not paths["bom"].exists():
         raise ExportError(f"{paths['bom']}: missing; the checks compare every file with the bill of materials")
     bom = read_bom(paths["bom"])
+    written = written_files(out)
     checks: dict[str, dict] = {"bom": _check_bom(bom)}
     read: dict[str, object] = {}  # what one check read and the next ones use: STEP solids, 3MF meshes
     for name, key, needs, run in (
@@ -80,7 +84,12 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
             checks[name] = {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
             continue
         if not paths[key].exists():
-            checks[name] = {"pass": None, "skipped": f"{FILES[key]} was not written"}
+            if FILES[key] in written:
+                checks[name] = {"pass": False, "missing": FILES[key],
+                                "why": [f"{FILES[key]} is missing: the run wrote it "
+                                        f"({written[FILES[key]]} bytes, listed in {REPORT})"]}
+            else:
+                checks[name] = {"pass": None, "skipped": f"{FILES[key]} was not written"}
             continue
         if needs and read.get(needs) is None:
             checks[name] = {"pass": None, "skipped": f"needs a readable {FILES[needs]}"}
@@ -90,11 +99,71 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
         except ExportError as exc:
             result = {"pass": False, "error": str(exc)}
         result["seconds"] = round(time.perf_counter() - t1, 3)
+        if result.get("pass") is False:
+            result.setdefault("why", failure_reasons(result))
         checks[name] = result
         log.info("check %s: %s", name, {True: "ok", False: "FAILED"}.get(result.get("pass"), "skipped"))
     failed = [k for k, v in checks.items() if v.get("pass") is False]
     return {"outdir": str(out), "pass": not failed, "failed": failed, "checks": checks,
             "seconds": round(time.perf_counter() - t0, 3)}
+
+
+def written_files(outdir: Path) -> dict[str, int]:
+    """``{file: bytes}`` the run says it wrote (``report.json``'s ``files``); empty without a report
+    (the check inside a run, or exports written by the library): then a file not there was not written."""
+    import json
+
+    try:
+        report = json.loads((outdir / REPORT).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    files = report.get("files") if isinstance(report, dict) else None
+    return {str(k): (v or {}).get("bytes") for k, v in files.items()} if isinstance(files, dict) else {}
+
+
+REASONS = {"missing": "missing from the file", "unexpected": "not in the BOM", "invalid": "invalid solids",
+           "volume_failures": "volume off the BOM's", "not_manifold": "not closed 2-manifolds",
+           "not_one_piece": "not one piece (object index)", "uncoloured": "without a colour",
+           "nonpositive_volume": "volume not positive", "failures": "failed"}
+FLAGS = {"unit_mm": "the unit is not mm", "coloured_by_kind": "not one colour per kind",
+         "complete": "the file is incomplete (no END-ISO-10303-21;)"}
+
+
+def failure_reasons(r: dict) -> list[str]:
+    """Plain reasons of a failed check from its figures (the lists of ids, the false flags)."""
+    out = [f"{r['error']}"] if r.get("error") else []
+    for key, what in REASONS.items():
+        items = r.get(key)
+        if items:
+            count = r.get("failed") if key == "failures" and r.get("failed") else len(items)
+            shown = ", ".join(_name(x) for x in items[:5])
+            out.append(f"{count} {what}: {shown}{', ...' if count > 5 else ''}")
+    out += [what for key, what in FLAGS.items() if r.get(key) is False]
+    if r.get("duplicate_ids"):
+        out.append(f"{r['duplicate_ids']} duplicate ids")
+    for a, b, what in (("solids", "bom_rows", "solids for BOM rows"), ("components", "parts", "components for parts"),
+                       ("genus", "expected_genus", "genus, expected"), ("outlines", "expected", "outlines for parts"),
+                       ("groups", "expected", "groups for parts")):
+        if a in r and b in r and r[a] != r[b]:
+            out.append(f"{r[a]} {what} {r[b]}")
+    if r.get("status") not in (None, "NoError"):
+        out.append(f"manifold3d status {r['status']}")
+    if r.get("audit_errors"):
+        out.append(f"{r['audit_errors']} DXF audit errors")
+    if "units" in r and r.get("units") != 4:
+        out.append(f"DXF units {r['units']}, expected 4 (mm)")
+    if "volume_error_mm3" in r and r["volume_error_mm3"] > r.get("float32_bound_mm3", float("inf")):
+        out.append(f"volume off by {r['volume_error_mm3']:.3g} mm3, above the float32 bound "
+                   f"{r['float32_bound_mm3']:.3g} mm3")
+    return out or ["see the JSON (--json) for the figures"]
+
+
+def _name(x) -> str:
+    if isinstance(x, dict):
+        who = x.get("id") or x.get("pair")
+        figs = ", ".join(f"{k} {v:.3g}" for k, v in x.items() if isinstance(v, float))
+        return f"{who} ({figs})" if figs else str(who)
+    return str(x)
 
 
 def _volumes(bom) -> dict[str, float]:

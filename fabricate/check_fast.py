@@ -40,7 +40,7 @@ def run_check(outdir, mode: str, tol: Tolerances = DEFAULT) -> dict:
     ``failed``, ``checks``, ``seconds``) with ``mode`` added; for ``off``,
     ``pass`` is None with the reason in ``skipped``.
     """
-    from .check import check_outputs
+    from .check import check_outputs, failure_reasons, written_files
 
     out = Path(outdir)
     if mode == "off":
@@ -56,10 +56,16 @@ def run_check(outdir, mode: str, tol: Tolerances = DEFAULT) -> dict:
 
     bom = read_bom(out / "bom.csv")
     checks = dict(result["checks"])
+    written = written_files(out)
     for name, fname, light in (("step", STEP_FILE, scan_step), ("dxf", DXF_FILE, dxf_against_bom)):
         if (out / fname).exists():
             t1 = time.perf_counter()
             checks[name] = dict(light(out / fname, bom), seconds=round(time.perf_counter() - t1, 3))
+            if checks[name]["pass"] is False:
+                checks[name]["why"] = failure_reasons(checks[name])
+        elif fname in written:
+            checks[name] = {"pass": False, "missing": fname,
+                            "why": [f"{fname} is missing: the run wrote it ({written[fname]} bytes)"]}
     failed = [k for k, v in checks.items() if v.get("pass") is False]
     return {"outdir": str(out), "mode": "fast", "pass": not failed, "failed": failed, "checks": checks,
             "note": FAST_NOTE, "seconds": round(time.perf_counter() - t0, 3)}

@@ -61,6 +61,10 @@ def stage_input(ctx) -> str:
         if value is not None:
             plan[key] = value
     plan.update(scale=cfg.scale, mm_per_unit=factor, faces=mesh.n_faces, vertices=mesh.n_vertices)
+    if plan["levels"] == 0 and kind != "surface":  # optimized as it is: quads, not triangles
+        from .quads import RUN_HINT, require_quads
+
+        require_quads(mesh, f"input.{kind} {plan['source']}", hint=RUN_HINT)
     if factor != 1.0:
         mesh = mesh.with_vertices(mesh.V * factor)
         if "surface" in ctx.values:

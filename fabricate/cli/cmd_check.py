@@ -28,7 +28,10 @@ def run(args) -> int:
     else:
         for name, r in result["checks"].items():
             state = {True: "ok  ", False: "FAIL", None: "skip"}[r.get("pass")]
-            detail = r.get("skipped") or r.get("error") or _summary(name, r)
+            detail = r.get("skipped") or _summary(name, r)
+            if r.get("pass") is False:
+                detail = "; ".join(r.get("why") or [r.get("error") or "see --json"]) + (
+                    f" ({detail})" if detail and not r.get("missing") else "")
             print(f"{state} {name:13s} {detail}")
         print(f"{'all checks passed' if result['pass'] else 'FAILED: ' + ', '.join(result['failed'])} "
               f"({result['seconds']:.1f} s)")

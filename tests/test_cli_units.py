@@ -1,0 +1,167 @@
+"""``--units`` of the standalone commands, offsets past the focal distance, triangle input refused."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from fabricate.cli import main
+from fabricate.cli.units import UNIT_TO_MM, UNITS
+from fabricate.config import UNIT_TO_MM as CONFIG_UNITS
+from fabricate.offset import offset_structure
+from fabricate.offset.turnover import area_quadratic, focal_limits, turned_faces
+from optimize import shapes
+from optimize.io import read_mesh, write_mesh
+from optimize.mesh import Mesh
+
+RADIUS_M, RISE_M = 8.0, 3.0
+SPHERE_M = (RADIUS_M ** 2 + RISE_M ** 2) / (2 * RISE_M)  # the dome is a cap of this sphere
+
+
+def _dome(scale: float = 1.0) -> Mesh:
+    m = shapes.revolution(shapes.dome_profile(radius=RADIUS_M, rise=RISE_M, k=6), 12, name="dome")
+    return m.with_vertices(m.V * scale)
+
+
+@pytest.fixture
+def dome_m(tmp_path):
+    """A conical dome written in metres (8 m span)."""
+    path = tmp_path / "dome_m.obj"
+    write_mesh(path, _dome())
+    return path
+
+
+def test_units_are_the_configs():
+    assert UNIT_TO_MM == CONFIG_UNITS and set(UNITS) == set(CONFIG_UNITS)
+
+
+def test_faces_turn_over_at_the_sphere_radius():
+    """On a spherical cap every node axis passes through the centre: the layer collapses there."""
+    mesh = _dome(1000.0)
+    s = offset_structure(mesh, (0.0, -100.0))
+    coef = area_quadratic(mesh, s.normals, s.offset)
+    lo, hi, f_lo, f_hi = focal_limits(coef)
+    R = SPHERE_M * 1000.0
+    inward = lo if np.isfinite(lo) else -hi  # whichever side the normals point away from
+    assert -R <= inward <= -0.8 * R
+    side = np.sign(inward)
+    assert turned_faces(coef, 0.5 * side * R).size == 0
+    assert turned_faces(coef, 1.1 * side * R).size == mesh.n_faces
+    assert s.report["turned_over"]["ok"]
+
+
+def test_offset_in_metres_read_as_mm_turns_faces_over_loudly(dome_m, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["offset", str(dome_m), "--distances=0,-200,200", "-o", str(out)]) == 3
+    stdout = capsys.readouterr().out
+    assert "FACES TURN OVER" in stdout
+    rep = json.loads((out / "offset_report.json").read_text())
+    t = rep["turned_over"]
+    assert not t["ok"] and t["count"] > 0
+    bad = [L for L in t["per_layer"] if L["count"]]
+    assert bad and all(L["faces"] for L in bad)
+    assert f"faces {', '.join(map(str, bad[0]['faces'][:3]))}" in stdout  # ids printed, first few
+    assert rep["input"]["units"] == "mm"
+
+
+def test_offset_with_units_m_is_clean_and_in_mm(dome_m, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["offset", str(dome_m), "--distances=0,-200", "-o", str(out), "--units", "m"]) == 0
+    stdout = capsys.readouterr().out
+    assert "TURN OVER" not in stdout and "file in m" in stdout
+    rep = json.loads((out / "offset_report.json").read_text())
+    assert rep["turned_over"]["ok"] and rep["input"]["mm_per_unit"] == 1000.0
+    assert rep["mesh"]["bbox_diagonal_mm"] == pytest.approx(_dome(1000.0).bbox_diagonal())
+    layer = read_mesh(out / "layer_0.obj")
+    assert np.allclose(layer.V, _dome(1000.0).V)  # output files in mm
+    assert rep["face_distance"]["per_layer"][1]["max_error_mm"] < 1e-6  # conical: exact at 200 mm
+
+
+def test_measure_reports_lengths_in_mm(dome_m, capsys):
+    assert main(["measure", str(dome_m), "--units", "m"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert main(["measure", str(dome_m)]) == 0
+    t = json.loads(capsys.readouterr().out)
+    assert s["units"]["lengths"] == "mm" and s["units"]["file"] == "m"
+    assert s["edge_length"]["mean"] == pytest.approx(1000.0 * t["edge_length"]["mean"])
+    assert s["planarity"]["max"] == pytest.approx(t["planarity"]["max"], abs=1e-12)  # scale-free
+
+
+def test_optimize_writes_in_the_files_unit(tmp_path, capsys):
+    noisy = shapes.perturbed(_dome(), 0.01, seed=3)
+    src = tmp_path / "noisy_m.obj"
+    write_mesh(src, noisy)
+    out = tmp_path / "opt_m.obj"
+    code = main(["optimize", str(src), "-o", str(out), "--units", "m", "--progress", "off"])
+    assert code in (0, 3)
+    stdout = capsys.readouterr().out
+    assert " mm of " in stdout  # the distance to the reference in mm
+    res = read_mesh(out)
+    assert np.abs(res.V - noisy.V).max() < 0.05 * RADIUS_M  # metres in, metres out
+    assert np.abs(res.V).max() == pytest.approx(np.abs(noisy.V).max(), rel=0.05)
+
+
+def test_shapes_writes_in_the_asked_unit(tmp_path, capsys):
+    assert main(["shapes"]) == 0
+    name = capsys.readouterr().out.split(":")[0].strip()
+    a, b = tmp_path / "a_mm.obj", tmp_path / "a_m.obj"
+    assert main(["shapes", name, "-o", str(a)]) == 0
+    assert main(["shapes", name, "-o", str(b), "--units", "m"]) == 0
+    assert "units m" in capsys.readouterr().out
+    assert np.allclose(read_mesh(a).V, 1000.0 * read_mesh(b).V)
+
+
+def _triangles(tmp_path) -> str:
+    m = _dome(1000.0)
+    path = tmp_path / "tri.obj"
+    write_mesh(path, Mesh(m.V, m.triangulate(), name="tri"))
+    return str(path)
+
+
+@pytest.mark.parametrize("target", ["pq", "conical"])
+def test_optimize_refuses_a_triangle_mesh_at_once(tmp_path, capsys, target):
+    src = _triangles(tmp_path)
+    out = tmp_path / "out.obj"
+    assert main(["optimize", src, "-o", str(out), "--target", target]) == 2
+    err = capsys.readouterr().err
+    assert "faces are triangles" in err and "fabricate remesh" in err and "input.surface" in err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_run_input_stage_refuses_a_triangle_mesh(tmp_path):
+    from fabricate.quads import RUN_HINT, require_quads
+    from optimize.errors import MeshError
+
+    m = read_mesh(_triangles(tmp_path))
+    with pytest.raises(MeshError, match="input.surface"):
+        require_quads(m, "input.mesh tri.obj", hint=RUN_HINT)
+    require_quads(_dome(), "input.mesh dome.obj", hint=RUN_HINT)  # quads pass
+
+
+def test_run_with_a_triangle_mesh_exits_2_before_optimizing(tmp_path, capsys):
+    import yaml
+
+    src = _triangles(tmp_path)
+    cfg = tmp_path / "tri.yaml"
+    cfg.write_text(yaml.safe_dump({"name": "tri", "input": {"mesh": src}, "subdivision": {"levels": 0}}))
+    code = main(["run", str(cfg), "--out", str(tmp_path / "outputs"), "-q"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert "faces are triangles" in err and "input.surface" in err
+    assert not (tmp_path / "outputs" / "tri").exists()
+
+
+def test_optimize_prints_the_worst_defect_it_stops_on(tmp_path, capsys):
+    """The message's 'worst defect/tolerance 10^x' is one of the printed maxima."""
+    import re
+
+    src = tmp_path / "noisy.obj"
+    write_mesh(src, shapes.perturbed(_dome(1000.0), 0.05, seed=1))
+    assert main(["optimize", str(src), "-o", str(tmp_path / "o.obj"), "--target", "conical",
+                 "--max-iter", "1", "--progress", "off"]) == 3
+    out = capsys.readouterr().out
+    score = float(re.search(r"worst defect/tolerance 10\^(-?[\d.]+)", out).group(1))
+    maxima = [float(x) for x in re.findall(r"max (\S+)  mean", out)]
+    assert any(abs(np.log10(v / 1e-6) - score) < 0.01 for v in maxima if v > 0), (score, maxima)
