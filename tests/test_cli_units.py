@@ -165,3 +165,25 @@ def test_optimize_prints_the_worst_defect_it_stops_on(tmp_path, capsys):
     score = float(re.search(r"worst defect/tolerance 10\^(-?[\d.]+)", out).group(1))
     maxima = [float(x) for x in re.findall(r"max (\S+)  mean", out)]
     assert any(abs(np.log10(v / 1e-6) - score) < 0.01 for v in maxima if v > 0), (score, maxima)
+
+
+def test_remesh_notes_count_the_faces_written(tmp_path, capsys):
+    """The seamless branch collapses boundary slivers after tracing: the note counts what is written."""
+    import re
+
+    from optimize import surfaces
+
+    f = (lambda x, y: 0.1 * (x ** 3 - 3 * x * y * y),
+         lambda x, y: 0.1 * np.stack([3 * x * x - 3 * y * y, -6 * x * y], 1),
+         lambda x, y: 0.1 * np.stack([np.stack([6 * x, -6 * y], 1), np.stack([-6 * y, -6 * x], 1)], 1))
+    surf = surfaces.height_field(f, size=(3.0, 3.0), n=(41, 41))
+    src, out = tmp_path / "saddle.obj", tmp_path / "quads.obj"
+    write_mesh(src, surf.mesh.with_vertices(surf.mesh.V * 1000.0))  # mm
+    assert main(["remesh", str(src), "--edge-length", "300", "-o", str(out), "--optimize", "none",
+                 "--side=" + ",".join(map(str, surf.side))]) == 0
+    stdout = capsys.readouterr().out
+    written = read_mesh(out)
+    counted = [tuple(map(int, m)) for m in re.findall(r"(\d+) quads, (\d+) other faces", stdout)]
+    assert counted, stdout
+    q = int(np.sum(written.face_sizes == 4))
+    assert all(c == (q, written.n_faces - q) for c in counted), (counted, q, written.n_faces)
