@@ -1,6 +1,8 @@
 """The output check in the mode a run asks for (``outputs.check``): full, fast or off.
 
-``full`` is :func:`fabricate.check.check_outputs` as it is.  ``fast`` runs the
+``full`` is :func:`fabricate.check.check_outputs` as it is (the STEP read by
+an independent text reader); ``occ`` the same with OpenCASCADE reading the
+STEP back (``fabricate check --occ``).  ``fast`` runs the
 same checks with ``skip={"step"}`` (the STEP is not read back: OpenCASCADE
 reading the STEP back is nearly all of the time on big models: about 10 ms per
 part), then puts two light checks, from the files alone, in place of the two
@@ -46,10 +48,10 @@ def run_check(outdir, mode: str, tol: Tolerances = DEFAULT) -> dict:
     if mode == "off":
         return {"outdir": str(out), "mode": "off", "pass": None, "failed": [], "checks": {},
                 "skipped": "outputs.check: off", "seconds": 0.0}
-    if mode == "full":
-        return dict(check_outputs(out, tol=tol), mode="full")
+    if mode in ("full", "occ"):
+        return dict(check_outputs(out, tol=tol, step_reader="text" if mode == "full" else "occ"), mode=mode)
     if mode != "fast":
-        raise ValueError(f"check mode {mode!r}: expected 'full', 'fast' or 'off'")
+        raise ValueError(f"check mode {mode!r}: expected 'full', 'occ', 'fast' or 'off'")
     t0 = time.perf_counter()
     result = check_outputs(out, tol=tol, skip=frozenset({"step"}))
     from .export.bom import read_bom
