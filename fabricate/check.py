@@ -14,7 +14,8 @@ with it:
   ``1e-6`` relative; the file's unit is mm; every solid has a colour, one
   per kind, different kinds different.  With ``step_reader="occ"``
   (``fabricate check --occ``) OpenCASCADE reads it back instead and every
-  solid passes ``BRepCheck_Analyzer`` (about 10 ms a part).
+  solid passes ``BRepCheck_Analyzer`` (about 10 ms a part), and ezdxf
+  audits the DXF.
 - ``3mf``: one object per BOM row, same names; manifold3d (double precision)
   accepts each as a closed 2-manifold; volumes to ``1e-6``.
 - ``stl``: split into parts with the 3MF's triangle counts, welded per part;
@@ -25,7 +26,9 @@ with it:
   ``cad_linear_mm x`` the smaller surface area).
 - ``bearing``: every panel touches each beam listed as its neighbour
   (manifold3d gap below ``cad_linear_mm``).
-- ``dxf``: ezdxf audit clean, units mm, one CUT outline (id in XDATA) and
+- ``dxf``: read by an independent reader (:mod:`fabricate.export.dxf_text`: lint
+  of codes, sections, handles, closed outlines; ``--occ``: ezdxf loads and
+  audits the whole file), units mm, one CUT outline (id in XDATA) and
   one ETCH id per panel and beam, and each outline has the area (``1e-9``
   relative) and the edge lengths (``1e-6`` mm) of a face of the STEP solid
   with the same id (as the STEP reader read it).
@@ -91,8 +94,8 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
             ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
             ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
             ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
-            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"],
-                                                       None if step_reader == "occ" else _text_faces), None)),
+            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], *(
+                (None, None) if step_reader == "occ" else (_text_faces, "text"))), None)),
             ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None))):
         t1 = time.perf_counter()
         if key in skip:
@@ -163,7 +166,9 @@ def failure_reasons(r: dict) -> list[str]:
             out.append(f"{r[a]} {what} {r[b]}")
     if r.get("status") not in (None, "NoError"):
         out.append(f"manifold3d status {r['status']}")
-    if r.get("audit_errors"):
+    if r.get("lint"):
+        out += [f"DXF: {x}" for x in r["lint"]]
+    elif r.get("audit_errors"):
         out.append(f"{r['audit_errors']} DXF audit errors")
     if "units" in r and r.get("units") != 4:
         out.append(f"DXF units {r['units']}, expected 4 (mm)")
@@ -394,10 +399,15 @@ def _check_bearing(meshes, bom, tol):
     return bearing(meshes, supports, tol.cad_linear_mm)
 
 
-def _check_dxf(path, bom, solids_step, faces_of=None):
-    """``faces_of(solid)``: its face loops (default: OpenCASCADE's, for solids read by OCC)."""
-    from .export.dxf import read_outlines
+def _check_dxf(path, bom, solids_step, faces_of=None, reader=None):
+    """``faces_of(solid)``: its face loops (default: OpenCASCADE's, for solids read by OCC);
+    ``reader``: ``"text"`` (the independent DXF reader, linted) or None (ezdxf loads and audits)."""
     from .export.verify import match_outline
+
+    if reader == "text":
+        from .export.dxf_text import read_outlines_text as read_outlines
+    else:
+        from .export.dxf import read_outlines
 
     if faces_of is None:
         from .export.verify import face_polygons as faces_of

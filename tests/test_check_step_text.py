@@ -94,3 +94,47 @@ def test_curved_or_foreign_files_are_refused_with_the_reason(tmp_path):
     p.write_text("solid x\nendsolid x\n")
     with pytest.raises(ExportError, match="not a STEP file"):
         read_step_text(p)
+
+
+@pytest.fixture(scope="module")
+def dxf_file(run_dir):
+    from fabricate.export import write_dxf
+
+    folder, parts = run_dir
+    write_dxf(parts, folder / "outlines.dxf")
+    return folder / "outlines.dxf"
+
+
+def test_dxf_text_reader_agrees_with_ezdxf(dxf_file):
+    from fabricate.export.dxf import read_outlines
+    from fabricate.export.dxf_text import read_outlines_text
+
+    mine, facts = read_outlines_text(dxf_file)
+    theirs, tf = read_outlines(dxf_file)
+    assert set(mine) == set(theirs) and facts["units"] == tf["units"] == 4 and facts["texts"] == tf["texts"]
+    assert all(np.array_equal(mine[k], theirs[k]) for k in mine)
+    assert facts["lint"] == [] and facts["audit_errors"] == 0
+
+
+def _same_handle(t: str) -> str:
+    """The second outline gets the first one's handle."""
+    first, second = re.findall(r"LWPOLYLINE\n  5\n([0-9A-F]+)\n", t)[:2]
+    return t.replace(f"LWPOLYLINE\n  5\n{second}\n", f"LWPOLYLINE\n  5\n{first}\n", 1)
+
+
+@pytest.mark.parametrize("edit, words", [
+    (lambda t: t[: t.rindex("EOF")], "end with 0/EOF"),
+    (lambda t: re.sub(r"(\nCUT\n100\nAcDbPolyline\n 90\n\d+\n 70\n)1(\n)", r"\g<1>0\2", t, count=1),
+     "not closed"),
+    (lambda t: _same_handle(t), "duplicate entity handles"),
+])
+def test_dxf_lint_catches_broken_files(dxf_file, tmp_path, edit, words):
+    from fabricate.export.dxf_text import read_outlines_text
+
+    text = dxf_file.read_text()
+    bad = tmp_path / "bad.dxf"
+    new = edit(text)
+    assert new != text
+    bad.write_text(new)
+    _, facts = read_outlines_text(bad)
+    assert any(words in x for x in facts["lint"]), facts["lint"]

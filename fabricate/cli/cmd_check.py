@@ -18,7 +18,7 @@ def register(sub) -> None:
                         "models): scan its text instead, and check the DXF areas against the BOM")
     p.add_argument("--occ", action="store_true",
                    help="read the STEP back with OpenCASCADE (BRepCheck per solid; about 10 ms a part) "
-                        "instead of the independent STEP text reader")
+                        "and audit the DXF with ezdxf, instead of the independent STEP and DXF readers")
     p.set_defaults(handler=run)
 
 
