@@ -10,9 +10,9 @@ that need the STEP read back:
 
 - ``step``: the STEP text is scanned: complete (``END-ISO-10303-21;``), unit
   mm, one ``MANIFOLD_SOLID_BREP`` per BOM row, product names equal the BOM ids;
-- ``dxf``: ezdxf audit clean, units mm, one CUT outline and one ETCH id per
-  panel and beam, each outline's area equal to the BOM's (to the BOM's
-  rounding, 1 mm2) instead of the STEP face's.
+- ``dxf``: the independent DXF reader's lint clean, units mm, one CUT outline
+  and one ETCH id per panel and beam, each outline's area equal to the BOM's
+  (to the BOM's rounding, 1 mm2) instead of the STEP face's.
 
 Every check dict says how it was made; the result carries ``mode``.
 ``fabricate check OUTDIR`` runs the full check on a finished run.
@@ -91,7 +91,7 @@ def scan_step(path, bom: list[dict]) -> dict:
 
 def dxf_against_bom(path, bom: list[dict]) -> dict:
     """Flat outlines against the BOM: audit, units, one outline and one id per part, areas."""
-    from .export.dxf import read_outlines
+    from .export.dxf_text import read_outlines_text as read_outlines
     from .export.verify import polygon_measures
 
     outlines, facts = read_outlines(path)
