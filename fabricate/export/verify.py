@@ -114,6 +114,7 @@ class Solid:
         self.tol = 1e-9 * max(size, 1.0)
         self.convex = bool((self.normals @ V.T - self.offsets[:, None]).max() <= self.tol)
         self._manifold = None
+        self._planes = None
 
     @property
     def manifold(self):
@@ -125,19 +126,34 @@ class Solid:
                 tri_verts=np.ascontiguousarray(self.T, dtype=np.uint64)))
         return self._manifold
 
+    @property
+    def support_planes(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(normals (q, 3), offsets (q,))`` of planes with the whole solid on their inner side: its
+        face planes when it is convex, else the faces of its convex hull (a notched beam's end cut)."""
+        if self._planes is None:
+            if self.convex:
+                self._planes = (self.normals, self.offsets)
+            else:
+                from scipy.spatial import ConvexHull
+
+                eq = ConvexHull(self.V).equations                 # n . x + c <= 0 inside, |n| = 1
+                self._planes = (eq[:, :3], -eq[:, 3])
+        return self._planes
+
     def separates(self, other: "Solid", tol: float) -> bool:
-        """True when one face plane of this convex solid has all of ``other`` outside (touching allowed)."""
-        if not self.convex:
-            return False
-        d = other.V @ self.normals.T - self.offsets[None, :]
+        """True when a supporting plane of this solid (a face plane, or a face of its convex hull) has
+        all of ``other`` outside (touching allowed): their interiors are then disjoint."""
+        n, c = self.support_planes
+        d = other.V @ n.T - c[None, :]
         return bool((d.min(axis=0) >= -tol).any())
 
 
 def intersections(solids: list[Solid], linear_tol: float) -> dict:
     """Overlap volumes of every pair of parts whose boxes overlap.
 
-    A pair is cleared by a separating face plane of a convex part (exact for
-    touching parts); otherwise manifold3d computes the intersection volume,
+    A pair is cleared by a separating supporting plane of either part (a face
+    plane of a convex part, a face of the convex hull of a non-convex one:
+    exact for touching parts); otherwise manifold3d computes the intersection volume,
     which must stay below ``linear_tol x`` the smaller surface area.
     """
     lo = np.array([s.V.min(axis=0) for s in solids]).reshape(-1, 3)
