@@ -170,6 +170,15 @@ def stage_cad(ctx) -> str:
         ctx.values["cad_skipped"] = msg
         ctx.notes.append(msg)
         return "skipped: folded panels"
+    turned = ctx["structure"].report.get("turned_over") or {"ok": True}
+    if not turned["ok"]:  # a layer past the focal distance: panels and beams would cross
+        from fabricate.offset.turnover import turnover_sentence
+
+        msg = "no panels or beams built: " + turnover_sentence(turned)
+        ctx.values["parts"] = None
+        ctx.values["cad_skipped"] = msg
+        ctx.notes.append(msg)
+        return "skipped: offset faces turn over"
     parts = build_parts(ctx["structure"], spec)
     ctx.values["parts"] = parts
     counts = {k: sum(len(g) for g in parts.of_kind(k)) for k in ("panel", "beam", "node")}

@@ -187,3 +187,35 @@ def test_remesh_notes_count_the_faces_written(tmp_path, capsys):
     assert counted, stdout
     q = int(np.sum(written.face_sizes == 4))
     assert all(c == (q, written.n_faces - q) for c in counted), (counted, q, written.n_faces)
+
+
+def test_run_with_a_layer_past_the_focal_distance_is_marked_and_builds_no_parts(tmp_path):
+    """The offset stage's turned-over faces stop the CAD stage with the reason and exit 3."""
+    import sys
+
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from _pipeline_fixtures import tiny_config
+
+    from fabricate.pipeline import run_pipeline
+
+    cfg = tiny_config(tmp_path, offset={"distances": [0, -9000]})
+    s = run_pipeline(cfg, tmp_path / "out")
+    assert s.exit_code == 3 and "offset_turned_over" in s.message and "FACES TURN OVER" in s.message
+    rep = json.loads((__import__("pathlib").Path(s.out_dir) / "report.json").read_text())
+    m = rep["measures"]["offset_turned_over"]
+    assert m["pass"] is False and m["enforced"] and m["max"] > 0 and m["worst"]
+    lo, hi = m["safe_range_mm"]
+    assert -9000 < lo < 0
+    assert rep["parts"] is None and "FACES TURN OVER" in " ".join(rep["offset"]["summary"])
+
+
+def test_a_too_deep_beam_says_the_layers_converge(tmp_path):
+    """9 m deep beams under a cap of a 12 m sphere: the advice is the depth, not the beam width."""
+    from fabricate.cad import PartSpec, build_parts
+    from optimize.errors import ConfigError
+
+    s = offset_structure(_dome(1000.0), (0.0, -9000.0))
+    assert s.report["turned_over"]["ok"]  # not past the focal distance: the beams fold at their ends
+    with pytest.raises(ConfigError, match="layers converge") as err:
+        build_parts(s, PartSpec(beam_depth=9000.0, beam_width=200.0))
+    assert "beam_width" not in str(err.value)

@@ -72,8 +72,11 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
         others = [b for b in beams["neighbour_beams"][i].ravel().tolist() if b != i]
         nb.append(tuple(pid[sorted({fp, fm})]) + tuple(bid[sorted(set(others))])
                   + (tuple(nid[topo.edges[i]]) if with_nodes else ()))
+    Q = np.asarray(structure.beam_quads)
+    edge_len = np.stack([np.linalg.norm(Q[:, 1] - Q[:, 0], axis=1), np.linalg.norm(Q[:, 2] - Q[:, 3], axis=1)], 1)
     _validate("beam", bid, e, X, FACES, beams["normals"],
-              lambda i: beam_hint(float(beams["planarity_mm"][i]), spec.beam_width))
+              lambda i: beam_hint(float(beams["planarity_mm"][i]), spec.beam_width,
+                                  tuple(edge_len[i].tolist()), tuple(structure.beam_span)))
     groups.append(_group("beam", bid, e, X, FACES, beams["normals"], OUTLINE_FACE, BEVEL_FACE,
                          beams["planarity_mm"], np.full(len(e), spec.beam_width),
                          proj.max(axis=1) - proj.min(axis=1), nb, spec))

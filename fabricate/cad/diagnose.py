@@ -108,8 +108,18 @@ def panel_failure(ids, faces_index, face_name: str, turn: float, P: np.ndarray, 
                        "quads regular (design parameters, optimize.fairness) avoids them")
 
 
-def beam_hint(planarity_mm: float, width: float) -> str:
-    """What to change for a beam that folds, given how far its quad is off its plate's mid-plane."""
+def beam_hint(planarity_mm: float, width: float, lengths_mm: tuple | None = None,
+              span_mm: tuple | None = None) -> str:
+    """What to change for a beam that folds, given how far its quad is off its plate's mid-plane and,
+    when known, its edge length at the two layers it spans (``lengths_mm``, ``span_mm``: distances)."""
+    if lengths_mm is not None and span_mm is not None:
+        l0, l1 = lengths_mm
+        if min(l0, l1) < 0.5 * max(l0, l1):
+            near, far = (span_mm[0], span_mm[1]) if l0 >= l1 else (span_mm[1], span_mm[0])
+            return (f"its edge is {max(l0, l1):.0f} mm long at the layer at {near:g} mm but only "
+                    f"{min(l0, l1):.0f} mm at {far:g} mm: the layers converge toward the focal points "
+                    f"(the beams are {abs(span_mm[1] - span_mm[0]):g} mm deep); reduce parts.beam_depth "
+                    "(or offset.distances)")
     if planarity_mm > 0.25 * width:
         return (f"its quad twists: corners up to {planarity_mm:.1f} mm off the plate's mid-plane (beam width "
                 f"{width:g} mm), the mesh is not conical there; optimize.target: conical makes the beams "

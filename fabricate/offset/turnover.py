@@ -104,8 +104,8 @@ def turnover_sentence(t: dict) -> str | None:
     if t["ok"]:
         return None
     lo, hi = t["safe_range_mm"]
-    rng = f"faces start to turn over beyond {'-inf' if lo is None else f'{lo:.4g}'} mm and " \
-          f"{'+inf' if hi is None else f'{hi:+.4g}'} mm"
+    rng = (f"no face turns over between {'-inf' if lo is None else f'{lo:.4g} mm'} and "
+           f"{'+inf' if hi is None else f'{hi:+.4g} mm'}")
     bad = [f"{L['count']} of {t['faces']} faces at {L['distance_mm']:g} mm (faces "
            f"{', '.join(map(str, L['faces']))}{', ...' if L['count'] > len(L['faces']) else ''})"
            for L in t["per_layer"] if L["count"]]
