@@ -113,11 +113,10 @@ def beam_hint(planarity_mm: float, width: float, lengths_mm: tuple | None = None
     """What to change for a beam that folds, given how far its quad is off its plate's mid-plane and,
     when known, its edge length at the two layers it spans (``lengths_mm``, ``span_mm``: distances)."""
     if lengths_mm is not None and span_mm is not None:
-        l0, l1 = lengths_mm
-        if min(l0, l1) < 0.5 * max(l0, l1):
-            near, far = (span_mm[0], span_mm[1]) if l0 >= l1 else (span_mm[1], span_mm[0])
-            return (f"its edge is {max(l0, l1):.0f} mm long at the layer at {near:g} mm but only "
-                    f"{min(l0, l1):.0f} mm at {far:g} mm: the layers converge toward the focal points "
+        l0, l1 = lengths_mm  # at the glass layer and at the far end of the beams
+        if l1 < 0.5 * l0:
+            return (f"its edge is {l0:.0f} mm long at the layer at {span_mm[0]:g} mm but only "
+                    f"{l1:.0f} mm at {span_mm[1]:g} mm: the layers converge toward the focal points "
                     f"(the beams are {abs(span_mm[1] - span_mm[0]):g} mm deep); reduce parts.beam_depth "
                     "(or offset.distances)")
     if planarity_mm > 0.25 * width:
