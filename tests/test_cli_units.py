@@ -219,3 +219,14 @@ def test_a_too_deep_beam_says_the_layers_converge(tmp_path):
     with pytest.raises(ConfigError, match="layers converge") as err:
         build_parts(s, PartSpec(beam_depth=9000.0, beam_width=200.0))
     assert "beam_width" not in str(err.value)
+
+
+def test_optimize_shows_progress_on_stderr_when_asked(tmp_path, capsys):
+    src = tmp_path / "noisy.obj"
+    write_mesh(src, shapes.perturbed(_dome(1000.0), 0.05, seed=1))
+    main(["optimize", str(src), "-o", str(tmp_path / "o.obj"), "--target", "conical", "--max-iter", "3",
+          "--progress", "on"])
+    cap = capsys.readouterr()
+    assert "3/3" in cap.err and "iteration 3: planarity" in cap.err and "iteration 3:" not in cap.out
+    main(["optimize", str(src), "-o", str(tmp_path / "p.obj"), "--max-iter", "3"])  # auto: not a terminal
+    assert capsys.readouterr().err == ""

@@ -139,6 +139,7 @@ class _progress:
         on = args.progress == "on" or (args.progress == "auto" and sys.stderr.isatty())
         self.bar = None
         self.total = int(args.max_iter)
+        self.note = ""
         if on:
             from ..progress import RichProgress
 
@@ -155,10 +156,11 @@ class _progress:
     def callback(self, entry: dict) -> None:
         figures = ", ".join(f"{k} {entry[k]:.2e}" for k in ("planarity", "conical", "circular", "node_cone")
                             if isinstance(entry.get(k), float))
-        self.bar.advance("optimize", 1, f"iteration {entry.get('iteration', '?')}: {figures}")
+        self.note = f"iteration {entry.get('iteration', '?')}: {figures}"
+        self.bar.advance("optimize", 1, self.note)
 
     def __exit__(self, *exc):
         if self.bar is not None:
-            self.bar.done("optimize")
+            self.bar.done("optimize", self.note)
             self.bar.__exit__(*exc)
         return None
