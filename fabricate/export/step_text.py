@@ -116,10 +116,13 @@ def _by_kind(data: bytes) -> dict[bytes, bytes]:
     a, b = data.find(b"DATA;"), data.rfind(b"ENDSEC;")
     body = data[a + 5:b].replace(b"\r", b"").strip()
     recs = body.split(b";\n")
-    if body.count(b"\n") >= len(recs):  # records broken over lines, or several on one line
+    split = body.count(b"\n") < len(recs)
+    if not split:  # records broken over lines, or several on one line
         recs = [b" ".join(x.split()) for x in re.split(rb";\s*(?=#\d+\s*=)", body)]
     recs[-1] = recs[-1].rstrip().rstrip(b";")
-    names = re.findall(rb";\n#\d+\s*=\s*([A-Z0-9_]*)", b";\n" + b";\n".join(recs))
+    joined = b";\n" + (body if split else b";\n".join(recs))
+    names = re.findall(rb";\n#\d+\s*=\s*([A-Z0-9_]*)", joined)
+    del joined
     if len(names) != len(recs):
         names = [r[r.find(b"=") + 1:r.find(b"(")].strip() for r in recs]
     code: dict[bytes, int] = {}
@@ -152,14 +155,15 @@ class _Kind:
     def column(self, i: int) -> list[bytes]:
         return [g[i] for g in self.groups]
 
-    def lookup(self, size: int) -> None:
-        self.row = np.full(size, -1, dtype=np.int64)
-        self.row[self.ids] = np.arange(len(self.ids))
+    def lookup(self, row: np.ndarray, kind: np.ndarray, code: int) -> None:
+        """Share the file's id -> row and id -> kind arrays; this kind is ``code``."""
+        self.row, self.kind, self.code = row, kind, code
 
     def at(self, refs, what: str, path) -> np.ndarray:
         refs = np.asarray(refs, dtype=np.int64)
-        r = self.row[np.clip(refs, 0, len(self.row) - 1)]
-        bad = (r < 0) | (refs >= len(self.row)) | (refs < 0)
+        i = np.clip(refs, 0, len(self.row) - 1)
+        r = self.row[i]
+        bad = (self.kind[i] != self.code) | (refs >= len(self.row)) | (refs < 0)
         if bad.any():
             raise ExportError(f"{path}: #{int(refs[np.argmax(bad)])} is not a {what}")
         return r
@@ -199,8 +203,12 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
         text = texts.get(rx.pattern[1:rx.pattern.index(b"\\(")], b"")
         K[k] = _Kind(text, rx, path)
     size = 1 + max((int(k.ids.max()) for k in K.values() if k.ids.size), default=0)
-    for k in K.values():
-        k.lookup(size)
+    row = np.full(size, -1, dtype=np.int64)       # one lookup for every kind: ids are unique in a file
+    kind = np.full(size, -1, dtype=np.int16)
+    for c, k in enumerate(K.values()):
+        row[k.ids] = np.arange(len(k.ids))
+        kind[k.ids] = c
+        k.lookup(row, kind, c)
 
     def refs(kind: str, col: int, width: int) -> np.ndarray:
         return _numbers(K[kind].column(col), kind, path, ints=True).reshape(-1, width)
