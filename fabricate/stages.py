@@ -61,6 +61,10 @@ def stage_input(ctx) -> str:
         if value is not None:
             plan[key] = value
     plan.update(scale=cfg.scale, mm_per_unit=factor, faces=mesh.n_faces, vertices=mesh.n_vertices)
+    if plan["levels"] == 0 and kind != "surface":  # optimized as it is: quads, not triangles
+        from .quads import RUN_HINT, require_quads
+
+        require_quads(mesh, f"input.{kind} {plan['source']}", hint=RUN_HINT)
     if factor != 1.0:
         mesh = mesh.with_vertices(mesh.V * factor)
         if "surface" in ctx.values:
@@ -166,6 +170,15 @@ def stage_cad(ctx) -> str:
         ctx.values["cad_skipped"] = msg
         ctx.notes.append(msg)
         return "skipped: folded panels"
+    turned = ctx["structure"].report.get("turned_over") or {"ok": True}
+    if not turned["ok"]:  # a layer past the focal distance: panels and beams would cross
+        from fabricate.offset.turnover import turnover_sentence
+
+        msg = "no panels or beams built: " + turnover_sentence(turned)
+        ctx.values["parts"] = None
+        ctx.values["cad_skipped"] = msg
+        ctx.notes.append(msg)
+        return "skipped: offset faces turn over"
     parts = build_parts(ctx["structure"], spec)
     ctx.values["parts"] = parts
     counts = {k: sum(len(g) for g in parts.of_kind(k)) for k in ("panel", "beam", "node")}

@@ -147,7 +147,7 @@ def test_export_failure_raises_export_error_and_leaves_nothing(tmp_path, monkeyp
 def test_failed_output_check_is_exit_4_written_and_marked(tmp_path, monkeypatch):
     import fabricate.check as check
 
-    def failing_check(outdir, tol=None):
+    def failing_check(outdir, tol=None, **kwargs):
         return {"pass": False, "checks": {"bom": {"pass": True}, "stl": {"pass": False, "why": "injected"}}}
 
     monkeypatch.setattr(check, "check_outputs", failing_check)
@@ -362,7 +362,7 @@ def test_fast_check_skips_the_step_read_back_and_still_catches_bad_files(tmp_pat
     assert check["checks"]["dxf"]["against"] == "bom" and check["checks"]["dxf"]["outlines"] > 0
     assert all(check["checks"][k]["pass"] for k in ("bom", "3mf", "stl", "intersections", "bearing", "svg"))
     full = run_check(out, "full")  # the full check of the same files agrees, reading the STEP back
-    assert full["mode"] == "full" and full["pass"] and "read_back" not in full["checks"]["step"]
+    assert full["mode"] == "full" and full["pass"] and full["checks"]["step"]["read_back"] == "text"
     step = (out / "model.step").read_text()
     (out / "model.step").write_text(step.replace("'P0001'", "'P9999'"))
     renamed = run_check(out, "fast")["checks"]["step"]

@@ -49,9 +49,24 @@ def run(args) -> int:
     with progress:
         summary = run_pipeline(config, args.out, progress=progress)
     line = f"{summary.name}: {summary.status} ({summary.message}) in {summary.seconds:.1f} s -> {target}"
+    _print_totals(target)
     if summary.exit_code == 0:
         print(line)
         print(f"open {target / 'report.html'}" if config.outputs.html else f"see {target / 'report.json'}")
     else:
         print(f"warning: {line}; results written and marked", file=sys.stderr)
     return summary.exit_code
+
+
+def _print_totals(target) -> None:
+    """The client's totals (glass m2, sizes, steel m and t) from the run's report.json, if written."""
+    import json
+
+    from fabricate.report.totals import totals_lines
+
+    try:
+        totals = json.loads((target / "report.json").read_text(encoding="utf-8")).get("totals")
+    except (OSError, ValueError, AttributeError):
+        return
+    for text in totals_lines(totals):
+        print(text)
