@@ -21,13 +21,14 @@ from .formulation import TARGETS, UNKNOWNS, Formulation, fit_axes
 from .guided import Glide, solve
 from .linalg import BACKENDS
 from .mesh import Mesh
-from .result import OptimizeResult
+from .result import OptimizeResult, check_folds
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
 
 METHODS = ("default", "penalty", "sqp", "hybrid")
 FORMULATIONS = ("auto",) + UNKNOWNS
+FOLD_ADVICE = "raise the fairness weight or fix the boundary"
 GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
 
 
@@ -157,22 +158,15 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         beam_axes[form.axis_vertices] = axes[form.axis_vertices]
     max_distance = float(ref.distance(Xn).max() / ref.bbox_diagonal)
     defects = measures.summary(out, tol)
-    status, message = run.status, run.message
-    folded = np.nonzero(measures.folded_faces(mesh, V))[0]
-    defects["folded"] = {"count": int(len(folded)), "faces": folded[:20].tolist()}
-    if len(folded) and status == "converged":
-        status = "folded"
-        message = (f"{run.message}, but {len(folded)} face(s) that were convex became dented or flipped "
-                   f"(first: {folded[:5].tolist()}); raise the fairness weight or fix the boundary")
     timings = dict(run.timings, setup=t_setup, report=time.perf_counter() - t1,
                    total=time.perf_counter() - t0)
-    success = status == "converged"
-    log.info("optimize_mesh(%s, %s): %s", mesh.name, target, message)
-    return OptimizeResult(mesh=out, success=success, status=status, message=message,
-                          nit=run.nit, history=run.history, defects=defects, max_distance=max_distance,
-                          normals=normals, axes=axes, cone_angles=cone_angles, beam_axes=beam_axes,
-                          timings=timings,
-                          method=method, target=target)
+    res = OptimizeResult(mesh=out, success=run.status == "converged", status=run.status,
+                         message=run.message, nit=run.nit, history=run.history, defects=defects,
+                         max_distance=max_distance, normals=normals, axes=axes, cone_angles=cone_angles,
+                         beam_axes=beam_axes, timings=timings, method=method, target=target)
+    check_folds(res, mesh.V, FOLD_ADVICE)
+    log.info("optimize_mesh(%s, %s): %s", mesh.name, target, res.message)
+    return res
 
 
 def _unit(U: np.ndarray) -> np.ndarray:

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import measures
 from .mesh import Mesh
 
 STATUSES = ("converged", "folded", "stalled", "max_iter", "diverged")
@@ -98,6 +99,21 @@ class OptimizeResult:
     def __repr__(self) -> str:
         return (f"OptimizeResult({self.method}/{self.target}: {self.status}, nit={self.nit}, "
                 f"success={self.success}, max_distance={self.max_distance:.3g}, {self.mesh!r})")
+
+
+def check_folds(result: OptimizeResult, V0: np.ndarray, advice: str = "") -> OptimizeResult:
+    """The one fold check of every method: record ``defects["folded"]`` (faces convex at
+    ``V0 (n, 3)``, the input positions, that are dented, flipped or collapsed in
+    ``result.mesh``: :func:`optimize.measures.folded_faces`) and turn a ``converged``
+    run with any of them into ``folded`` (not a success); ``advice`` ends the message.
+    Returns ``result`` (updated in place; calling it twice changes nothing more)."""
+    folded = np.nonzero(measures.folded_faces(result.mesh, result.mesh.V, V0))[0]
+    result.defects["folded"] = {"count": int(len(folded)), "faces": folded[:20].tolist()}
+    if len(folded) and result.status == "converged":
+        result.status, result.success = "folded", False
+        result.message = (f"{result.message}, but {len(folded)} face(s) that were convex became dented, "
+                          f"flipped or collapsed (first: {folded[:5].tolist()})" + (f"; {advice}" if advice else ""))
+    return result
 
 
 def _plain(v):

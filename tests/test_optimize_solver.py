@@ -140,7 +140,7 @@ def test_folded_faces_are_not_a_success():
     res = optimize_mesh(mesh, "pq", fixed="boundary")
     assert res.defects["planarity"]["ok"]  # every tolerance is met ...
     assert res.status == "folded" and not res.success  # ... but the panels are not cuttable
-    assert res.defects["folded"]["count"] > 0 and "dented or flipped" in res.message
+    assert res.defects["folded"]["count"] > 0 and "dented, flipped" in res.message
     folded = measures.folded_faces(mesh, res.mesh.V)
     assert folded.sum() == res.defects["folded"]["count"]
 

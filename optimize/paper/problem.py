@@ -26,7 +26,7 @@ from ..closeness import Reference
 from ..constraints.fixed import resolve
 from ..fairness import fairness_matrix
 from ..mesh import Mesh
-from ..result import OptimizeResult
+from ..result import OptimizeResult, check_folds
 from ..tolerances import DEFAULT, Tolerances
 from . import kernels
 from .angles import angle_values, corner_vertices
@@ -314,11 +314,11 @@ class Problem:
         axes = cones = None
         if self.target == "conical":
             axes, cones = node_axes(out)
-        return OptimizeResult(
+        return check_folds(OptimizeResult(
             mesh=out, success=success, status=status, message=message, nit=nit, history=history,
             defects=defects, max_distance=self.max_distance(V),
             normals=measures.face_normals(out), axes=axes, cone_angles=cones,
-            multipliers=multipliers, timings=timings, method=method, target=self.target)
+            multipliers=multipliers, timings=timings, method=method, target=self.target), self.mesh.V)
 
 
 def node_axes(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
