@@ -18,7 +18,8 @@ from .constraints import fixed as fixed_mod
 from .constraints import glide as glide_mod
 from .errors import ConfigError
 from .formulation import TARGETS, UNKNOWNS, Formulation, fit_axes
-from .guided import Glide, solve
+from .constraints import convexity
+from .guided import Convex, Glide, solve
 from .linalg import BACKENDS
 from .mesh import Mesh
 from .result import OptimizeResult, check_folds
@@ -49,7 +50,8 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
                   reference: Mesh | None = None, fixed=None, glide_boundary: bool = False,
                   fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = Tolerances(),
                   max_iter: int = 200, callback=None, linear_solver: str = "auto",
-                  formulation: str = "auto", torsion_free_beams="auto", **options) -> OptimizeResult:
+                  formulation: str = "auto", torsion_free_beams="auto", convex: bool = True,
+                  **options) -> OptimizeResult:
     """Move the vertices of ``mesh`` so that it becomes ``target``; never mutates ``mesh``.
 
     mesh : Mesh, quads with n-gons and triangles allowed, boundary allowed.
@@ -82,6 +84,11 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         ``beam_axes`` for the offset stage.  ``"auto"``: when the
         mesh has interior vertices of valence other than 4 (where the paper's angle
         balance says nothing and beams would twist).
+    convex : keep every corner that is convex in the input convex (default method:
+        one-sided rows, ``constraints.convexity``, and no accepted step folds a face);
+        ``False`` is the earlier behaviour (planar, perhaps dented; then ``folded``).
+        Where no fold-free mesh is near, the run ends ``stalled`` / ``max_iter`` and
+        ``defects["convexity"]`` names the faces held at their convexity floor.
     options : extras of the paper's methods (``mu``, ``kkt_tol``, ...), passed on
         to ``optimize.paper.run_paper_method``; none for the default method.
 
@@ -138,10 +145,14 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
                   else bool(torsion_free_beams)))
     form = Formulation(norm, target, unknowns, beams=beams)
     x0 = form.start(norm.V)
+    keep = None
+    if convex:
+        corners, floor = convexity.floors(norm, norm.V)
+        keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0
     run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=fairness,
                 closeness=closeness, tol=tol, max_iter=int(max_iter), callback=callback,
-                backend=linear_solver)
+                backend=linear_solver, convex=keep)
     L = form.layout
     Xn = L.view(run.x, "vertices")
     V = Xn * h + centre if run.nit else mesh.V.copy()  # no step taken: bit-exact input
@@ -164,9 +175,33 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
                          message=run.message, nit=run.nit, history=run.history, defects=defects,
                          max_distance=max_distance, normals=normals, axes=axes, cone_angles=cone_angles,
                          beam_axes=beam_axes, timings=timings, method=method, target=target)
+    if keep is not None:
+        _held(res, norm, Xn, keep, tol)
     check_folds(res, mesh.V, FOLD_ADVICE)
     log.info("optimize_mesh(%s, %s): %s", mesh.name, target, res.message)
     return res
+
+
+def _held(res: OptimizeResult, norm: Mesh, Xn: np.ndarray, keep: Convex, tol: Tolerances) -> None:
+    """``defects["convexity"]``: the faces whose corners sit at their convexity floor while the
+    face is not yet planar (where no fold-free mesh is near); a run that missed its tolerance
+    says so, naming them."""
+    s = convexity.sines(norm, Xn, keep.corners)
+    at = s < keep.floor + 1e-3 * np.maximum(keep.floor, 1e-9) + 1e-9
+    faces = np.unique(norm.topology.corner_face[keep.corners[at]])
+    planar = measures.planarity(norm, Xn)
+    held = faces[planar[faces] > tol.planarity]
+    held = held[np.argsort(-planar[held])]
+    res.defects["convexity"] = {"at_floor": int(len(faces)), "held": int(len(held)),
+                                "faces": held[:20].tolist(), "sine_floor": convexity.SINE_FLOOR}
+    if res.status != "converged" and len(held):
+        bad = np.nonzero(planar > tol.planarity)[0]
+        bad = bad[np.argsort(-planar[bad])]
+        res.message += (f"; no fold-free PQ mesh is near the input: {len(bad)} face(s) stay non-planar "
+                        f"(worst first: {bad[:6].tolist()}, up to {planar[bad[0]]:.2g}) where planar "
+                        f"faces would dent {len(held)} face(s) held at the convexity floor "
+                        f"({held[:6].tolist()}); the mesh lines there are far from a conjugate net: "
+                        f"remesh along principal directions (input.remesh / fabricate remesh)")
 
 
 def _unit(U: np.ndarray) -> np.ndarray:

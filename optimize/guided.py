@@ -46,7 +46,7 @@ import scipy.sparse as sp
 
 from . import measures
 from .closeness import Reference, closeness_terms
-from .constraints import edgefloor
+from .constraints import convexity, edgefloor
 from .constraints import glide as glide_mod
 from .fairness import fairness_matrix, fairness_matrix_parts
 from .formulation import Formulation
@@ -77,6 +77,16 @@ class Glide:
     curve: glide_mod.BoundaryCurve
     edges: np.ndarray  # (e, 2) boundary edges at gliding vertices, kept above ``floor (e,)``
     floor: np.ndarray
+
+
+@dataclass
+class Convex:
+    """Convexity kept (:mod:`optimize.constraints.convexity`): hinge rows on ``corners (k,)``
+    above ``floor (k,)``, and no accepted step may fold a face convex at ``V0 (n, 3)``."""
+
+    corners: np.ndarray
+    floor: np.ndarray
+    V0: np.ndarray
 
 
 @dataclass
@@ -124,6 +134,7 @@ def _embed(M: sp.spmatrix, n_cols: int) -> sp.csr_matrix:
 def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np.ndarray,
           glide: Glide | None, fairness: float, closeness: float, tol: Tolerances,
           max_iter: int, callback=None, backend: str = "auto", patience: int = 10,
+          convex: Convex | None = None,
           decay: float = 0.5, finish: float = 2.0,
           soft_iters: int = 10) -> RunState:
     """Run the iteration from ``x0 (layout.size,)`` (normalized coordinates).
@@ -137,6 +148,10 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
     ``mu / FAST`` when ``rho > 0.9``, ``mu / SHRINK`` when ``rho > 0.75``, else
     unchanged (never below the floor); see ``FAST`` for the measurements.
     callback : called with each iteration's history dict (observes only).
+    convex : keep convex corners convex: hinge rows, and a trial step that folds a face
+        (``measures.folded_faces`` against ``convex.V0``) is rejected like a step that
+        does not lower the objective (the damping grows), so every accepted iterate is
+        fold-free.  History entries carry ``folded`` (faces folded at that iterate) either way.
     """
     t_start = time.perf_counter()
     L = form.layout
@@ -184,6 +199,10 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
                 re, Je = edgefloor.terms(x, L, glide.edges, glide.floor)
                 rs.append(re)
                 Js.append(Je)
+        if convex is not None:
+            rv, Jv = convexity.terms(x, L, form.mesh, convex.corners, convex.floor)
+            rs.append(rv)
+            Js.append(Jv)
         rw = [w[0] for w in wide]
         phi_all = np.concatenate([phi] + [w[0] for w in wide if w[1] is not None])
         return np.concatenate(rs + rw), sp.vstack(Js, format="csr"), [w[2] for w in wide], phi_all
@@ -212,6 +231,8 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
     score = best = _score(defects, tol)
     history: list[dict] = []
     status, message, nit, since_best, mu = None, "", 0, 0, MU_START
+    folds_rejected = 0
+    V_start = L.view(x0, "vertices").copy() if convex is None else convex.V0
     if score <= 0:
         status, message = "converged", "the input already satisfies every tolerance"
     while status is None:
@@ -258,6 +279,11 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             rn, _, _, _ = residuals(xn, foot, gfoot)
             timings["assemble"] += time.perf_counter() - ta
             merit1 = float(rn @ rn)
+            if convex is not None and np.isfinite(merit1) and merit1 < merit0 and \
+                    measures.folded_faces(form.mesh, L.view(xn, "vertices"), convex.V0).any():
+                folds_rejected += 1
+                mu *= 10  # a shorter step, closer to the linearization the hinge rows saw
+                continue
             if np.isfinite(merit1) and merit1 < merit0:
                 accepted = True
                 # gain ratio: actual decrease over the decrease the (majorized) model predicts
@@ -296,6 +322,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             entry[k] = float(d.max(initial=0.0))
             entry[k + "_mean"] = float(d.mean()) if d.size else 0.0
         entry["fairness"] = float(np.sum((K @ x) ** 2) / max(1, K.shape[0] // 3))
+        entry["folded"] = int(measures.folded_faces(form.mesh, L.view(x, "vertices"), V_start).sum())
         if foot is not None:
             entry["closeness"] = float(np.linalg.norm(V - foot[0], axis=1).max() / ref.bbox_diagonal)
         history.append(entry)
@@ -321,5 +348,6 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
     timings["total"] = time.perf_counter() - t_start
     timings["factorizations"] = solver.factorizations
     timings["cg_iterations"] = solver.cg_iterations
+    timings["fold_rejections"] = folds_rejected
     return RunState(x=x, status=status, message=message, nit=nit, history=history, timings=timings,
                     defects={k: float(d.max(initial=0.0)) for k, d in defects.items()})

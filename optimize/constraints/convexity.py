@@ -1,0 +1,94 @@
+"""Convexity: a corner that starts convex stays convex (a one-sided row per corner).
+
+A planar quad can meet every planarity row and still be dented (a reflex
+corner) or a bow-tie: planar but not cuttable from glass.  The paper's
+angle-sum condition ``phi1 + ... + phi4 = 2 pi`` means planar *and* convex;
+the diagonal-distance and unit-normal rows of ``formulation`` only mean
+planar.  This row keeps the signed sine of each corner angle about its
+face's unit Newell normal,
+
+    s_c = ((q - p) x (r - p)) . n_f / (|q - p| |r - p|),
+
+(``p`` the corner's vertex, ``q`` the next and ``r`` the previous vertex of
+its face; positive at a convex corner, negative at a reflex one: the measure
+of ``measures.corner_turns``) above a floor: the hinge ``min(0, s_c - floor)``,
+zero while the corner is convex enough, so it acts only on corners about to
+turn reflex and its square is continuously differentiable (like
+``constraints.edgefloor``).  A polygon whose corners all have a positive sine
+about its normal is convex, so the rows of a face's corners together say
+"convex".  The floor (:func:`floors`) is ``min(SINE_FLOOR, s0 / 2)`` of the
+start sine ``s0``: a corner of 90 degrees may open to about 174 or close to
+6 degrees, one that starts at 178 degrees keeps half its margin.
+
+Gradient: with ``c = u x w``, ``u = q - p``, ``w = r - p``, ``N`` the vector
+area and ``b = (I - n n^T) c / |N|`` (the change of ``c . n`` through the
+normal), ``ds/dq = (w x n) / (|u||w|) - s u / |u|^2``, ``ds/dr = (n x u) /
+(|u||w|) - s w / |w|^2``, ``ds/dp = -(ds/dq + ds/dr)`` and every vertex ``j``
+of the face adds ``(w_j x b) / (2 |u||w|)`` with ``w_j = v_(j+1) - v_(j-1)``
+(``dN/dv_j = w_j x / 2``).  Each row stays within one face.
+
+Block: ``vertices (n, 3)``.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..measures import _vector_areas, corner_turns
+from ..mesh import Mesh
+from ..variables import Layout
+from .nodeaxes import _corner_spans
+
+SINE_FLOOR = 0.1  # about 5.7 degrees from straight or from closed
+CONVEX = 1e-6  # a corner with a start sine above -CONVEX counts as convex (as measures.folded_faces)
+
+
+def floors(mesh: Mesh, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(corners (k,), floor (k,))``: the corners convex at positions ``V (n, 3)`` and their floors."""
+    s0 = corner_turns(mesh, V)
+    corners = np.nonzero(s0 > -CONVEX)[0]
+    return corners, np.minimum(SINE_FLOOR, 0.5 * np.maximum(s0[corners], 0.0))
+
+
+def sines(mesh: Mesh, V: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """(k,) float: the signed corner sines ``s_c`` of ``corners`` at positions ``V (n, 3)``."""
+    return corner_turns(mesh, V)[corners]
+
+
+def terms(x: np.ndarray, layout: Layout, mesh: Mesh, corners: np.ndarray,
+          floor: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
+    """Residual ``(k,)`` and Jacobian ``(k, layout.size)`` of the hinge rows of ``corners``.
+
+    Rows of corners at or above their floor are zero, with a zero Jacobian row.
+    """
+    t = mesh.topology
+    V = layout.view(x, "vertices")
+    s = sines(mesh, V, corners)
+    low = np.nonzero(s < floor)[0]
+    r = np.where(s < floor, s - floor, 0.0)
+    idx = layout.index("vertices")
+    if not len(low):
+        return r, sp.csr_matrix((len(corners), layout.size))
+    c = corners[low]
+    f = t.corner_face[c]
+    p, q, rr = t.corner_vertex[c], t.corner_next_vertex[c], t.corner_prev_vertex[c]
+    u, w = V[q] - V[p], V[rr] - V[p]
+    lu, lw = np.linalg.norm(u, axis=1), np.linalg.norm(w, axis=1)
+    den = np.maximum(lu * lw, 1e-300)[:, None]
+    N = 0.5 * _vector_areas(mesh, V)[f]
+    ln = np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
+    n = N / ln
+    cr = np.cross(u, w)
+    sv = s[low][:, None]
+    gq = np.cross(w, n) / den - sv * u / np.maximum(lu, 1e-300)[:, None] ** 2
+    gr = np.cross(n, u) / den - sv * w / np.maximum(lw, 1e-300)[:, None] ** 2
+    b = (cr - np.einsum("ij,ij->i", cr, n)[:, None] * n) / ln
+    gv = np.cross(_corner_spans(mesh, V, f), b[:, None, :]) / (2.0 * den[:, :, None])  # (a, k, 3)
+    F = mesh.F[f]
+    valid = np.broadcast_to((F >= 0)[..., None], gv.shape)
+    rows_v = np.broadcast_to(low[:, None, None], gv.shape)
+    cols_v = idx[np.maximum(F, 0)]
+    rows = np.concatenate([rows_v[valid], np.repeat(low, 9)])
+    cols = np.concatenate([cols_v[valid], np.concatenate([idx[q], idx[rr], idx[p]], axis=1).ravel()])
+    vals = np.concatenate([gv[valid], np.concatenate([gq, gr, -(gq + gr)], axis=1).ravel()])
+    return r, sp.csr_matrix((vals, (rows, cols)), shape=(len(corners), layout.size))
