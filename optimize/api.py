@@ -18,18 +18,24 @@ from .constraints import fixed as fixed_mod
 from .constraints import glide as glide_mod
 from .errors import ConfigError
 from .formulation import TARGETS, UNKNOWNS, Formulation, fit_axes
+from .conjugacy import record_net
 from .constraints import convexity
+from . import guided
 from .guided import Convex, Glide, solve
 from .linalg import BACKENDS
 from .mesh import Mesh
-from .result import OptimizeResult, check_folds
+from .result import OptimizeResult, check_folds, record_shape
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
 
 METHODS = ("default", "penalty", "sqp", "hybrid")
 FORMULATIONS = ("auto",) + UNKNOWNS
-FOLD_ADVICE = "raise the fairness weight or fix the boundary"
+FOLD_ADVICE = ("the convexity rows should have prevented this: please report it; remeshing along "
+               "principal directions (input.remesh) gives a mesh a fold-free PQ mesh is near")
+NO_CONVEX_FOLD_ADVICE = ("run with convexity kept (drop --no-convex / convex=False): faces then stay convex "
+                         "and where that leaves them non-planar the run names them")
+
 GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
 
 
@@ -127,6 +133,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     ref_norm = ref_mesh.with_vertices((ref_mesh.V - centre) / h) if reference is not None else norm
     ref = Reference(ref_norm)
     fixed_idx = fixed_mod.resolve(mesh, fixed)
+    _check_meetable(mesh, target, fixed, fixed_idx, tol)
     glide = None
     if glide_boundary:  # corners stay: a point cannot glide around a kink of the curve
         fixed_idx = np.union1d(fixed_idx, fixed_mod.corner_vertices(mesh))
@@ -152,7 +159,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     t_setup = time.perf_counter() - t0
     run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=fairness,
                 closeness=closeness, tol=tol, max_iter=int(max_iter), callback=callback,
-                backend=linear_solver, convex=keep)
+                backend=linear_solver, convex=keep, far=guided.FAR)
     L = form.layout
     Xn = L.view(run.x, "vertices")
     V = Xn * h + centre if run.nit else mesh.V.copy()  # no step taken: bit-exact input
@@ -175,11 +182,41 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
                          message=run.message, nit=run.nit, history=run.history, defects=defects,
                          max_distance=max_distance, normals=normals, axes=axes, cone_angles=cone_angles,
                          beam_axes=beam_axes, timings=timings, method=method, target=target)
+    record_shape(res, mesh, ref.distance(Xn) * h, ref.bbox_diagonal * h)
+    record_net(res, mesh, target)
     if keep is not None:
         _held(res, norm, Xn, keep, tol)
-    check_folds(res, mesh.V, FOLD_ADVICE)
+    check_folds(res, mesh.V, FOLD_ADVICE if convex else NO_CONVEX_FOLD_ADVICE)
     log.info("optimize_mesh(%s, %s): %s", mesh.name, target, res.message)
     return res
+
+
+def _check_meetable(mesh: Mesh, target: str, fixed, fixed_idx: np.ndarray, tol: Tolerances) -> None:
+    """Refuse, before the first iteration, a fixed set no iteration can meet: a face whose
+    vertices are all fixed but that is not planar (for ``circular``: not circular) now.
+    Raises :class:`ConfigError` naming the faces."""
+    if not len(fixed_idx):
+        return
+    pinned = np.zeros(mesh.n_vertices, dtype=bool)
+    pinned[fixed_idx] = True
+    F = mesh.F
+    allfixed = np.where(F >= 0, pinned[np.maximum(F, 0)], True).all(axis=1)
+    if not allfixed.any():
+        return
+    bad = allfixed & (measures.planarity(mesh) > tol.planarity)
+    what = "planar"
+    if target == "circular" and not bad.any():
+        circ = np.zeros(mesh.n_faces)
+        circ[mesh.face_sizes == 4] = measures.circular_defect(mesh)
+        bad, what = allfixed & (circ > tol.circular), "circular"
+    faces = np.nonzero(bad)[0]
+    if len(faces):
+        name = fixed if isinstance(fixed, str) else f"{len(fixed_idx)} listed vertices"
+        worst = measures.planarity(mesh)[faces] if what == "planar" else None
+        detail = f" (planarity up to {worst.max():.3g}, tolerance {tol.planarity:g})" if worst is not None else ""
+        raise ConfigError(f"fixed: {name!r} fixes every vertex of {len(faces)} face(s) that are not "
+                          f"{what}{detail}: faces {faces[:10].tolist()}; no iteration can change them, "
+                          f"so {target} cannot be reached; fix fewer vertices (e.g. 'corners') or glide")
 
 
 def _held(res: OptimizeResult, norm: Mesh, Xn: np.ndarray, keep: Convex, tol: Tolerances) -> None:
@@ -197,11 +234,14 @@ def _held(res: OptimizeResult, norm: Mesh, Xn: np.ndarray, keep: Convex, tol: To
     if res.status != "converged" and len(held):
         bad = np.nonzero(planar > tol.planarity)[0]
         bad = bad[np.argsort(-planar[bad])]
-        res.message += (f"; no fold-free PQ mesh is near the input: {len(bad)} face(s) stay non-planar "
+        net = res.defects.get("net", {})
+        what = "PQ" if res.target == "pq" else res.target
+        res.message += (f"; no fold-free {what} mesh is near the input: {len(bad)} face(s) stay non-planar "
                         f"(worst first: {bad[:6].tolist()}, up to {planar[bad[0]]:.2g}) where planar "
                         f"faces would dent {len(held)} face(s) held at the convexity floor "
-                        f"({held[:6].tolist()}); the mesh lines there are far from a conjugate net: "
-                        f"remesh along principal directions (input.remesh / fabricate remesh)")
+                        f"({held[:6].tolist()}); {net.get('line', '')}"
+                        + ("" if net.get("far") else "; remeshing along principal directions (input.remesh, "
+                                                     "fabricate remesh) gives a mesh one is near"))
 
 
 def _unit(U: np.ndarray) -> np.ndarray:

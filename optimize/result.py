@@ -116,6 +116,22 @@ def check_folds(result: OptimizeResult, V0: np.ndarray, advice: str = "") -> Opt
     return result
 
 
+def record_shape(result: OptimizeResult, mesh0: Mesh, distance: np.ndarray, diagonal: float) -> None:
+    """``defects["distance"]``: max and mean distance of the result's vertices to the reference,
+    ``distance (n,)`` in the mesh's units, absolute and over the reference's bbox ``diagonal``;
+    ``defects["fairness"]``: the roughness (``fairness.roughness``) of ``mesh0`` (the input)
+    and of the result, and their ratio (above 1: the result is rougher)."""
+    from .fairness import roughness
+
+    d = np.asarray(distance, dtype=float)
+    result.defects["distance"] = {"max": float(d.max(initial=0.0)), "mean": float(d.mean()) if d.size else 0.0,
+                                  "max_relative": float(d.max(initial=0.0) / diagonal),
+                                  "mean_relative": float(d.mean() / diagonal) if d.size else 0.0}
+    before, after = roughness(mesh0), roughness(result.mesh)
+    result.defects["fairness"] = {"input": before, "result": after,
+                                  "ratio": float(after / before) if before > 0 else float("inf") if after > 0 else 1.0}
+
+
 def _plain(v):
     """A JSON-ready scalar for numpy numbers."""
     if isinstance(v, (np.floating, np.integer, np.bool_)):

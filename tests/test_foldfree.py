@@ -88,3 +88,64 @@ def test_convexity_rows_gradient_matches_finite_differences():
         assert np.abs(J.toarray() - Jn).max() < 1e-7
         r, J = convexity.terms(x, L, mesh, corners, np.full(len(corners), -2.0))  # none acting
         assert not r.any() and J.nnz == 0
+
+
+def test_unmeetable_fixed_set_is_refused_before_iterating():
+    from optimize.errors import ConfigError
+
+    strip = shapes.perturbed(shapes.grid(6, 2, size=(5, 1), height=lambda x, y: 0.1 * x * y), 0.1, seed=3)
+    seen = []
+    with pytest.raises(ConfigError) as err:
+        optimize_mesh(strip, "pq", fixed="boundary", callback=seen.append)
+    assert not seen  # said before the first iteration
+    bad = np.nonzero(measures.planarity(strip) > 1e-6)[0]
+    assert "faces " + str(bad[:10].tolist()) in str(err.value) and "'boundary'" in str(err.value)
+    res = optimize_mesh(strip, "pq", fixed="corners")  # meetable: runs
+    assert res.nit > 0
+
+
+def test_cli_optimize_prints_distance_fairness_and_folds(tmp_path, capsys):
+    from fabricate.cli import main
+    from optimize.io import write_mesh
+
+    src = tmp_path / "in.obj"
+    write_mesh(src, conjugate_grid())
+    assert main(["optimize", str(src), "-o", str(tmp_path / "out.obj")]) == 0
+    out = capsys.readouterr().out
+    assert "% of the bbox diagonal), mean" in out and "fairness (mean second difference" in out
+    assert "folded faces: 0" in out
+    strip = shapes.perturbed(shapes.grid(6, 2, size=(5, 1), height=lambda x, y: 0.1 * x * y), 0.1, seed=3)
+    write_mesh(src, strip)
+    assert main(["optimize", str(src), "-o", str(tmp_path / "out2.obj"), "--fix", "boundary"]) == 2
+    assert not (tmp_path / "out2.obj").exists()
+
+
+def test_near_pq_input_keeps_its_fairness_and_barely_moves(monkeypatch):
+    from optimize import guided
+
+    base = shapes.revolution(shapes.dome_profile(k=9), 12)  # PQ by construction
+    mesh = shapes.perturbed(base, 2e-4, seed=4)  # planar to about 1e-3: nearly there
+    h = measures.edge_lengths(mesh).mean()
+    res = optimize_mesh(mesh, "pq")
+    assert res.success, res.message
+    fair, dist = res.defects["fairness"], res.defects["distance"]
+    assert 0.5 <= fair["ratio"] <= 2.0
+    assert dist["max"] < 3e-3 * h  # about its noise (2e-4 h per coordinate), not a fairing step
+    monkeypatch.setattr(guided, "FAR", None)  # the fairness weight in full, as before
+    old = optimize_mesh(mesh, "pq")
+    assert old.defects["distance"]["max"] > 3 * dist["max"]
+
+
+def test_net_defect_tells_conjugate_asymptotic_and_principal_nets_apart():
+    from optimize.conjugacy import net_defect
+
+    translational = shapes.grid(9, 9, size=(8, 8), height=lambda x, y: 0.5 * np.sin(0.6 * x) + 0.04 * y ** 2)
+    d = net_defect(translational)  # z = f(x) + g(y): its grid lines are a conjugate net
+    assert d.mean_conjugacy < 1e-9 and not d.far("pq")
+    d = net_defect(hypar())  # the rulings of z = x y: an asymptotic net
+    assert d.mean_conjugacy > 0.99 and d.far("pq") and "far" in d.line("pq")
+    dome = shapes.revolution(shapes.dome_profile(k=9), 16)  # meridians and parallels: principal
+    d = net_defect(dome)
+    assert d.mean_conjugacy < 1e-6 and d.mean_principal_angle < 1e-3 and not d.far("conical")
+    sheared = dome.with_vertices(dome.V @ np.array([[1, 0.0, 0], [0.6, 1, 0], [0, 0, 1]]))  # lines off principal
+    assert net_defect(sheared).mean_principal_angle > 5

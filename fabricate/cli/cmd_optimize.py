@@ -30,6 +30,10 @@ def register(sub) -> None:
     p.add_argument("--torsion-free-beams", choices=("auto", "on", "off"), default="auto",
                    help="conical: solve node axes with every interior beam planar (auto: when the mesh "
                         "has interior vertices of valence other than 4)")
+    p.add_argument("--no-convex", dest="convex", action="store_false",
+                   help="default method: let corners that are convex in the input turn reflex (the "
+                        "earlier behaviour: planar, perhaps dented panels, status folded); by default "
+                        "convexity is a constraint")
     p.add_argument("--fix", default="none", metavar="{boundary,corners,none}",
                    help="vertices that must not move (default none)")
     p.add_argument("--glide", action="store_true", help="boundary vertices glide on the boundary curve")
@@ -57,12 +61,17 @@ def run(args) -> int:
         tol = tol.replace(planarity=args.tol, conical=args.tol, circular=args.tol)
     mesh = read_mesh(args.mesh)
     reference = read_mesh(args.reference) if args.reference else None
+    if args.target != "strip":  # said before optimizing: is a fold-free mesh likely near?
+        from optimize.conjugacy import net_defect
+
+        print(f"{mesh.name}: {net_defect(mesh).line(args.target)}")
     res = optimize_mesh(mesh, args.target, method=args.method, reference=reference,
                         fixed=None if args.fix == "none" else args.fix, glide_boundary=args.glide,
                         fairness=args.fairness, closeness=args.closeness, tol=tol,
                         max_iter=args.max_iter,
                         **({} if args.method != "default" else
                            dict(formulation=args.formulation, linear_solver=args.linear_solver,
+                                convex=args.convex,
                                 torsion_free_beams={"auto": "auto", "on": True, "off": False}[
                                     args.torsion_free_beams])))
     write_mesh(args.output, res.mesh, comments=_marks(res))
@@ -75,7 +84,17 @@ def run(args) -> int:
             s = d[key]
             mark = "ok" if s.get("ok") else "NOT reached"
             print(f"  {key:10s} max {s['max']:.3g}  mean {s['mean']:.3g}  tolerance {s.get('tolerance')}  {mark}")
-    print(f"  max distance to the reference: {res.max_distance:.3g} of the bbox diagonal")
+    dist, fair = d.get("distance"), d.get("fairness")
+    if dist:
+        print(f"  distance to the reference: max {dist['max']:.3g} ({100 * dist['max_relative']:.3g}% of the "
+              f"bbox diagonal), mean {dist['mean']:.3g} ({100 * dist['mean_relative']:.3g}%), in the mesh's units")
+    else:
+        print(f"  max distance to the reference: {res.max_distance:.3g} of the bbox diagonal")
+    if fair:
+        print(f"  fairness (mean second difference / mean edge): input {fair['input']:.3g}, "
+              f"result {fair['result']:.3g} (x{fair['ratio']:.2f})")
+    fold = d.get("folded", {})
+    print(f"  folded faces: {fold.get('count', 0)}" + (f" (first {fold['faces'][:5]})" if fold.get("count") else ""))
     print(f"  {res.message}")
     if args.report:
         rep = {"input": str(args.mesh), "output": str(args.output), "tolerances": tol.as_dict(),
