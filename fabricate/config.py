@@ -110,6 +110,7 @@ class InputSection(Section):
     irregular: Literal["faces", "vertices", "nearest"] | None = None
     side: Literal["keep"] | tuple[float, float, float] | None = None
     radius: float | None = Field(default=None, gt=0)
+    remesh: Literal["auto", "always", "never"] = "never"
 
     _paths = field_validator("mesh", "control", "surface", mode="before")(_resolve_path)
 
@@ -129,6 +130,9 @@ class InputSection(Section):
             raise PydanticCustomError("irregular", "irregular applies only to a surface input")
         if self.surface is None and self.side is not None:
             raise PydanticCustomError("side", "side applies only to a surface input")
+        if self.mesh is None and self.remesh != "never":
+            raise PydanticCustomError("remesh", "remesh applies only to a mesh input (a surface input is "
+                                      "remeshed anyway)")
         if self.surface is None and self.radius is not None:
             raise PydanticCustomError("radius", "radius applies only to a surface input")
         if isinstance(self.side, tuple) and not (all(math.isfinite(c) for c in self.side) and any(self.side)):
@@ -160,6 +164,7 @@ class OptimizeSection(Section):
     max_iter: int = Field(default=200, ge=1, le=100000)
     fixed: Literal["boundary", "corners"] | list[int] | None = None
     glide_boundary: bool = False
+    convex: bool = True
 
     @field_validator("fixed")
     @classmethod

@@ -36,6 +36,8 @@ FOLD_ADVICE = ("the convexity rows should have prevented this: please report it;
 NO_CONVEX_FOLD_ADVICE = ("run with convexity kept (drop --no-convex / convex=False): faces then stay convex "
                          "and where that leaves them non-planar the run names them")
 
+HELD_ADVICE = ("what helps: remeshing along principal directions (--remesh auto, input.remesh: auto), "
+               "or the paper's penalty method (--method penalty), which sometimes finds one")
 GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
 
 
@@ -236,12 +238,10 @@ def _held(res: OptimizeResult, norm: Mesh, Xn: np.ndarray, keep: Convex, tol: To
         bad = bad[np.argsort(-planar[bad])]
         net = res.defects.get("net", {})
         what = "PQ" if res.target == "pq" else res.target
-        res.message += (f"; no fold-free {what} mesh is near the input: {len(bad)} face(s) stay non-planar "
-                        f"(worst first: {bad[:6].tolist()}, up to {planar[bad[0]]:.2g}) where planar "
-                        f"faces would dent {len(held)} face(s) held at the convexity floor "
-                        f"({held[:6].tolist()}); {net.get('line', '')}"
-                        + ("" if net.get("far") else "; remeshing along principal directions (input.remesh, "
-                                                     "fabricate remesh) gives a mesh one is near"))
+        res.message += (f"; the default solver found no fold-free {what} mesh near the input: {len(bad)} face(s) "
+                        f"stay non-planar (worst first: {bad[:6].tolist()}, up to {planar[bad[0]]:.2g}) where "
+                        f"planar faces would dent {len(held)} face(s) held at the convexity floor "
+                        f"({held[:6].tolist()}); {net.get('line', '')}; {HELD_ADVICE}")
 
 
 def _unit(U: np.ndarray) -> np.ndarray:

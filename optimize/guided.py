@@ -252,8 +252,14 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
     history: list[dict] = []
     status, message, nit, since_best, mu = None, "", 0, 0, MU_START
     folds_rejected = 0
+    pattern = None
+    if convex is not None:  # the hinge rows come and go: a fixed sparsity pattern keeps PARDISO's analysis
+        _, Jall = convexity.terms(x0, L, form.mesh, convex.corners, np.full(len(convex.corners), np.inf))
+        Jall = Jall @ S
+        pattern = (abs(Jall).T @ abs(Jall)).tocsr()
+        pattern.data[:] = 1e-300  # structurally there, numerically nothing
     fscale = [1.0]  # fairness weight factor: the worst target defect / far (at most 1)
-    V_start = L.view(x0, "vertices").copy() if convex is None else convex.V0
+    folds = convexity.FoldCheck(form.mesh, L.view(x0, "vertices").copy() if convex is None else convex.V0)
     if score <= 0:
         status, message = "converged", "the input already satisfies every tolerance"
     while status is None:
@@ -283,6 +289,8 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             for Jk in p:
                 Jk = Jk @ S
                 JtJ = JtJ + len(p) * (Jk.T @ Jk)
+        if pattern is not None:
+            JtJ = JtJ + pattern
         JtJ = JtJ.tocsr()
         merit0 = float(r @ r)
         timings["assemble"] += time.perf_counter() - ta
@@ -305,7 +313,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             timings["assemble"] += time.perf_counter() - ta
             merit1 = float(rn @ rn)
             if convex is not None and np.isfinite(merit1) and merit1 < merit0 and \
-                    measures.folded_faces(form.mesh, L.view(xn, "vertices"), convex.V0).any():
+                    folds.faces(L.view(xn, "vertices")).any():
                 folds_rejected += 1
                 mu *= 10  # a shorter step, closer to the linearization the hinge rows saw
                 continue
@@ -347,7 +355,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             entry[k] = float(d.max(initial=0.0))
             entry[k + "_mean"] = float(d.mean()) if d.size else 0.0
         entry["fairness"] = float(np.sum((K @ x) ** 2) / max(1, K.shape[0] // 3))
-        entry["folded"] = int(measures.folded_faces(form.mesh, L.view(x, "vertices"), V_start).sum())
+        entry["folded"] = int(folds.faces(L.view(x, "vertices")).sum())
         if foot is not None:
             entry["closeness"] = float(np.linalg.norm(V - foot[0], axis=1).max() / ref.bbox_diagonal)
         history.append(entry)

@@ -34,6 +34,11 @@ def register(sub) -> None:
                    help="default method: let corners that are convex in the input turn reflex (the "
                         "earlier behaviour: planar, perhaps dented panels, status folded); by default "
                         "convexity is a constraint")
+    p.add_argument("--remesh", choices=("auto", "always", "never"), default="never",
+                   help="a way forward when the mesh lines are far from a conjugate net: also remesh "
+                        "the input (as a surface) along principal directions and optimize that; auto: "
+                        "when the input's own lines do not end fold-free and exact; always: take the "
+                        "remeshed mesh (OUT then has new faces); never (default): OUT keeps MESH's faces")
     p.add_argument("--fix", default="none", metavar="{boundary,corners,none}",
                    help="vertices that must not move (default none)")
     p.add_argument("--glide", action="store_true", help="boundary vertices glide on the boundary curve")
@@ -65,15 +70,20 @@ def run(args) -> int:
         from optimize.conjugacy import net_defect
 
         print(f"{mesh.name}: {net_defect(mesh).line(args.target)}")
-    res = optimize_mesh(mesh, args.target, method=args.method, reference=reference,
-                        fixed=None if args.fix == "none" else args.fix, glide_boundary=args.glide,
-                        fairness=args.fairness, closeness=args.closeness, tol=tol,
-                        max_iter=args.max_iter,
-                        **({} if args.method != "default" else
-                           dict(formulation=args.formulation, linear_solver=args.linear_solver,
-                                convex=args.convex,
-                                torsion_free_beams={"auto": "auto", "on": True, "off": False}[
-                                    args.torsion_free_beams])))
+    kwargs = dict(method=args.method, fixed=None if args.fix == "none" else args.fix,
+                  glide_boundary=args.glide, fairness=args.fairness, closeness=args.closeness, tol=tol,
+                  max_iter=args.max_iter,
+                  **({} if args.method != "default" else
+                     dict(formulation=args.formulation, linear_solver=args.linear_solver, convex=args.convex,
+                          torsion_free_beams={"auto": "auto", "on": True, "off": False}[args.torsion_free_beams])))
+    routes = []
+    if args.remesh == "never" or args.target == "strip":
+        res = optimize_mesh(mesh, args.target, reference=reference, **kwargs)
+    else:
+        from optimize.routes import optimize_routes
+
+        chosen, routes = optimize_routes(mesh, args.target, remesh=args.remesh, reference=reference, **kwargs)
+        res = chosen.result
     write_mesh(args.output, res.mesh, comments=_marks(res))
     d = res.defects
     print(f"{mesh.name} -> {args.output}: {res.status} after {res.nit} iterations "
@@ -96,9 +106,13 @@ def run(args) -> int:
     fold = d.get("folded", {})
     print(f"  folded faces: {fold.get('count', 0)}" + (f" (first {fold['faces'][:5]})" if fold.get("count") else ""))
     print(f"  {res.message}")
+    for route in routes:
+        print(f"  {route.line()}" + ("  <- written" if route.result is res else ""))
     if args.report:
         rep = {"input": str(args.mesh), "output": str(args.output), "tolerances": tol.as_dict(),
                "tolerance_reached": bool(res.success), **res.report()}
+        if routes:
+            rep["routes"] = [r.as_dict() for r in routes]
         with atomic_open(args.report) as fh:
             json.dump(rep, fh, indent=2)
     return 0 if res.success else 3

@@ -27,6 +27,10 @@ normal), ``ds/dq = (w x n) / (|u||w|) - s u / |u|^2``, ``ds/dr = (n x u) /
 of the face adds ``(w_j x b) / (2 |u||w|)`` with ``w_j = v_(j+1) - v_(j-1)``
 (``dN/dv_j = w_j x / 2``).  Each row stays within one face.
 
+The paper's angle-sum rows ``phi1 + ... + phi4 = 2 pi`` (planar and convex)
+beside these were measured not to help (hypar900 / wave900 stalled the same,
+conjugate900+noise 7 -> 10 iterations), so they are not added.
+
 Block: ``vertices (n, 3)``.
 """
 from __future__ import annotations
@@ -34,13 +38,59 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..measures import _vector_areas, corner_turns
+from ..measures import COLLAPSED, corner_turns
 from ..mesh import Mesh
 from ..variables import Layout
 from .nodeaxes import _corner_spans
 
 SINE_FLOOR = 0.1  # about 5.7 degrees from straight or from closed
 CONVEX = 1e-6  # a corner with a start sine above -CONVEX counts as convex (as measures.folded_faces)
+
+
+def vector_areas(mesh: Mesh, V: np.ndarray) -> np.ndarray:
+    """(m, 3) float: twice the vector area of each face (as ``measures._vector_areas``, summed
+    with ``bincount``: the rows are evaluated at every trial step)."""
+    t = mesh.topology
+    o = V[mesh.F[t.corner_face, 0]]
+    cr = np.cross(V[t.corner_vertex] - o, V[t.corner_next_vertex] - o)
+    return np.stack([np.bincount(t.corner_face, weights=cr[:, k], minlength=mesh.n_faces) for k in range(3)],
+                    axis=1)
+
+
+def turns(mesh: Mesh, V: np.ndarray, corners: np.ndarray | None = None,
+          areas: np.ndarray | None = None) -> np.ndarray:
+    """Signed corner sines (``measures.corner_turns``) of ``corners`` (default all) at ``V (n, 3)``."""
+    t = mesh.topology
+    c = slice(None) if corners is None else corners
+    A = vector_areas(mesh, V) if areas is None else areas
+    N = A / np.maximum(np.linalg.norm(A, axis=1, keepdims=True), 1e-300)
+    P = V[t.corner_vertex[c]]
+    u, w = V[t.corner_next_vertex[c]] - P, V[t.corner_prev_vertex[c]] - P
+    lengths = np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(w, axis=1), 1e-300)
+    return np.einsum("ij,ij->i", np.cross(u, w), N[t.corner_face[c]]) / lengths
+
+
+class FoldCheck:
+    """``measures.folded_faces`` against fixed start positions ``V0 (n, 3)``, with what depends on
+    ``V0`` computed once (the optimizer asks at every trial step)."""
+
+    def __init__(self, mesh: Mesh, V0: np.ndarray, tol: float = 1e-6):
+        t = mesh.topology
+        self.mesh, self.tol = mesh, tol
+        A0 = vector_areas(mesh, V0)
+        self.N0 = A0 / np.maximum(np.linalg.norm(A0, axis=1, keepdims=True), 1e-300)
+        self.convex0 = turns(mesh, V0, areas=A0) > -tol
+        self.l0 = np.linalg.norm(V0[t.corner_next_vertex] - V0[t.corner_vertex], axis=1)
+
+    def faces(self, V: np.ndarray) -> np.ndarray:
+        """(m,) bool: faces folded at ``V`` (reflex where convex at the start, flipped, collapsed)."""
+        t, m = self.mesh.topology, self.mesh.n_faces
+        A = vector_areas(self.mesh, V)
+        bad_corner = self.convex0 & (turns(self.mesh, V, areas=A) < -self.tol)
+        l1 = np.linalg.norm(V[t.corner_next_vertex] - V[t.corner_vertex], axis=1)
+        bad_corner |= l1 < COLLAPSED * self.l0
+        bad = np.bincount(t.corner_face, weights=bad_corner, minlength=m) > 0
+        return bad | (np.einsum("ij,ij->i", self.N0, A) < 0)
 
 
 def floors(mesh: Mesh, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -52,7 +102,7 @@ def floors(mesh: Mesh, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def sines(mesh: Mesh, V: np.ndarray, corners: np.ndarray) -> np.ndarray:
     """(k,) float: the signed corner sines ``s_c`` of ``corners`` at positions ``V (n, 3)``."""
-    return corner_turns(mesh, V)[corners]
+    return turns(mesh, V, corners)
 
 
 def terms(x: np.ndarray, layout: Layout, mesh: Mesh, corners: np.ndarray,
@@ -63,7 +113,8 @@ def terms(x: np.ndarray, layout: Layout, mesh: Mesh, corners: np.ndarray,
     """
     t = mesh.topology
     V = layout.view(x, "vertices")
-    s = sines(mesh, V, corners)
+    areas = vector_areas(mesh, V)
+    s = turns(mesh, V, corners, areas)
     low = np.nonzero(s < floor)[0]
     r = np.where(s < floor, s - floor, 0.0)
     idx = layout.index("vertices")
@@ -75,7 +126,7 @@ def terms(x: np.ndarray, layout: Layout, mesh: Mesh, corners: np.ndarray,
     u, w = V[q] - V[p], V[rr] - V[p]
     lu, lw = np.linalg.norm(u, axis=1), np.linalg.norm(w, axis=1)
     den = np.maximum(lu * lw, 1e-300)[:, None]
-    N = 0.5 * _vector_areas(mesh, V)[f]
+    N = 0.5 * areas[f]
     ln = np.maximum(np.linalg.norm(N, axis=1), 1e-300)[:, None]
     n = N / ln
     cr = np.cross(u, w)
