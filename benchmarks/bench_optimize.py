@@ -177,7 +177,7 @@ def result_row(mesh0, name, target, method, seconds, res):
             "max": float(defect_of(out, target).max()), "mean": float(defect_of(out, target).mean()),
             "planarity": float(p.max()), "distance": float(d["distance"]["max_relative"]), "nit": res.nit,
             "folded": int(d["folded"]["count"]), "status": res.status,
-            "fair": f"fair x{d['fairness']['ratio']:.2f}"}
+            "fair": f"fair {d['fairness']['input']:.3g}->{d['fairness']['result']:.3g}"}
 
 
 def foldfree_table(args):
