@@ -220,6 +220,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
                 Js.append(Je)
         if convex is not None:
             rv, Jv = convexity.terms(x, L, form.mesh, convex.corners, convex.floor)
+            hinge_seen[0] = hinge_seen[0] or bool(rv.any())
             rs.append(rv)
             Js.append(Jv)
         rw = [w[0] for w in wide]
@@ -252,8 +253,9 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
     history: list[dict] = []
     status, message, nit, since_best, mu = None, "", 0, 0, MU_START
     folds_rejected = 0
-    pattern = None
-    if convex is not None:  # the hinge rows come and go: a fixed sparsity pattern keeps PARDISO's analysis
+    pattern, hinge_seen = None, [False]
+    if convex is not None:  # the hinge rows come and go: once one has acted, a fixed sparsity
+        # pattern (every face's vertices coupled) keeps PARDISO's symbolic analysis
         _, Jall = convexity.terms(x0, L, form.mesh, convex.corners, np.full(len(convex.corners), np.inf))
         Jall = Jall @ S
         pattern = (abs(Jall).T @ abs(Jall)).tocsr()
@@ -289,7 +291,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
             for Jk in p:
                 Jk = Jk @ S
                 JtJ = JtJ + len(p) * (Jk.T @ Jk)
-        if pattern is not None:
+        if pattern is not None and hinge_seen[0]:
             JtJ = JtJ + pattern
         JtJ = JtJ.tocsr()
         merit0 = float(r @ r)
