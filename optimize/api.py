@@ -77,7 +77,9 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         length (a one-sided row, :mod:`optimize.constraints.edgefloor`), so a
         vertex cannot slide onto its neighbour or into a corner.
     fairness, closeness : weights of the scale-free fairness and tangent-plane
-        closeness energies relative to the constraints (halved every iteration).
+        closeness energies relative to the constraints (halved every iteration; the
+        fairness weight also scaled by the worst defect over ``guided.FAR``, so a mesh
+        nearly there keeps its shape).
     tol : Tolerances; the run converges when every defect of the target is within it.
     max_iter : iteration budget.
     callback : ``callback(entry: dict)`` after each iteration.
