@@ -160,6 +160,7 @@ class InputSection(Section):
     irregular: Literal["faces", "vertices", "nearest"] | None = None
     side: Literal["keep"] | tuple[float, float, float] | None = None
     radius: float | None = Field(default=None, gt=0, le=1e7)
+    remesh: Literal["auto", "always", "never"] = "never"
     layer: str | None = Field(default=None, min_length=1, max_length=500)
     object: str | None = Field(default=None, min_length=1, max_length=500)
 
@@ -191,6 +192,9 @@ class InputSection(Section):
             raise PydanticCustomError("irregular", "irregular applies only to a surface input")
         if self.surface is None and self.side is not None:
             raise PydanticCustomError("side", "side applies only to a surface input")
+        if self.mesh is None and self.remesh != "never":
+            raise PydanticCustomError("remesh", "remesh applies only to a mesh input (a surface input is "
+                                      "remeshed anyway)")
         rhino = self.mesh is not None and self.mesh.suffix.lower() == ".3dm"
         for key in ("layer", "object"):
             if getattr(self, key) is not None and not rhino:
@@ -227,6 +231,7 @@ class OptimizeSection(Section):
     max_iter: int = Field(default=200, ge=1, le=MAX_ITER)
     fixed: Literal["boundary", "corners"] | list[int] | None = None
     glide_boundary: bool = False
+    convex: bool = True
 
     @field_validator("fixed")
     @classmethod

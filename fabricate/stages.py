@@ -99,13 +99,22 @@ def stage_optimize(ctx) -> str:
                   max_iter=opt.max_iter, callback=callback)
     if opt.method == "default":
         kwargs.update(formulation=opt.formulation, linear_solver=opt.linear_solver,
-                      torsion_free_beams=opt.torsion_free_beams)
+                      torsion_free_beams=opt.torsion_free_beams, convex=opt.convex)
     hier = subdivide_and_perturb(mesh, levels, scheme=plan["scheme"], target=target,
                                  surface=ctx.values.get("surface"), **kwargs)
     ctx.values["levels"] = [_plain(_level_facts(lv)) for lv in hier.levels]
     ctx.values["level_results"] = [lv.result for lv in hier.levels]
     result = hier.levels[-1].result
     mesh = hier.mesh
+    if cfg.input.kind == "mesh" and cfg.input.remesh != "never" and levels == 0 and result is not None:
+        from optimize.routes import optimize_routes  # input.remesh: the remeshed route too
+
+        kwargs.pop("callback")
+        chosen, routes = optimize_routes(ctx["input_mesh"], target, remesh=cfg.input.remesh,
+                                         original=result, **kwargs)
+        plan["routes"] = _plain([r.as_dict() for r in routes])
+        ctx.notes.extend(r.line() for r in routes)
+        mesh, result = chosen.mesh, chosen.result
     ctx.values["mesh"] = mesh
     ctx.values["result"] = result
     if result is None:

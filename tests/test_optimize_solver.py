@@ -139,10 +139,10 @@ def test_folded_faces_are_not_a_success():
     # z = x y meshed along its rulings (asymptotic lines, no conjugate net): with the noisy
     # boundary fixed, planarity is reached only by denting quads (reflex corners of 30-65 deg)
     mesh = shapes.perturbed(shapes.grid(8, 7, height=lambda x, y: 0.5 * x * y), 0.05, seed=14)
-    res = optimize_mesh(mesh, "pq", fixed="boundary")
+    res = optimize_mesh(mesh, "pq", fixed="boundary", convex=False)  # without the convexity rows
     assert res.defects["planarity"]["ok"]  # every tolerance is met ...
     assert res.status == "folded" and not res.success  # ... but the panels are not cuttable
-    assert res.defects["folded"]["count"] > 0 and "dented or flipped" in res.message
+    assert res.defects["folded"]["count"] > 0 and "dented, flipped" in res.message
     folded = measures.folded_faces(mesh, res.mesh.V)
     assert folded.sum() == res.defects["folded"]["count"]
 

@@ -241,9 +241,10 @@ def test_folded_panels_write_no_cut_file_and_end_marked(tmp_path, capsys):
 
     mesh = shapes.perturbed(shapes.grid(8, 7, size=(7000.0, 6000.0),
                                         height=lambda x, y: 0.5e-3 * x * y), 50.0, seed=14)
-    assert optimize_mesh(mesh, "pq", fixed="boundary").status == "folded"
+    assert optimize_mesh(mesh, "pq", fixed="boundary", convex=False).status == "folded"
     write_mesh(tmp_path / "hypar.obj", mesh)
-    (tmp_path / "f.yaml").write_text("input: {mesh: hypar.obj}\noptimize: {target: pq, fixed: boundary}\n")
+    (tmp_path / "f.yaml").write_text("input: {mesh: hypar.obj}\noptimize: {target: pq, fixed: boundary, "
+                                     "convex: false}\n")
     code = main(["run", str(tmp_path / "f.yaml"), "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert code == 3 and "folded" in err and "no panels or beams built" in err

@@ -33,6 +33,15 @@ def register(sub) -> None:
     p.add_argument("--torsion-free-beams", choices=("auto", "on", "off"), default="auto",
                    help="conical: solve node axes with every interior beam planar (auto: when the mesh "
                         "has interior vertices of valence other than 4)")
+    p.add_argument("--no-convex", dest="convex", action="store_false",
+                   help="default method: let corners that are convex in the input turn reflex (the "
+                        "earlier behaviour: planar, perhaps dented panels, status folded); by default "
+                        "convexity is a constraint")
+    p.add_argument("--remesh", choices=("auto", "always", "never"), default="never",
+                   help="a way forward when the mesh lines are far from a conjugate net: also remesh "
+                        "the input (as a surface) along principal directions and optimize that; auto: "
+                        "when the input's own lines do not end fold-free and exact; always: take the "
+                        "remeshed mesh (OUT then has new faces); never (default): OUT keeps MESH's faces")
     p.add_argument("--fix", default="none", metavar="{boundary,corners,none}",
                    help="vertices that must not move (default none)")
     p.add_argument("--glide", action="store_true", help="boundary vertices glide on the boundary curve")
@@ -67,15 +76,25 @@ def run(args) -> int:
     mesh = read_mm(args.mesh, args.units)
     require_quads(mesh, str(args.mesh), hint=CLI_HINT)
     reference = read_mm(args.reference, args.units) if args.reference else None
+    if args.target != "strip":  # said before optimizing: is a fold-free mesh likely near?
+        from optimize.conjugacy import net_defect
+
+        print(f"{mesh.name}: {net_defect(mesh).line(args.target)}")
+    kwargs = dict(method=args.method, fixed=None if args.fix == "none" else args.fix,
+                  glide_boundary=args.glide, fairness=args.fairness, closeness=args.closeness, tol=tol,
+                  max_iter=args.max_iter,
+                  **({} if args.method != "default" else
+                     dict(formulation=args.formulation, linear_solver=args.linear_solver, convex=args.convex,
+                          torsion_free_beams={"auto": "auto", "on": True, "off": False}[args.torsion_free_beams])))
+    routes = []
     with _progress(args) as callback:
-        res = optimize_mesh(mesh, args.target, method=args.method, reference=reference,
-                        fixed=None if args.fix == "none" else args.fix, glide_boundary=args.glide,
-                        fairness=args.fairness, closeness=args.closeness, tol=tol,
-                            max_iter=args.max_iter, callback=callback,
-                            **({} if args.method != "default" else
-                               dict(formulation=args.formulation, linear_solver=args.linear_solver,
-                                    torsion_free_beams={"auto": "auto", "on": True, "off": False}[
-                                        args.torsion_free_beams])))
+        if args.remesh == "never" or args.target == "strip":
+            res = optimize_mesh(mesh, args.target, reference=reference, callback=callback, **kwargs)
+        else:
+            from optimize.routes import optimize_routes
+
+            chosen, routes = optimize_routes(mesh, args.target, remesh=args.remesh, reference=reference, **kwargs)
+            res = chosen.result
     write_mesh(args.output, to_file_units(res.mesh, args.units), comments=_marks(res))
     d = res.defects
     print(f"{mesh.name} -> {args.output}: {res.status} after {res.nit} iterations "
@@ -88,14 +107,28 @@ def run(args) -> int:
             print(f"  {key:10s} max {s['max']:.3g}  mean {s['mean']:.3g}  tolerance {s.get('tolerance')}  {mark}")
     for line in _other_defects(res, tol):
         print(line)
-    diag = (reference or mesh).bbox_diagonal()
-    print(f"  max distance to the reference: {res.max_distance:.3g} of the bbox diagonal "
-          f"({res.max_distance * diag:.3g} mm of {diag:,.0f} mm)")
+    dist, fair = d.get("distance"), d.get("fairness")
+    if dist:
+        print(f"  distance to the reference: max {dist['max']:.3g} mm ({100 * dist['max_relative']:.3g}% of the "
+              f"bbox diagonal), mean {dist['mean']:.3g} mm ({100 * dist['mean_relative']:.3g}%)")
+    else:
+        diag = (reference or mesh).bbox_diagonal()
+        print(f"  max distance to the reference: {res.max_distance:.3g} of the bbox diagonal "
+              f"({res.max_distance * diag:.3g} mm of {diag:,.0f} mm)")
+    if fair:
+        print(f"  fairness (mean second difference / mean edge): input {fair['input']:.3g}, "
+              f"result {fair['result']:.3g} (x{fair['ratio']:.2f})")
+    fold = d.get("folded", {})
+    print(f"  folded faces: {fold.get('count', 0)}" + (f" (first {fold['faces'][:5]})" if fold.get("count") else ""))
     print(f"  {res.message}")
+    for route in routes:
+        print(f"  {route.line()}" + ("  <- written" if route.result is res else ""))
     if args.report:
         rep = {"input": str(args.mesh), "output": str(args.output), "units": args.units,
                "lengths": "mm", "tolerances": tol.as_dict(),
                "tolerance_reached": bool(res.success), **res.report()}
+        if routes:
+            rep["routes"] = [r.as_dict() for r in routes]
         with atomic_open(args.report) as fh:
             json.dump(rep, fh, indent=2)
     return 0 if res.success else 3
