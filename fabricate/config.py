@@ -30,6 +30,7 @@ from optimize.errors import ConfigError
 from optimize.tolerances import Tolerances
 
 from .config_errors import did_you_mean, format_errors, key_lines
+from .structure.options import StructureSection
 
 UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
@@ -258,6 +259,7 @@ class RunConfig(Section):
     offset: OffsetSection = Field(default_factory=OffsetSection)
     parts: PartsSection = Field(default_factory=PartsSection)
     outputs: OutputsSection = Field(default_factory=OutputsSection)
+    structure: StructureSection = Field(default_factory=StructureSection)
     units: Literal["mm", "cm", "m", "in", "ft"] = "mm"
     scale: float = Field(default=1.0, gt=0)
 

@@ -1,0 +1,158 @@
+"""Linear static solution of a :class:`~fabricate.structure.frame.Frame` by OpenSees (openseespy).
+
+The model is built here from our arrays; the solution is OpenSees': ``elasticBeamColumn``
+elements (Euler-Bernoulli, one per beam), a ``Linear`` geometric transformation per element
+whose ``vecxz`` is the beam-plane normal, ``SparseSYM`` (which reports a singular stiffness:
+a mechanism), one factorization for every load case.  OpenSees is imported here only.
+
+Section axes: OpenSees' local ``z`` moment of inertia is the section's strong ``Iy`` (bending
+in the beam plane), its local ``y`` one the weak ``Iz``.
+"""
+from __future__ import annotations
+
+import ctypes
+import importlib.util
+import os
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from optimize.errors import ConfigError
+
+from .frame import Frame
+from .loads import LoadCase
+
+
+class MechanismError(ConfigError):
+    """The frame cannot carry its loads: singular stiffness (too few supports, released joints)."""
+
+
+@dataclass(frozen=True, eq=False)
+class Solution:
+    """Results of every load case, in the order solved.
+
+    end_forces : {case: (e, 12) float} forces and moments on each element at its ends, local axes
+        ``[N1 Vy1 Vz1 T1 My1 Mz1 N2 Vy2 Vz2 T2 My2 Mz2]`` (N, N mm; OpenSees' ``localForce``).
+    displacements : {case: (n, 6) float} node displacements (mm) and rotations (rad), global.
+    reactions : {case: (n, 6) float} support reactions (N, N mm), global.
+    line_local : {case: (e, 3) float} the element line loads in local axes (N/mm).
+    seconds : {"build", "solve", "read"} time inside OpenSees calls; ``ours`` the rest.
+    """
+
+    end_forces: dict
+    displacements: dict
+    reactions: dict
+    line_local: dict
+    seconds: dict = field(default_factory=dict)
+    version: str = ""
+
+
+def _opensees():
+    """The openseespy module; its wheel's own BLAS is loaded first (the wheel's LAPACK does not
+    find it on every Linux)."""
+    try:
+        spec = importlib.util.find_spec("openseespylinux")
+        if spec is not None and spec.origin:
+            blas = os.path.join(os.path.dirname(spec.origin), "lib", "libblas.so.3")
+            if os.path.exists(blas):
+                ctypes.CDLL(blas, mode=ctypes.RTLD_GLOBAL)
+        import openseespy.opensees as ops
+    except (ImportError, RuntimeError, OSError) as exc:
+        raise RuntimeError(f"OpenSees (openseespy) cannot be imported: {exc}; install it with "
+                           "pip install openseespy") from None
+    return ops
+
+
+def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
+    """Solve ``frame`` for each case in ``cases`` (linear elastic; superposition holds).
+
+    Raises MechanismError when the stiffness is singular or the displacements are not finite
+    or larger than the frame itself.
+    """
+    ops = _opensees()
+    t0 = time.perf_counter()
+    spent = {"build": 0.0, "solve": 0.0, "read": 0.0}
+    axes = frame.local_axes()
+    A, Iy, Iz, J = frame.prop("A"), frame.prop("Iy"), frame.prop("Iz"), frame.prop("J")
+    X = frame.X.tolist()
+    El = (frame.elements + 1).tolist()
+    vecxz = frame.vecxz.tolist()
+    fixed = frame.fixed.astype(int).tolist()
+    supported = np.nonzero(frame.fixed.any(axis=1))[0]
+    props = np.stack([A, Iy, Iz, J], axis=1).tolist()
+    release = ["-releasez", 3, "-releasey", 3] if frame.pinned else []
+    E, G = frame.E, frame.G
+    t = time.perf_counter()
+    ops.wipe()
+    ops.logFile(os.devnull, "-noEcho")
+    ops.model("basic", "-ndm", 3, "-ndf", 6)
+    for i, (x, y, z) in enumerate(X):
+        ops.node(i + 1, x, y, z)
+    for i in supported.tolist():
+        ops.fix(i + 1, *fixed[i])
+    for k, ((a, b), v, (a_, iy, iz, j)) in enumerate(zip(El, vecxz, props)):
+        ops.geomTransf("Linear", k + 1, *v)
+        # OpenSees: A E G J Iy(local y, weak) Iz(local z, strong)
+        ops.element("elasticBeamColumn", k + 1, a, b, a_, E, G, j, iz, iy, k + 1, *release)
+    ops.system("SparseSYM")
+    ops.numberer("RCM")
+    ops.constraints("Plain")
+    ops.integrator("LoadControl", 1.0)
+    ops.algorithm("Linear")
+    ops.analysis("Static")
+    spent["build"] += time.perf_counter() - t
+    size = float(np.linalg.norm(frame.X.max(axis=0) - frame.X.min(axis=0)))
+    end_forces, disp, reac, line_local = {}, {}, {}, {}
+    n, e = frame.n_nodes, frame.n_elements
+    for c, (name, case) in enumerate(cases.items()):
+        wl = np.einsum("eij,ej->ei", axes, case.line)  # local wx, wy, wz
+        line_local[name] = wl
+        loaded = np.nonzero(np.abs(wl).max(axis=1) > 0)[0]
+        nodal = np.nonzero(np.abs(case.nodal).max(axis=1) > 0)[0]
+        if loaded.size == 0 and nodal.size == 0:  # an empty case (a zero load): nothing to solve
+            end_forces[name], disp[name], reac[name] = np.zeros((e, 12)), np.zeros((n, 6)), np.zeros((n, 6))
+            continue
+        t = time.perf_counter()
+        ops.timeSeries("Constant", c + 1)
+        ops.pattern("Plain", c + 1, c + 1)
+        for k, (wx, wy, wz) in zip(loaded.tolist(), wl[loaded].tolist()):
+            ops.eleLoad("-ele", k + 1, "-type", "-beamUniform", wy, wz, wx)
+        for i, f in zip(nodal.tolist(), case.nodal[nodal].tolist()):
+            ops.load(i + 1, *f)
+        spent["build"] += time.perf_counter() - t
+        t = time.perf_counter()
+        ok = ops.analyze(1)
+        spent["solve"] += time.perf_counter() - t
+        t = time.perf_counter()
+        U = np.array([ops.nodeDisp(i + 1) for i in range(n)], dtype=float).reshape(n, 6)
+        Fe = np.array([ops.eleResponse(k + 1, "localForce") for k in range(e)], dtype=float).reshape(e, 12)
+        ops.reactions()
+        R = np.zeros((n, 6))
+        for i in supported.tolist():
+            R[i] = ops.nodeReaction(i + 1)
+        spent["read"] += time.perf_counter() - t
+        if ok != 0 or not (np.isfinite(U).all() and np.isfinite(Fe).all()) or \
+                np.abs(U[:, :3]).max(initial=0.0) > max(size, 1.0):
+            ops.wipe()
+            why = (f"OpenSees found the stiffness singular (analyze returned {ok})" if ok != 0
+                   else "the displacements are not finite or larger than the frame itself")
+            raise MechanismError(f"the frame is a mechanism (or far too soft) under load case {name!r}: {why}; expected "
+                                 f"supports that hold it ({len(supported)} supported nodes) and connections "
+                                 f"that make it stiff ({'pinned' if frame.pinned else 'rigid'} joints)")
+        end_forces[name], disp[name], reac[name] = Fe, U, R
+        t = time.perf_counter()
+        ops.remove("loadPattern", c + 1)
+        ops.reset()
+        spent["build"] += time.perf_counter() - t
+    try:
+        from importlib.metadata import version as _version
+        version = _version("openseespy")
+    except Exception:  # noqa: BLE001 - a version string is a courtesy
+        version = ""
+    ops.wipe()
+    total = time.perf_counter() - t0
+    spent = {k: round(v, 4) for k, v in spent.items()}
+    spent["opensees"] = round(sum(spent.values()), 4)
+    spent["ours"] = round(total - spent["opensees"], 4)
+    return Solution(end_forces, disp, reac, line_local, spent, version)
