@@ -31,7 +31,7 @@ from .report.measures import collect_measures
 
 log = logging.getLogger(__name__)
 
-STAGES = ("input", "optimize", "offset", "cad", "exports", "report")
+STAGES = ("input", "optimize", "offset", "cad", "structure", "exports", "report")
 EXIT_CODES = {"ok": 0, "tolerance_not_reached": 3, "export_failed": 4, "bad_input": 2, "error": 1}
 
 
@@ -105,6 +105,7 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
         for name in STAGES[:-1]:
             _run_stage(ctx, name)
         ctx.values["measures"] = collect_measures(ctx)
+        ctx.values["measures"].update(ctx.get("structure_measures") or {})
         ctx.values["outcome"] = outcome(ctx)
         ctx.timings["before_report"] = time.perf_counter() - t_start
         _run_stage(ctx, "report")

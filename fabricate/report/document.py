@@ -102,6 +102,7 @@ def build_report(ctx, pictures: dict[str, str]) -> dict[str, Any]:
         "levels": ctx.get("levels", []),
         "offset": getattr(structure, "report", None),
         "parts": parts_summary(ctx.get("parts")),
+        "structure": ctx.get("statics_report"),
         "check": ctx.get("check"),
         "files": files,
         "pictures": pictures,

@@ -14,11 +14,14 @@ import numpy as np
 from .engine import MechanismError, solve
 from .frame import Frame, frame_from_offset
 from .loads import basic_cases
+from .options import ALPHA
 from .results import Results, evaluate, worst
 from .sections import SectionProperties, plate
 
-UTILIZATION_NOTE = ("elastic cross-section check |N|/Npl + |My|/Mel,y + |Mz|/Mel,z (EN 1993-1-1 6.2.1(7)); "
-                    "shear, torsion, member buckling and connections are not checked")
+UTILIZATION_NOTE = ("max of the elastic cross-section check |N|/Npl + |My|/Mel,y + |Mz|/Mel,z (EN 1993-1-1 "
+                    "6.2.1(7)) and the same with the compression over chi Npl (flexural buckling 6.3.1, "
+                    "interaction factors 1); shear, torsion, lateral-torsional buckling and connections "
+                    "are not checked")
 
 
 @dataclass(frozen=True, eq=False)
@@ -89,7 +92,8 @@ def solve_frame(frame, cases, options, structure) -> tuple:
                              f"{exc}") from None
     span = options.span or default_span(np.asarray(structure.mesh.V), options.up)
     results = evaluate(frame, cases, solution, options.combination_list(), fy=options.fy,
-                       deflection_limit=options.deflection_limit, span_mm=span)
+                       deflection_limit=options.deflection_limit, span_mm=span, alpha=ALPHA[options.buckling_curve],
+                       buckling_length_factor=options.buckling_length_factor)
     return solution, results
 
 
@@ -137,7 +141,9 @@ def report(check: StructureCheck) -> dict:
                      "vertices": check.supports[:50].tolist()},
         "connections": opt.connections,
         "section": check.section.as_dict(), "sections": sections,
-        "grade": opt.grade, "fy_mpa": opt.fy,
+        "grade": opt.grade, "fy_mpa": opt.fy, "buckling_curve": opt.buckling_curve,
+        "buckling_length_factor": opt.buckling_length_factor,
+        "min_buckling_factor": float(r.chi.min(initial=1.0)) if r.chi is not None else None,
         "steel_mass_kg": round(fr.steel_mass_kg(), 1),
         "loads_kN": {"characteristic_totals": totals, "input": opt.loads.model_dump()},
         "combinations": [{"name": n, "kind": k, "factors": f} for n, k, f in opt.combination_list()],

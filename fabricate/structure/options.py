@@ -17,6 +17,8 @@ from .sections import SectionProperties, section
 
 CASES = ("self_weight", "glass", "finishes", "snow", "wind_pressure", "wind_suction")
 """The basic load cases (EN 1991-style names); permanent: self_weight, glass, finishes."""
+ALPHA = {"a0": 0.13, "a": 0.21, "b": 0.34, "c": 0.49, "d": 0.76}
+"""Imperfection factor of each flexural buckling curve (EN 1993-1-1 Table 6.1)."""
 GRADES = {"S235": 235.0, "S275": 275.0, "S355": 355.0, "S460": 460.0}
 """Yield strength f_y (MPa) of the structural steel grades (EN 10025-2, t <= 40 mm)."""
 
@@ -111,6 +113,8 @@ class StructureSection(Section):
     check: Literal["off", "report", "enforce"] = "off"
     grade: Literal["S235", "S275", "S355", "S460"] = "S355"
     gamma_m0: float = Field(default=1.0, ge=1.0)
+    buckling_curve: Literal["a0", "a", "b", "c", "d"] = "c"   # EN 1993-1-1 Table 6.1 (c: tees, plates, cold-formed RHS)
+    buckling_length_factor: float = Field(default=1.0, gt=0)  # buckling length / beam length
     elastic_modulus: float = Field(default=210000.0, gt=0)   # MPa
     shear_modulus: float = Field(default=81000.0, gt=0)      # MPa
     section: SectionOption | None = None   # null: the parts' plate, parts.beam_width x the layer span

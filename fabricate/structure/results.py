@@ -6,10 +6,12 @@ Internal forces along an element follow from its end forces and its uniform line
 the section's strong axis), ``My(x) = -M1y - F1z x - wz x^2 / 2`` (weak axis), ``T = -M1x``,
 evaluated at :data:`SAMPLES` points and at the parabolas' vertices.
 
-Utilization (EN 1993-1-1 6.2.1(7), elastic cross-section check, linear interaction):
-``|N| / (A fy) + |M_strong| / (Wy fy) + |M_weak| / (Wz fy)`` with ``fy = f_y / gamma_M0``; the max
-over the element and the ULS combinations.  Shear, torsion, member buckling (flexural,
-lateral-torsional) and connection design are not checked.
+Utilization: the larger of the elastic cross-section check (EN 1993-1-1 6.2.1(7), linear
+interaction) ``|N| / (A fy) + |M_strong| / (Wy fy) + |M_weak| / (Wz fy)`` and the same with the
+compression divided by the flexural buckling factor ``chi`` (6.3.1, the weaker axis, buckling
+length = the beam length times ``buckling_length_factor``, imperfection factor ``alpha``:
+interaction factors taken as 1); ``fy = f_y / gamma_M``; the max over the element and the ULS
+combinations.  Shear, torsion, lateral-torsional buckling and connections are not checked.
 
 Deflection of a beam relative to the chord between its nodes: ``EI v'' = M(x)`` with
 ``v(0) = v(L) = 0`` (exact for the end moments and the uniform load), both planes, the
@@ -44,6 +46,21 @@ def internal_forces(F: np.ndarray, w: np.ndarray, L: np.ndarray, n: int = SAMPLE
     return x, N, Ms, Mw, -F[:, 3]
 
 
+def buckling_factor(A: np.ndarray, I_min: np.ndarray, L_cr: np.ndarray, E: float, fy: float,
+                    alpha: float) -> np.ndarray:
+    """(e,) float flexural buckling reduction ``chi <= 1`` (EN 1993-1-1 6.3.1.2)."""
+    lam = np.sqrt(A * fy / (np.pi ** 2 * E * I_min / L_cr ** 2))
+    phi = 0.5 * (1.0 + alpha * (lam - 0.2) + lam ** 2)
+    return np.minimum(1.0, 1.0 / (phi + np.sqrt(np.maximum(phi ** 2 - lam ** 2, 0.0))))
+
+
+def utilization(N, Ms, Mw, A, Wy, Wz, chi, fy: float) -> np.ndarray:
+    """Utilization of sections ``A, Wy, Wz, chi`` (broadcast) under ``N`` (+ tension), ``Ms``, ``Mw``
+    (N, N mm): the larger of the cross-section and the flexural buckling check (module docstring)."""
+    bend = np.abs(Ms) / (Wy * fy) + np.abs(Mw) / (Wz * fy)
+    return np.maximum(np.abs(N) / (A * fy), np.maximum(-N, 0.0) / (chi * A * fy)) + bend
+
+
 def chord_deflection(F: np.ndarray, w: np.ndarray, L: np.ndarray, EI_strong: np.ndarray, EI_weak: np.ndarray,
                      n: int = SAMPLES) -> np.ndarray:
     """(e,) float max deflection (mm) of each element relative to the chord of its ends.
@@ -70,7 +87,8 @@ class Results:
     M_strong_kNm, M_weak_kNm, T_kNm (e,) max |moment| of that combination; utilization (e,);
     governing (e,) int index into ``uls``; deflection_mm, deflection_limit_mm (e,) (worst SLS);
     displacement_mm (e,) worst node displacement of the element's ends (SLS); node_displacement
-    (n, 3) of the governing SLS combination; equilibrium {case: relative residual}.
+    (n, 3) of the governing SLS combination; equilibrium {case: relative residual}; chi (e,)
+    flexural buckling factors.
     """
 
     N_kN: np.ndarray
@@ -89,6 +107,7 @@ class Results:
     span_mm: float
     displacement_limit_mm: float
     equilibrium: dict = field(default_factory=dict)
+    chi: np.ndarray | None = None
 
 
 def equilibrium(frame, cases, solution) -> dict[str, float]:
@@ -104,7 +123,7 @@ def equilibrium(frame, cases, solution) -> dict[str, float]:
 
 
 def evaluate(frame, cases, solution, combinations, *, fy: float, deflection_limit: float,
-             span_mm: float) -> Results:
+             span_mm: float, alpha: float = 0.49, buckling_length_factor: float = 1.0) -> Results:
     """Combine the solved basic cases (superposition) and evaluate every element.
 
     combinations : ``[(name, "uls" | "sls", {case: factor})]``; fy : design yield strength, MPa.
@@ -112,6 +131,8 @@ def evaluate(frame, cases, solution, combinations, *, fy: float, deflection_limi
     L = frame.lengths()
     A, Wy, Wz = frame.prop("A"), frame.prop("Wy"), frame.prop("Wz")
     EIs, EIw = frame.E * frame.prop("Iy"), frame.E * frame.prop("Iz")
+    chi = buckling_factor(A, np.minimum(frame.prop("Iy"), frame.prop("Iz")), L * buckling_length_factor,
+                          frame.E, fy, alpha)
     e = frame.n_elements
     uls = [c for c in combinations if c[1] == "uls"]
     sls = [c for c in combinations if c[1] == "sls"]
@@ -126,7 +147,7 @@ def evaluate(frame, cases, solution, combinations, *, fy: float, deflection_limi
     for ci, (_, _, factors) in enumerate(uls):
         F, w = mix(solution.end_forces, factors), mix(solution.line_local, factors)
         x, N, Ms, Mw, T = internal_forces(F, w, L)
-        u = np.abs(N) / (A * fy)[:, None] + np.abs(Ms) / (Wy * fy)[:, None] + np.abs(Mw) / (Wz * fy)[:, None]
+        u = utilization(N, Ms, Mw, A[:, None], Wy[:, None], Wz[:, None], chi[:, None], fy)
         j = np.argmax(u, axis=1)
         better = u[rows, j] > util
         util = np.where(better, u[rows, j], util)
@@ -152,7 +173,7 @@ def evaluate(frame, cases, solution, combinations, *, fy: float, deflection_limi
                    deflection_limit_mm=L / deflection_limit, displacement_mm=disp, node_displacement=node_disp,
                    uls=tuple(c[0] for c in uls), sls=tuple(c[0] for c in sls), governing_sls=gov_sls,
                    span_mm=float(span_mm), displacement_limit_mm=float(span_mm / deflection_limit),
-                   equilibrium=equilibrium(frame, cases, solution))
+                   equilibrium=equilibrium(frame, cases, solution), chi=chi)
 
 
 def worst(values: np.ndarray, ids, k: int = N_WORST, **columns) -> list[dict]:

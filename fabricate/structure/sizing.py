@@ -18,6 +18,8 @@ import numpy as np
 from optimize.errors import ConfigError
 
 from .check import check_structure, configured_section
+from .options import ALPHA
+from .results import buckling_factor, utilization
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +70,7 @@ def size_sections(structure, options, spec) -> Sizing:
     base = configured_section(options, spec, structure)
     cands = sorted({s.properties("structure.sizing.sections").name: s.properties("structure.sizing.sections")
                     for s in options.sizing.sections}.values(), key=lambda s: (s.A, -s.Iy))
-    fy = options.fy
+    fy, alpha = options.fy, ALPHA[options.buckling_curve]
     groups = beam_groups(structure, options.sizing.group_by)
     e = len(structure.edges)
     first = check_structure(structure, options, spec)
@@ -88,10 +90,13 @@ def size_sections(structure, options, spec) -> Sizing:
         new = {}
         for g, ix in groups.items():
             cur = cands[pick[g]]
-            N, Ms, Mw = np.abs(r.N_kN[ix]) * 1e3, r.M_strong_kNm[ix] * 1e6, r.M_weak_kNm[ix] * 1e6
+            N, Ms, Mw = r.N_kN[ix] * 1e3, r.M_strong_kNm[ix] * 1e6, r.M_weak_kNm[ix] * 1e6
             defl = r.deflection_mm[ix] / r.deflection_limit_mm[ix]
+            L = chk.frame.lengths()[ix] * options.buckling_length_factor
             ok = [c for c, s in enumerate(cands)
-                  if (N / (s.A * fy) + Ms / (s.Wy * fy) + Mw / (s.Wz * fy)).max() <= 1.0
+                  if utilization(N, Ms, Mw, s.A, s.Wy, s.Wz,
+                                 buckling_factor(s.A, min(s.Iy, s.Iz), L, options.elastic_modulus, fy, alpha),
+                                 fy).max() <= 1.0
                   and (defl * cur.Iy / s.Iy).max() <= 1.0]
             new[g] = ok[0] if ok else len(cands) - 1
         if new == pick:
