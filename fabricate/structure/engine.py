@@ -66,10 +66,36 @@ def _opensees():
             if os.path.exists(blas):
                 ctypes.CDLL(blas, mode=ctypes.RTLD_LOCAL)
         import openseespy.opensees as ops
+        _quiet_exit()
     except (ImportError, RuntimeError, OSError) as exc:
         raise RuntimeError(f"OpenSees (openseespy) cannot be imported: {exc}; install it with "
                            "pip install openseespy") from None
     return ops
+
+
+_QUIET = []
+
+
+def _quiet_exit() -> None:
+    """OpenSees prints "Process 0 Terminating" on stderr when the interpreter exits, after our last
+    line (an error message must stay one line): at exit, once everything of ours is flushed, stderr's
+    file descriptor goes to the null device."""
+    if _QUIET:
+        return
+    import atexit
+    import sys
+
+    def hush():
+        try:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            fd = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(fd, 2)
+        except (OSError, ValueError):
+            pass
+
+    atexit.register(hush)
+    _QUIET.append(hush)
 
 
 def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:

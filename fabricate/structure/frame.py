@@ -98,12 +98,17 @@ def check_frame(frame: Frame) -> None:
         raise ConfigError("structure.supports: no node is supported, expected at least one support")
 
 
-def support_vertices(V: np.ndarray, boundary: np.ndarray, supports, tolerance: float, up) -> np.ndarray:
+LOWEST_FRACTION = 0.05
+"""``supports: lowest`` without a tolerance: vertices within this fraction of the height above the lowest."""
+
+
+def support_vertices(V: np.ndarray, boundary: np.ndarray, supports, tolerance: float | None, up) -> np.ndarray:
     """Vertex indices chosen by ``structure.supports``.
 
     V : (n, 3) float mm; boundary : (n,) bool boundary vertices.
     supports : ``"lowest"`` (vertices within ``tolerance`` mm above the lowest one along ``up``,
-        on the boundary when the mesh has one), ``"boundary"`` or a list of vertex indices.
+        default :data:`LOWEST_FRACTION` of the height, on the boundary when the mesh has one),
+        ``"boundary"`` or a list of vertex indices.
     """
     n = len(V)
     if isinstance(supports, str) and supports == "boundary":
@@ -117,6 +122,8 @@ def support_vertices(V: np.ndarray, boundary: np.ndarray, supports, tolerance: f
         h = V @ u
         pool = boundary if boundary.any() else np.ones(n, bool)
         low = h[pool].min()
+        if tolerance is None:
+            tolerance = LOWEST_FRACTION * float(h.max() - h.min())
         return np.nonzero(pool & (h <= low + tolerance))[0]
     idx = np.asarray(list(supports), dtype=np.int64)
     if idx.size and (idx.max() >= n):
@@ -126,7 +133,7 @@ def support_vertices(V: np.ndarray, boundary: np.ndarray, supports, tolerance: f
 
 
 def frame_from_offset(structure, section: SectionProperties, *, E: float, G: float, supports="lowest",
-                      support_tolerance: float = 10.0, support_kind: str = "pinned", pinned: bool = False,
+                      support_tolerance: float | None = None, support_kind: str = "pinned", pinned: bool = False,
                       up=(0.0, 0.0, 1.0)) -> tuple[Frame, np.ndarray]:
     """The frame of an :class:`fabricate.offset.OffsetStructure` with one ``section`` everywhere.
 

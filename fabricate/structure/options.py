@@ -120,7 +120,7 @@ class StructureSection(Section):
     section: SectionOption | None = None   # null: the parts' plate, parts.beam_width x the layer span
     connections: Literal["rigid", "pinned"] = "rigid"
     supports: Literal["lowest", "boundary"] | list[int] = "lowest"
-    support_tolerance: float = Field(default=10.0, ge=0)   # mm above the lowest vertex ('lowest')
+    support_tolerance: float | None = Field(default=None, ge=0)  # mm above the lowest ('lowest'); null: 5% of the height
     support_kind: Literal["pinned", "fixed"] = "pinned"
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
     deflection_limit: float = Field(default=200.0, gt=0)   # span / n, beams and whole structure

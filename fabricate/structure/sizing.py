@@ -3,10 +3,11 @@
 Groups (``structure.sizing.group_by``): ``all`` beams together, or ``boundary`` (beams on the
 mesh boundary) and ``interior``.  Each round solves the frame with the current sections, then
 picks per group the lightest candidate whose utilization and beam deflection, estimated from
-the current forces (``|N| / (A fy) + |M_strong| / (Wy fy) + |M_weak| / (Wz fy)``; deflection
-scaled by the ratio of ``Iy``), pass for every beam of the group; the forces change with the
-stiffnesses and the self-weight, so the rounds repeat until the choice is stable and the
-re-solved frame passes (a group that still fails moves one size up).  The answer is always
+the current forces (the utilization of :mod:`fabricate.structure.results` with the candidate's
+``A, Wy, Wz`` and buckling factor; the deflection scaled by the larger ratio of ``Iy`` or ``Iz``),
+pass for every beam of the group; the forces change with the stiffnesses and the self-weight,
+so the rounds repeat until the choice is stable and the re-solved frame passes.  A group whose
+choice failed a full solve never goes back to that section or a lighter one, so the rounds end.  The answer is always
 the result of a full solve with the chosen sections, never the estimate.
 """
 from __future__ import annotations
@@ -76,6 +77,7 @@ def size_sections(structure, options, spec) -> Sizing:
     first = check_structure(structure, options, spec)
     configured_mass = first.frame.steel_mass_kg(spec.density_steel)
     pick = {g: len(cands) - 1 for g in groups}  # start from the heaviest candidate
+    floor = {g: 0 for g in groups}              # lighter ones failed a full solve
     history: list = []
     chk = None
     for rounds in range(1, options.sizing.max_rounds + 1):
@@ -85,8 +87,12 @@ def size_sections(structure, options, spec) -> Sizing:
         chk = check_structure(structure, options, spec, sections=cands, section_of=section_of)
         checked = dict(pick)
         r = chk.results
+        passes = chk.passes()
         history.append({"round": rounds, "chosen": {g: cands[pick[g]].name for g in groups},
-                        "max_utilization": round(chk.max_utilization, 4), "passes": chk.passes()})
+                        "max_utilization": round(chk.max_utilization, 4), "passes": passes})
+        if not passes:
+            for g in _failing_groups(chk, groups):
+                floor[g] = max(floor[g], pick[g] + 1)
         new = {}
         for g, ix in groups.items():
             cur = cands[pick[g]]
@@ -94,19 +100,14 @@ def size_sections(structure, options, spec) -> Sizing:
             defl = r.deflection_mm[ix] / r.deflection_limit_mm[ix]
             L = chk.frame.lengths()[ix] * options.buckling_length_factor
             ok = [c for c, s in enumerate(cands)
-                  if utilization(N, Ms, Mw, s.A, s.Wy, s.Wz,
-                                 buckling_factor(s.A, min(s.Iy, s.Iz), L, options.elastic_modulus, fy, alpha),
-                                 fy).max() <= 1.0
-                  and (defl * cur.Iy / s.Iy).max() <= 1.0]
-            new[g] = ok[0] if ok else len(cands) - 1
-        if new == pick:
-            if chk.passes():
-                break
-            failing = _failing_groups(chk, groups)
-            bumped = {g: min(pick[g] + 1, len(cands) - 1) if g in failing else pick[g] for g in groups}
-            if bumped == pick:
-                break  # the heaviest candidate does not pass: say so
-            new = bumped
+                  if c >= floor[g]
+                  and utilization(N, Ms, Mw, s.A, s.Wy, s.Wz,
+                                  buckling_factor(s.A, min(s.Iy, s.Iz), L, options.elastic_modulus, fy, alpha),
+                                  fy).max() <= 1.0
+                  and (defl * max(cur.Iy / s.Iy, cur.Iz / s.Iz)).max() <= 1.0]
+            new[g] = ok[0] if ok else min(max(floor[g], pick[g]), len(cands) - 1)
+        if new == pick and (passes or all(floor[g] >= len(cands) for g in groups if g in _failing_groups(chk, groups))):
+            break  # stable and passing, or the heaviest candidate does not pass: say so
         pick = new
     util = {g: round(float(chk.results.utilization[ix].max(initial=0.0)), 4) for g, ix in groups.items()}
     return Sizing(groups=groups, chosen={g: cands[checked[g]].name for g in groups}, check=chk,
