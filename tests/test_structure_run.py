@@ -142,3 +142,46 @@ def test_bad_structure_input_is_exit_2_with_one_line_naming_the_key(tmp_path, se
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and key in lines[0] and "Traceback" not in proc.stderr
     assert not (tmp_path / "o" / "c").exists()
+
+
+def test_reference_config_lists_every_structure_key():
+    import yaml
+
+    from fabricate.structure.options import LoadsOption, SizingOption, StructureSection
+
+    data = yaml.safe_load((REPO / "configs" / "reference.yaml").read_text())["structure"]
+    assert set(data) == set(StructureSection.allowed_keys())
+    assert set(data["loads"]) == set(LoadsOption.allowed_keys())
+    assert set(data["sizing"]) == set(SizingOption.allowed_keys())
+    from fabricate.config import load_config
+
+    assert load_config(REPO / "configs" / "reference.yaml").structure.check == "off"  # YAML's bare off
+
+
+def test_supports_outline_is_the_longest_boundary_loop_and_a_closed_mesh_has_none():
+    from fabricate.structure.frame import support_vertices
+    from optimize.errors import ConfigError
+
+    ring = shapes.grid(6, 6, size=(5.0, 5.0))  # one boundary loop of 20 vertices
+    t = ring.topology
+    sel = support_vertices(ring.V, t.is_boundary_vertex, "outline", None, (0, 0, 1), loops=t.boundary_loops)
+    assert sorted(sel.tolist()) == sorted(np.nonzero(t.is_boundary_vertex)[0].tolist())
+    with pytest.raises(ConfigError, match="structure.supports = 'outline'"):
+        support_vertices(ring.V, np.zeros(len(ring.V), bool), "outline", None, (0, 0, 1), loops=[])
+
+
+def test_fabricate_size_reports_the_lightest_passing_section_and_the_steel_saved(tmp_path):
+    cfg = tmp_path / "s.yaml"
+    cfg.write_text("input:\n  shape:\n    name: dome\n    params: {radius: 5000, rise: 2000, meridians: 6, rings: 3}\n"
+                   "structure:\n  sizing:\n    group_by: all\n    sections:\n"
+                   "      - {shape: plate, depth: 200, width: 1}\n      - {shape: rhs, depth: 200, width: 60, web: 4}\n"
+                   "      - {shape: plate, depth: 200, width: 60}\n")
+    proc = subprocess.run([sys.executable, "-m", "fabricate", "size", str(cfg), "--json", str(tmp_path / "s.json")],
+                          cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    import json
+
+    d = json.loads((tmp_path / "s.json").read_text())
+    assert d["chosen"] == {"all": "rhs 200x60x4"} and d["passes"]
+    assert d["configured_section"] == "plate 60x200" and d["saved_kg"] > 0
+    assert "rhs 200x60x4" in proc.stdout and "saved" in proc.stdout

@@ -14,9 +14,9 @@ import numpy as np
 from .engine import MechanismError, solve
 from .frame import Frame, frame_from_offset
 from .loads import basic_cases
-from .options import ALPHA
+from .options import ALPHA, GRADES
 from .results import Results, evaluate, worst
-from .sections import SectionProperties, plate
+from .sections import SectionProperties, plate, slender_part
 
 UTILIZATION_NOTE = ("max of the elastic cross-section check |N|/Npl + |My|/Mel,y + |Mz|/Mel,z (EN 1993-1-1 "
                     "6.2.1(7)) and the same with the compression over chi Npl (flexural buckling 6.3.1, "
@@ -46,10 +46,16 @@ class StructureCheck:
         """(e,) float beam deflection / its limit."""
         return self.results.deflection_mm / self.results.deflection_limit_mm
 
+    def slender(self) -> list[str]:
+        """The sections in use with a class 4 part (local buckling is not checked: they fail)."""
+        fy = GRADES[self.options.grade]
+        used = sorted(set(np.unique(self.frame.section_of).tolist()))
+        return [m for m in (slender_part(self.frame.sections[i], fy) for i in used) if m]
+
     def passes(self) -> bool:
         r = self.results
         return bool(self.max_utilization <= 1.0 and (self.deflection_ratio() <= 1.0).all()
-                    and r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm)
+                    and r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm and not self.slender())
 
 
 def configured_section(options, spec, structure) -> SectionProperties:
@@ -161,6 +167,7 @@ def report(check: StructureCheck) -> dict:
                          "pass": bool(r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm),
                          "combination": r.governing_sls},
         "equilibrium": {"relative_residual": r.equilibrium, "max": max(r.equilibrium.values(), default=0.0)},
+        "class_4": check.slender(),
         "pass": check.passes(),
         "seconds": check.seconds,
     }

@@ -102,13 +102,15 @@ LOWEST_FRACTION = 0.05
 """``supports: lowest`` without a tolerance: vertices within this fraction of the height above the lowest."""
 
 
-def support_vertices(V: np.ndarray, boundary: np.ndarray, supports, tolerance: float | None, up) -> np.ndarray:
+def support_vertices(V: np.ndarray, boundary: np.ndarray, supports, tolerance: float | None, up,
+                     loops=()) -> np.ndarray:
     """Vertex indices chosen by ``structure.supports``.
 
     V : (n, 3) float mm; boundary : (n,) bool boundary vertices.
     supports : ``"lowest"`` (vertices within ``tolerance`` mm above the lowest one along ``up``,
         default :data:`LOWEST_FRACTION` of the height, on the boundary when the mesh has one),
-        ``"boundary"`` or a list of vertex indices.
+        ``"boundary"``, ``"outline"`` (the longest boundary loop: a roof's edge without the rims of
+        its openings; ``loops`` the mesh's boundary loops) or a list of vertex indices.
     """
     n = len(V)
     if isinstance(supports, str) and supports == "boundary":
@@ -117,6 +119,12 @@ def support_vertices(V: np.ndarray, boundary: np.ndarray, supports, tolerance: f
             raise ConfigError("structure.supports = 'boundary': the mesh has no boundary (closed), expected "
                               "'lowest' or vertex indices")
         return sel
+    if isinstance(supports, str) and supports == "outline":
+        if not len(loops):
+            raise ConfigError("structure.supports = 'outline': the mesh has no boundary (closed), expected "
+                              "'lowest' or vertex indices")
+        lengths = [float(np.linalg.norm(V[np.roll(lp, -1)] - V[lp], axis=1).sum()) for lp in loops]
+        return np.unique(np.asarray(loops[int(np.argmax(lengths))]))
     if isinstance(supports, str) and supports == "lowest":
         u = np.asarray(up, dtype=float) / np.linalg.norm(up)
         h = V @ u
@@ -147,7 +155,8 @@ def frame_from_offset(structure, section: SectionProperties, *, E: float, G: flo
     frac = section.centroid / section.h
     X = np.asarray(mesh.V + (d0 + frac * (d1 - d0)) * structure.offset, dtype=float)
     edges = np.asarray(structure.edges, dtype=np.int64)
-    sup = support_vertices(np.asarray(mesh.V), mesh.topology.is_boundary_vertex, supports, support_tolerance, up)
+    sup = support_vertices(np.asarray(mesh.V), mesh.topology.is_boundary_vertex, supports, support_tolerance, up,
+                           loops=mesh.topology.boundary_loops)
     if sup.size == 0:
         raise ConfigError(f"structure.supports = {supports!r}: selects no vertex, expected at least one support")
     fixed = np.zeros((len(X), 6), dtype=bool)

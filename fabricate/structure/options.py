@@ -28,6 +28,10 @@ class Section(BaseModel):
 
     model_config = ConfigDict(extra="forbid", validate_default=True, populate_by_name=True)
 
+    @classmethod
+    def allowed_keys(cls) -> list[str]:
+        return [f.alias or name for name, f in cls.model_fields.items()]
+
 
 class SectionOption(Section):
     """A beam section (mm): ``plate`` width x depth, ``rhs`` depth x width x web (wall),
@@ -119,7 +123,7 @@ class StructureSection(Section):
     shear_modulus: float = Field(default=81000.0, gt=0)      # MPa
     section: SectionOption | None = None   # null: the parts' plate, parts.beam_width x the layer span
     connections: Literal["rigid", "pinned"] = "rigid"
-    supports: Literal["lowest", "boundary"] | list[int] = "lowest"
+    supports: Literal["lowest", "boundary", "outline"] | list[int] = "lowest"
     support_tolerance: float | None = Field(default=None, ge=0)  # mm above the lowest ('lowest'); null: 5% of the height
     support_kind: Literal["pinned", "fixed"] = "pinned"
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -129,13 +133,18 @@ class StructureSection(Section):
     combinations: list[CombinationOption] | None = None   # null: DEFAULT_COMBINATIONS
     sizing: SizingOption = Field(default_factory=SizingOption)
 
+    @field_validator("check", mode="before")
+    @classmethod
+    def _yaml_off(cls, v):
+        return "off" if v is False else v  # YAML 1.1 reads a bare `off` as false
+
     @field_validator("supports")
     @classmethod
     def _supports(cls, v):
         if isinstance(v, list):
             if not v:
                 raise PydanticCustomError("supports", "an empty list supports nothing; expected vertex indices, "
-                                          "'lowest' or 'boundary'")
+                                          "'lowest', 'boundary' or 'outline'")
             if any(i < 0 for i in v):
                 raise PydanticCustomError("supports", "vertex indices must be >= 0")
         return v

@@ -89,7 +89,8 @@ def html_section(rep: dict | None) -> str:
     drows = "".join(
         f"<tr><td>{escape(w['id'])}</td><td class=num>{w['deflection_mm']:.2f}</td><td class=num>{w['limit_mm']:.1f}"
         f"</td><td class=num>{w['value']:.3f}</td></tr>" for w in d["worst"])
-    notes = "".join(f"<li>{escape(n)}</li>" for n in rep.get("notes", []))
+    notes = "".join(f"<li>{escape(n)}</li>" for n in rep.get("notes", []) + [
+        f"class 4 section (local buckling is not checked, so it fails): {m}" for m in rep.get("class_4", [])])
     return (f"<h2>Structure</h2><p>The steel frame <span class=\"{cls}\">{verdict}</span> the check "
             f"(structure.check: {escape(rep['check'])}; {escape(rep['engine'])}): max utilization "
             f"{_f(u['max'])} ({escape(str(rep['governing_combination']))}), beam deflection {_f(d['max_ratio'])} of "

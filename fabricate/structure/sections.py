@@ -132,3 +132,26 @@ def section(shape: str, *, depth: float, width: float, web: float | None = None,
             raise ConfigError(f"{key}.{missing[0]}: missing, a {shape} section needs web and flange (mm)")
         return (tee if shape == "tee" else i_section)(depth, width, web, flange, key)
     raise ConfigError(f"{key}.shape = {shape!r}: expected one of {', '.join(SHAPES)}")
+
+
+def slender_part(sec: SectionProperties, fy: float) -> str | None:
+    """The part of ``sec`` beyond the class 3 width-to-thickness limit of EN 1993-1-1 Table 5.2
+    (local buckling, class 4, is not covered by the check), or None.
+
+    Limits with ``eps = sqrt(235 / fy)``: I and RHS webs (bending) ``c/t <= 124 eps``; RHS flanges
+    (the compressed wall in bending) ``42 eps``; I flange outstands and tee stems ``14 eps``; tee
+    flange outstands ``14 eps``.  Solid plates have no thin parts.  ``c`` as the clear width
+    (without radii: ``h - 3t`` for RHS walls).
+    """
+    eps = math.sqrt(235.0 / fy)
+    parts: list[tuple[str, float, float]] = []
+    if sec.shape == "rhs":
+        parts = [("web", (sec.h - 3 * sec.tw) / sec.tw, 124 * eps), ("flange", (sec.b - 3 * sec.tw) / sec.tw, 42 * eps)]
+    elif sec.shape == "i":
+        parts = [("web", (sec.h - 2 * sec.tf) / sec.tw, 124 * eps), ("flange", (sec.b - sec.tw) / 2 / sec.tf, 14 * eps)]
+    elif sec.shape == "tee":
+        parts = [("stem", (sec.h - sec.tf) / sec.tw, 14 * eps), ("flange", (sec.b - sec.tw) / 2 / sec.tf, 14 * eps)]
+    for name, ct, limit in parts:
+        if ct > limit:
+            return f"{sec.name}: {name} c/t = {ct:.1f} > {limit:.1f} (class 4)"
+    return None

@@ -6,7 +6,8 @@ picks per group the lightest candidate whose utilization and beam deflection, es
 the current forces (the utilization of :mod:`fabricate.structure.results` with the candidate's
 ``A, Wy, Wz`` and buckling factor; the deflection scaled by the larger ratio of ``Iy`` or ``Iz``),
 pass for every beam of the group; the forces change with the stiffnesses and the self-weight,
-so the rounds repeat until the choice is stable and the re-solved frame passes.  A group whose
+so the rounds repeat until the choice is stable and the re-solved frame passes.  Candidates with a class 4 part (EN 1993-1-1 Table 5.2) are left out.
+A group whose
 choice failed a full solve never goes back to that section or a lighter one, so the rounds end.  The answer is always
 the result of a full solve with the chosen sections, never the estimate.
 """
@@ -19,8 +20,9 @@ import numpy as np
 from optimize.errors import ConfigError
 
 from .check import check_structure, configured_section
-from .options import ALPHA
+from .options import ALPHA, GRADES
 from .results import buckling_factor, utilization
+from .sections import slender_part
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,6 +40,7 @@ class Sizing:
     passes: bool
     utilization: dict = field(default_factory=dict)
     history: list = field(default_factory=list)
+    excluded: list = field(default_factory=list)
 
     @property
     def saved_kg(self) -> float:
@@ -50,7 +53,8 @@ class Sizing:
                 "configured_mass_kg": round(self.configured_mass_kg, 1), "sized_mass_kg": round(self.sized_mass_kg, 1),
                 "saved_kg": round(self.saved_kg, 1),
                 "saved_percent": round(100.0 * self.saved_kg / self.configured_mass_kg, 1)
-                if self.configured_mass_kg > 0 else 0.0, "history": self.history}
+                if self.configured_mass_kg > 0 else 0.0, "history": self.history,
+                "excluded_class_4": self.excluded}
 
 
 def beam_groups(structure, group_by: str) -> dict[str, np.ndarray]:
@@ -72,6 +76,11 @@ def size_sections(structure, options, spec) -> Sizing:
     cands = sorted({s.properties("structure.sizing.sections").name: s.properties("structure.sizing.sections")
                     for s in options.sizing.sections}.values(), key=lambda s: (s.A, -s.Iy))
     fy, alpha = options.fy, ALPHA[options.buckling_curve]
+    slender = [m for m in (slender_part(c, GRADES[options.grade]) for c in cands) if m]
+    cands = [c for c in cands if slender_part(c, GRADES[options.grade]) is None]
+    if not cands:
+        raise ConfigError(f"structure.sizing.sections: every candidate has a class 4 part ({'; '.join(slender)}), "
+                          "expected sections whose walls are thick enough not to buckle locally")
     groups = beam_groups(structure, options.sizing.group_by)
     e = len(structure.edges)
     first = check_structure(structure, options, spec)
@@ -113,7 +122,7 @@ def size_sections(structure, options, spec) -> Sizing:
     return Sizing(groups=groups, chosen={g: cands[checked[g]].name for g in groups}, check=chk,
                   configured_mass_kg=configured_mass, sized_mass_kg=chk.frame.steel_mass_kg(spec.density_steel),
                   configured_section=base.name, rounds=rounds, passes=chk.passes(), utilization=util,
-                  history=history)
+                  history=history, excluded=slender)
 
 
 def _failing_groups(chk, groups) -> set[str]:
