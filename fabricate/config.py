@@ -45,6 +45,7 @@ from .config_design import MAX_FACES, DesignParamError, check_design, subdivided
 from .config_errors import format_errors
 from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
 from .config_yaml import MAX_DEPTH, read_config
+from .structure.options import StructureSection
 
 UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
@@ -393,6 +394,7 @@ class RunConfig(Section):
     offset: OffsetSection = Field(default_factory=OffsetSection)
     parts: PartsSection = Field(default_factory=PartsSection)
     outputs: OutputsSection = Field(default_factory=OutputsSection)
+    structure: StructureSection = Field(default_factory=StructureSection)
     units: Literal["mm", "cm", "m", "in", "ft"] = "mm"
     scale: float = Field(default=1.0, ge=1e-6, le=1e6)
 

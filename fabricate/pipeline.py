@@ -32,7 +32,7 @@ from .requirements import apply_requirements, warnings
 
 log = logging.getLogger(__name__)
 
-STAGES = ("input", "optimize", "offset", "cad", "exports", "report")
+STAGES = ("input", "optimize", "offset", "cad", "structure", "exports", "report")
 EXIT_CODES = {"ok": 0, "tolerance_not_reached": 3, "export_failed": 4, "bad_input": 2, "error": 1}
 
 
@@ -106,7 +106,9 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
         for name in STAGES[:-1]:
             _run_stage(ctx, name)
         tol = config.tolerances
-        ctx.values["measures"] = apply_requirements(collect_measures(ctx), ctx.get("structure"), tol.requirements,
+        measures = collect_measures(ctx)
+        measures.update(ctx.get("structure_measures") or {})
+        ctx.values["measures"] = apply_requirements(measures, ctx.get("structure"), tol.requirements,
                                                     ctx["plan"]["target"], tol.beam_twist_mm)
         ctx.values["outcome"] = outcome(ctx)
         ctx.timings["before_report"] = time.perf_counter() - t_start

@@ -9,6 +9,7 @@ input    -> values["input_mesh"] (mm), ["plan"] (levels, scheme, target, source 
 optimize -> ["mesh"] (final), ["result"] (OptimizeResult or None), ["levels"] (hierarchy facts)
 offset   -> ["structure"] (OffsetStructure)
 cad      -> ["parts"] (Parts)
+structure -> ["statics"] (StructureCheck or None), ["statics_report"], ["structure_measures"]
 exports  -> files in the work folder, ctx.files facts, ["check"] (with its "mode": full | fast | off)
 report   -> ["measures"], report.json, pictures, model.glb, report.html
 """
@@ -198,6 +199,18 @@ def count_parts(parts) -> int:
     return len(parts)
 
 
+# -- structure -----------------------------------------------------------------------
+def stage_structure(ctx) -> str:
+    """The structural check of the beam frame (``fabricate.structure.run.check_run``) when
+    ``structure.check`` is ``report`` or ``enforce``: values ["statics"], ["statics_report"],
+    ["structure_measures"]."""
+    if ctx.config.structure.check == "off":
+        return "off (structure.check: off)"
+    from fabricate.structure.run import check_run
+
+    return check_run(ctx)
+
+
 # -- exports -------------------------------------------------------------------------
 EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl"),
            ("three_mf", "model.3mf", "write_3mf"), ("dxf", "outlines.dxf", "write_dxf"),
@@ -250,6 +263,10 @@ def stage_exports(ctx) -> str:
         except Exception as exc:  # an exporter bug or an OCC failure: exit 4, with the file named
             raise ExportError(f"{fname}: export failed: {type(exc).__name__}: {exc}") from exc
         ctx.files[fname] = dict(facts or {})
+        if key == "bom" and ctx.get("statics") is not None:  # the structure's columns on the beam rows
+            from fabricate.structure.outputs import add_bom_columns
+
+            ctx.files[fname].update(add_bom_columns(out / fname, ctx["statics"]))
     if cfg.outputs.wanted("cut_files"):  # one nested DXF and SVG per material and thickness
         ctx.progress.advance("exports", 1, "nested cut files")
         ctx.files.update(export.write_cut_files(ctx["parts"], out, cfg.outputs.nesting.model_dump()))

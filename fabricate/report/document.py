@@ -105,6 +105,7 @@ def build_report(ctx, pictures: dict[str, str]) -> dict[str, Any]:
         "offset": getattr(structure, "report", None),
         "totals": client_totals(ctx.get("parts")),
         "parts": parts_summary(ctx.get("parts")),
+        "structure": ctx.get("statics_report"),
         "check": ctx.get("check"),
         "files": files,
         "pictures": pictures,

@@ -116,6 +116,12 @@ def _measure_rows(measures: dict[str, dict]) -> list[list[Any]]:
     return rows
 
 
+def _structure_html(rep) -> str:
+    from fabricate.structure.outputs import html_section
+
+    return html_section(rep)
+
+
 def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: bool) -> str:
     """The page as a string (``pictures``: file name -> caption)."""
     name = escape(report["name"])
@@ -185,6 +191,7 @@ def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: boo
 <h2>Pictures</h2><div class="pics">{pics or '<p>Pictures were not requested.</p>'}</div>
 <h2>Optimization</h2>{opt_html}
 <h2>Offset and parts</h2>{f'<ul>{offset}</ul>' if offset else ''}{parts_html}
+{_structure_html(report.get("structure"))}
 <h2>Timings</h2>{timings}
 <h2>Files</h2>{files}
 <h2>Versions</h2>{versions}
