@@ -239,6 +239,7 @@ class OutputsSection(Section):
     pictures: bool = True
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"
+    overwrite: bool = False  # replace an earlier finished run (as ``fabricate run --force``)
 
     def check_mode(self, parts: int) -> str:
         """``full`` | ``fast`` | ``off`` for a model of ``parts`` parts (``auto`` resolved)."""
