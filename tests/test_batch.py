@@ -114,7 +114,7 @@ def test_worker_exception_is_one_row(tmp_path, monkeypatch):
     cfg = small_config(tmp_path, "fine")
     jobs = expand_jobs([cfg]) + [Job("ghost", "ghost.yaml", error="ghost.yaml: input: required key is missing")]
 
-    def boom(config, out_root):
+    def boom(config, out_root, **kwargs):
         raise RuntimeError("injected")
 
     monkeypatch.setattr(batch, "run_pipeline", boom)
