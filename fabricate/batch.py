@@ -14,6 +14,7 @@ becomes a row with its status and message; the others carry on.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import csv
 import io
 import itertools
@@ -21,6 +22,7 @@ import logging
 import multiprocessing
 import os
 import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -209,10 +211,12 @@ def run_batch(jobs: list[Job], out_root: str | Path, *, workers: int | None = No
         except cf.CancelledError:
             return False
         except Exception as exc:  # noqa: BLE001 - a dead worker process, a lost Dask task
-            lost.setdefault(i, []).append(f"{type(exc).__name__}: {exc}".rstrip(": "))
+            text = str(exc).split(". ")[0].split("\n")[0]
+            lost.setdefault(i, []).append(f"{type(exc).__name__}: {text}" if text else type(exc).__name__)
             return False
         if i in lost:
-            results[i].notes.append(f"its first worker died ({lost[i][0]}); this is the second attempt")
+            results[i].notes.append(f"its first attempt ended when a worker process died ({lost[i][0]}); "
+                                    "this result is from a second attempt, run on its own")
         if on_done:
             on_done(results[i])
         return True
@@ -222,6 +226,8 @@ def run_batch(jobs: list[Job], out_root: str | Path, *, workers: int | None = No
             _round(todo, jobs, out_root, force, scheduler, n, finish)
         again = [i for i in todo if i not in results]
         if again:  # alone, in fresh workers, at most n at a time
+            for note in _sweep(out_root, jobs):
+                log.warning("%s", note)
             for i in again:
                 log.warning("%s: its worker died (%s); running it again on its own", jobs[i].name,
                             "; ".join(lost.get(i, ["pool broken"])))
@@ -238,10 +244,8 @@ def run_batch(jobs: list[Job], out_root: str | Path, *, workers: int | None = No
                                             "(fabricate run) to see why")
             if on_done:
                 on_done(results[i])
-    notes = _sweep(out_root, jobs)
-    if notes:
-        for note in notes:
-            log.warning("%s", note)
+    for note in _sweep(out_root, jobs):
+        log.warning("%s", note)
     return [results[i] for i in range(len(jobs))]
 
 
@@ -249,9 +253,13 @@ def _round(indices, jobs, out_root, force, scheduler, n, finish) -> None:
     """All ``indices`` on one executor of ``n`` workers (a broken pool fails what it still held)."""
     executor, close = make_executor(n, scheduler)
     try:
-        futures = {executor.submit(run_job, jobs[i], out_root, force): i for i in indices}
+        with _workers_ignore_sigint():
+            futures = {executor.submit(run_job, jobs[i], out_root, force): i for i in indices}
         for fut in cf.as_completed(futures):
             finish(futures[fut], fut)
+    except BaseException:
+        _stop_workers()  # before the executor's shutdown, which would wait for the running jobs
+        raise
     finally:
         close()
 
@@ -264,15 +272,34 @@ def _isolated(indices, jobs, out_root, force, scheduler, n, finish) -> None:
             while pending and len(running) < n:
                 i = pending.pop(0)
                 executor, close = make_executor(1, scheduler)
-                running[executor.submit(run_job, jobs[i], out_root, force)] = (i, close)
+                with _workers_ignore_sigint():
+                    running[executor.submit(run_job, jobs[i], out_root, force)] = (i, close)
             done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
             for fut in done:
                 i, close = running.pop(fut)
                 close()
                 finish(i, fut)
+    except BaseException:
+        _stop_workers()
+        raise
     finally:
         for _, close in running.values():
             close()
+
+
+@contextlib.contextmanager
+def _workers_ignore_sigint():
+    """Worker processes start while SIGINT is ignored, so they ignore it from their first
+    instruction (an ignored signal stays ignored across exec; a handler would not): Ctrl-C is the
+    batch's to handle, never a traceback from a worker still importing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _stop_workers() -> None:

@@ -111,7 +111,7 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
     runfolder.make_parent(target)
     notes = runfolder.clean_stale_parts(target.parent, config.name)
     for note in notes:
-        log.warning("%s", note)
+        log.info("%s", note)
     with runfolder.run_lock(target):
         previous = runfolder.check_target(target, force)
         tmp = runfolder.new_part(target)

@@ -203,7 +203,25 @@ def clean_stale_parts(folder: Path, name: str | None = None) -> list[str]:
         elif rec is None and name is not None and path.name.startswith(f".{name}.") and read_owner(path) is None:
             notes.append(f"left alone: {path} ({folder_size(path) / 1e6:.1f} MB), a temporary folder with no "
                          "owner record (an older version's?); remove it when no run is writing there")
+        elif rec is not None and alive is None and name is not None and path.name.startswith(f".{name}."):
+            notes.append(f"left alone: {path}, being written by pid {rec.get('pid')} on {rec.get('host')} "
+                         "(cannot tell from here whether it still runs)")
+    _drop_free_locks(folder)
     return notes
+
+
+def _drop_free_locks(folder: Path) -> None:
+    """Remove lock files in ``folder`` that no process holds (left by a killed run)."""
+    import fcntl
+
+    for path in sorted(folder.glob(".*.lock")):
+        with contextlib.suppress(OSError):
+            fd = os.open(path, os.O_RDWR)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                os.unlink(path)
+            finally:
+                os.close(fd)
 
 
 def make_parent(target: Path, what: str = "--out") -> None:

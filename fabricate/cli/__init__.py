@@ -50,8 +50,8 @@ def main(argv: list[str] | None = None) -> int:
     """
     from .supervise import supervise
 
-    parser = build_parser()
     try:
+        parser = build_parser()
         args = parser.parse_args(argv)
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

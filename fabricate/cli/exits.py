@@ -21,12 +21,13 @@ WRITE_FAILED = {errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EROFS, errno.EFBIG}
 
 def classify(exc: BaseException) -> tuple[int, str]:
     """``(exit code, one line)`` for an exception that ended a command ('' for no message)."""
-    from optimize.errors import ConicalFabError
+    from .supervise import received
 
-    if isinstance(exc, ConicalFabError):
+    if isinstance(exc, KeyboardInterrupt) or received():
+        return INTERRUPTED, "interrupted"  # also what an interrupted import turned into
+    errors = sys.modules.get("optimize.errors")  # not loaded: none of its errors was raised (fast)
+    if errors is not None and isinstance(exc, errors.ConicalFabError):
         return exc.exit_code, f"error: {exc}"
-    if isinstance(exc, KeyboardInterrupt):
-        return INTERRUPTED, "interrupted"
     if isinstance(exc, BrokenPipeError):
         return BROKEN_PIPE, ""
     if isinstance(exc, OSError) and (exc.filename is not None or exc.errno in WRITE_FAILED):

@@ -4,9 +4,9 @@ Python handles a signal only between bytecodes: inside one long call into
 OpenCASCADE, MKL or numba it would wait until that call returns (a STEP
 read-back of a large model takes a minute).  So the ``fabricate`` command runs
 its work in a forked child in a process group of its own and stays a small
-supervisor: it forwards SIGINT / SIGTERM / SIGHUP to that group (the child
-turns the first into KeyboardInterrupt and unwinds, removing its temporary
-folders), and when the group has not ended :data:`GRACE` seconds later it kills
+supervisor: it forwards SIGINT / SIGTERM / SIGHUP to the child (which turns
+the first into KeyboardInterrupt and unwinds, removing its temporary folders;
+a batch stops its workers), and when the group has not ended :data:`GRACE` seconds later it kills
 it (batch workers included) and removes the temporary folders the killed
 processes left (:func:`fabricate.runfolder.clean_stale_parts`).
 Ctrl-Z stops the whole group and ``fg`` resumes it.
@@ -26,9 +26,18 @@ GRACE = 1.5
 FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 
+_RECEIVED: list[int] = []
+
+
+def received() -> int | None:
+    """The signal :func:`interrupt_handler` received in this process, if any."""
+    return _RECEIVED[0] if _RECEIVED else None
+
+
 def interrupt_handler(signum, frame):
     """In the working process: the first signal unwinds (KeyboardInterrupt); later ones are ignored
     so that they cannot break off the clean-up the first one started."""
+    _RECEIVED.append(signum)
     for sig in FORWARDED:
         signal.signal(sig, signal.SIG_IGN)
     raise KeyboardInterrupt(f"signal {signum}")
@@ -77,7 +86,7 @@ def _watch(pid: int, folders: Callable[[], Iterable[Path]]) -> int:
             state["deadline"] = time.monotonic() + GRACE
         state["signal"] = signum
         with contextlib.suppress(OSError):
-            os.killpg(pid, signum)
+            os.kill(pid, signum)  # the child only: a batch stops its own workers
 
     def stop(signum, frame):  # Ctrl-Z: stop the work too, resume it with ourselves
         with contextlib.suppress(OSError):
@@ -124,11 +133,60 @@ def _watch(pid: int, folders: Callable[[], Iterable[Path]]) -> int:
     return os.WEXITSTATUS(status) if os.WIFEXITED(status) else 1
 
 
-def _clean(folders: Callable[[], Iterable[Path]]) -> list[str]:
-    from fabricate.runfolder import clean_stale_parts
+PART_OWNER = ".conical-fab-part.json"
+"""= optimize.atomic.PART_OWNER (not imported: ``optimize`` takes a second to import, and this runs
+while the user waits for Ctrl-C to finish)."""
 
-    removed = []
+
+def _gone(pid: int) -> bool:
+    """No such process, or only its zombie (killed, not yet reaped)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[-1].split()[0]
+    except (OSError, IndexError):
+        return not Path("/proc/self").exists() and not _exists(pid)
+    return state in ("Z", "X")
+
+
+def _exists(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _clean(folders: Callable[[], Iterable[Path]]) -> list[str]:
+    """Remove the temporary folders under ``folders`` whose owner process (on this host) is gone,
+    and the lock files no process holds; the removed folders."""
+    import fcntl
+    import json
+    import shutil
+    import socket
+
+    removed, host = [], socket.gethostname()
     for folder in folders():
-        with contextlib.suppress(OSError):
-            removed += [n.split(" ", 2)[1] for n in clean_stale_parts(Path(folder)) if n.startswith("removed ")]
+        for path in sorted(Path(folder).glob(".*.part")):
+            try:
+                rec = json.loads((path / PART_OWNER).read_text())
+                pid = int(rec["pid"])
+                if rec.get("host") != host or pid <= 0:
+                    continue
+            except (OSError, ValueError, KeyError, TypeError):
+                continue
+            deadline = time.monotonic() + 1.0  # killed processes take a moment to go
+            while not _gone(pid) and time.monotonic() < deadline:
+                time.sleep(0.02)
+            if _gone(pid):
+                shutil.rmtree(path, ignore_errors=True)
+                removed.append(str(path))
+        for path in sorted(Path(folder).glob(".*.lock")):
+            with contextlib.suppress(OSError):
+                fd = os.open(path, os.O_RDWR)
+                try:
+                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                    os.unlink(path)  # held by nobody: a killed run's
+                finally:
+                    os.close(fd)
     return removed
