@@ -32,7 +32,8 @@ import time
 from pathlib import Path
 from typing import Iterator
 
-from optimize.atomic import (folder_size, owner_record, part_dir, publish_dir, read_owner, stale_parts)
+from optimize.atomic import (PART_OWNER, folder_size, owner_record, part_dir, publish_dir, read_owner,
+                             stale_parts)
 from optimize.errors import ConfigError
 
 MARKER = ".conical-fab-run.json"
@@ -46,11 +47,12 @@ def config_hash(config) -> str:
 
 
 def manifest(folder: Path) -> dict[str, list[int]]:
-    """``{relative path: [size, mtime_ns]}`` of every file under ``folder`` but the marker."""
+    """``{relative path: [size, mtime_ns]}`` of every file under ``folder`` but the marker (and the
+    temporary folder's owner record, removed when it is published)."""
     out = {}
     for path in sorted(folder.rglob("*")):
         rel = path.relative_to(folder).as_posix()
-        if rel != MARKER and (path.is_file() or path.is_symlink()):
+        if rel not in (MARKER, PART_OWNER) and (path.is_file() or path.is_symlink()):
             st = path.lstat()
             out[rel] = [st.st_size, st.st_mtime_ns]
     return out

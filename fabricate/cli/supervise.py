@@ -21,7 +21,7 @@ import time
 from pathlib import Path
 from typing import Callable, Iterable
 
-GRACE = 1.5
+GRACE = 1.0
 """Seconds the work may take to unwind after a signal before it is killed."""
 FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
@@ -143,7 +143,7 @@ def _gone(pid: int) -> bool:
     try:
         state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[-1].split()[0]
     except (OSError, IndexError):
-        return not Path("/proc/self").exists() and not _exists(pid)
+        return not _exists(pid)
     return state in ("Z", "X")
 
 
