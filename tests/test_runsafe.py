@@ -310,3 +310,28 @@ def test_a_lock_is_exclusive_within_one_process_too(tmp_path):
             with run_lock(target):
                 pass
     assert list(tmp_path.iterdir()) == []
+
+
+def test_sigint_during_a_batch_stops_the_workers_and_leaves_nothing(tmp_path):
+    cfgs = []
+    for name in ("b1", "b2"):
+        cfgs.append(tmp_path / f"{name}.yaml")
+        cfgs[-1].write_text(f"name: {name}\ninput:\n  shape: {{name: dome, params: {{meridians: 8, rings: 4}}}}\n"
+                            "optimize: {max_iter: 200}\n")
+    out = tmp_path / "out"
+    proc = subprocess.Popen(PY + ["-m", "fabricate", "batch", *map(str, cfgs), "--workers", "2", "--out", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
+    try:
+        deadline = time.monotonic() + 120
+        while not (out.is_dir() and any(p.suffix == ".part" for p in out.iterdir())):
+            assert time.monotonic() < deadline and proc.poll() is None, proc.stderr.read()
+            time.sleep(0.05)
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    err = proc.stderr.read()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert [p for p in out.iterdir() if p.name.startswith(".")] == []
