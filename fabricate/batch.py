@@ -365,3 +365,5 @@ def print_table(summaries: list[RunSummary], console=None) -> None:
     for s in summaries:
         if s.status != "ok":
             console.print(f"[bold]{s.name}[/bold]: {s.message}", highlight=False)
+        for note in s.notes:
+            console.print(f"[bold]{s.name}[/bold] note: {note}", highlight=False)
