@@ -26,6 +26,7 @@ import contextlib
 import errno
 import hashlib
 import json
+import logging
 import os
 import shutil
 import time
@@ -35,6 +36,8 @@ from typing import Iterator
 from optimize.atomic import (PART_OWNER, folder_size, owner_record, part_dir, publish_dir, read_owner,
                              stale_parts)
 from optimize.errors import ConfigError
+
+log = logging.getLogger(__name__)
 
 MARKER = ".conical-fab-run.json"
 SHOWN = 5  # file names quoted in a message
@@ -162,6 +165,13 @@ def run_lock(target: Path) -> Iterator[None]:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as exc:
             os.close(fd)
+            if exc.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):  # a file system without locks
+                log.warning("%s: this file system cannot lock files (%s); runs into it are not kept apart",
+                            target.parent, exc.strerror)
+                with contextlib.suppress(OSError):
+                    os.unlink(path)
+                yield
+                return
             if exc.errno not in (errno.EAGAIN, errno.EACCES):
                 raise
             raise ConfigError(f"{target}: another fabricate run is writing this folder ({_holder(path)}); "

@@ -335,3 +335,31 @@ def test_sigint_during_a_batch_stops_the_workers_and_leaves_nothing(tmp_path):
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
     assert [p for p in out.iterdir() if p.name.startswith(".")] == []
+
+
+def test_killing_the_command_kills_its_work_too(tmp_path):
+    """``kill -9`` of ``fabricate`` (a CI timeout, a process-group kill) takes the working child
+    with it: nothing goes on writing unwatched; the next run removes what it left."""
+    cfg = tmp_path / "slow.yaml"
+    cfg.write_text("name: slow\ninput:\n  shape: {name: dome, params: {meridians: 6, rings: 3}}\n")
+    out = tmp_path / "out"
+    proc = subprocess.Popen(PY + ["-c", STUCK_IN_NATIVE_CODE, str(cfg), str(out)], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=ENV)
+    try:
+        assert proc.stdout.readline().strip() == "IN CAD"
+        part = next(p for p in out.iterdir() if p.suffix == ".part")
+        worker = json.loads((part / PART_OWNER).read_text())["pid"]
+        assert worker != proc.pid
+        proc.kill()
+        proc.wait(timeout=30)
+        deadline = time.monotonic() + 10
+        while os.path.exists(f"/proc/{worker}") and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not os.path.exists(f"/proc/{worker}")
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    from fabricate.runfolder import clean_stale_parts
+
+    notes = clean_stale_parts(out, "slow")
+    assert notes and notes[0].startswith(f"removed {part}") and list(out.iterdir()) == []

@@ -55,11 +55,13 @@ def supervise(work: Callable[[], int], folders: Callable[[], Iterable[Path]]) ->
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
             stream.flush()
+    parent = os.getpid()
     pid = os.fork()
     if pid == 0:  # the child: do the work, never return into the caller
         code = 1
         try:
             os.setpgid(0, 0)
+            _die_with(parent)
             for sig in FORWARDED:
                 signal.signal(sig, interrupt_handler)
             signal.signal(signal.SIGTSTP, signal.SIG_DFL)
@@ -74,6 +76,20 @@ def supervise(work: Callable[[], int], folders: Callable[[], Iterable[Path]]) ->
                     stream.flush()
             os._exit(code)
     return _watch(pid, folders)
+
+
+def _die_with(parent: int) -> None:
+    """Linux: the child is killed when the supervisor dies (``kill -9`` of it, or of its process
+    group, which the child left): nothing may go on writing unwatched."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL, 0, 0, 0)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # it died before the request was made
+        os._exit(1)
 
 
 def _watch(pid: int, folders: Callable[[], Iterable[Path]]) -> int:
