@@ -19,11 +19,12 @@ exporter that raises (exit 4) raise the package's errors and write nothing.
 from __future__ import annotations
 
 import logging
-import shutil
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
+
+from optimize.atomic import remove_part
 
 from . import runfolder, stages
 from .config import RunConfig
@@ -130,7 +131,7 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
             runfolder.check_target(target, force)  # still as it was (only this process may write it)
             dest, beside = runfolder.publish_run(tmp, target, previous, out["exit_code"])
         except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
+            remove_part(tmp)
             raise
     ctx.timings["total"] = time.perf_counter() - t_start
     summary = _summary(ctx, dest, ctx.timings["total"])

@@ -28,13 +28,12 @@ import hashlib
 import json
 import logging
 import os
-import shutil
 import time
 from pathlib import Path
 from typing import Iterator
 
 from optimize.atomic import (PART_OWNER, folder_size, owner_record, part_dir, publish_dir, read_owner,
-                             stale_parts)
+                             remove_part, stale_parts)
 from optimize.errors import ConfigError
 
 log = logging.getLogger(__name__)
@@ -207,9 +206,12 @@ def clean_stale_parts(folder: Path, name: str | None = None) -> list[str]:
     removed, and for each of ``name``'s that has no owner record (left alone: whose is it?)."""
     notes = []
     for path, rec, alive in stale_parts(folder):
+        if rec is None and _empty_and_old(path):
+            remove_part(path)  # nothing to lose, and no run takes a minute to write its owner record
+            continue
         if rec is not None and alive is False:
             size = folder_size(path)
-            shutil.rmtree(path, ignore_errors=True)
+            remove_part(path)
             notes.append(f"removed {path} ({size / 1e6:.1f} MB), left by a run that ended without cleaning "
                          f"up (pid {rec.get('pid')}, started {rec.get('created_utc')})")
         elif rec is None and name is not None and path.name.startswith(f".{name}.") and read_owner(path) is None:
@@ -220,6 +222,13 @@ def clean_stale_parts(folder: Path, name: str | None = None) -> list[str]:
                          "(cannot tell from here whether it still runs)")
     _drop_free_locks(folder)
     return notes
+
+
+def _empty_and_old(path: Path, age: float = 60.0) -> bool:
+    try:
+        return not any(path.iterdir()) and time.time() - path.stat().st_mtime > age
+    except OSError:
+        return False
 
 
 def _drop_free_locks(folder: Path) -> None:

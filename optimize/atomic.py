@@ -137,6 +137,26 @@ def stale_parts(folder: str | os.PathLike) -> list[tuple[Path, dict | None, bool
     return out
 
 
+def remove_part(folder: Path) -> None:
+    """Remove a temporary folder, its owner record last: a removal cut short (the process killed)
+    leaves a folder that still says whose it was, so the next clean-up finishes it."""
+    owner = folder / PART_OWNER
+    with contextlib.suppress(OSError):
+        for child in folder.iterdir():
+            if child.name != PART_OWNER:
+                if child.is_dir() and not child.is_symlink():
+                    shutil.rmtree(child, ignore_errors=True)
+                else:
+                    with contextlib.suppress(OSError):
+                        child.unlink()
+    with contextlib.suppress(OSError):
+        owner.unlink()
+    with contextlib.suppress(OSError):
+        folder.rmdir()
+    if folder.exists():
+        shutil.rmtree(folder, ignore_errors=True)
+
+
 def folder_size(folder: Path) -> int:
     """Bytes of the files under ``folder`` (errors ignored)."""
     total = 0
@@ -194,7 +214,7 @@ def publish_dir(tmp: Path, target: Path) -> None:
         os.rename(tmp, target)
     with contextlib.suppress(OSError):
         _write_owner(old)
-    shutil.rmtree(old, ignore_errors=True)
+    remove_part(old)
 
 
 @contextlib.contextmanager
@@ -212,5 +232,5 @@ def atomic_dir(target: str | os.PathLike) -> Iterator[Path]:
         yield tmp
         publish_dir(tmp, target)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        remove_part(tmp)
         raise

@@ -62,7 +62,7 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 2
     if argv is None:
-        return supervise(lambda: run_handler(args), lambda: scratch_folders(args))
+        return supervise(lambda: run_handler(args, supervised=True), lambda: scratch_folders(args))
     if threading.current_thread() is not threading.main_thread():
         return run_handler(args)
     previous = signal.signal(signal.SIGTERM, _terminate)  # kill unwinds like Ctrl-C
@@ -76,9 +76,10 @@ def _terminate(signum, frame):
     raise KeyboardInterrupt(f"signal {signum}")
 
 
-def run_handler(args) -> int:
+def run_handler(args, supervised: bool = False) -> int:
     """Run the subcommand; every exception becomes one line and its exit code
-    (:func:`fabricate.cli.exits.classify`: the one table from exception classes to codes)."""
+    (:func:`fabricate.cli.exits.classify`: the one table from exception classes to codes).
+    With ``--debug`` an internal error is raised on (in-process) or its traceback printed."""
     from .exits import BROKEN_PIPE, classify, quiet_broken_pipe
 
     try:
@@ -87,6 +88,8 @@ def run_handler(args) -> int:
         if isinstance(exc, SystemExit):
             raise
         if args.debug and not isinstance(exc, KeyboardInterrupt):
+            if not supervised:
+                raise
             import traceback
 
             traceback.print_exc()
