@@ -155,7 +155,12 @@ def run_lock(target: Path) -> Iterator[None]:
     """Hold an exclusive lock on writing ``target`` (``<parent>/.<name>.lock``, removed on release).
 
     Raises ConfigError (exit 2) when another process holds it, naming that process."""
-    import fcntl
+    try:
+        import fcntl
+    except ImportError:  # not a POSIX system: no lock
+        log.warning("%s: runs into this folder are not kept apart on this system (no fcntl)", target.parent)
+        yield
+        return
 
     path = target.with_name(f".{target.name}.lock")
     while True:
@@ -233,7 +238,10 @@ def _empty_and_old(path: Path, age: float = 60.0) -> bool:
 
 def _drop_free_locks(folder: Path) -> None:
     """Remove lock files in ``folder`` that no process holds (left by a killed run)."""
-    import fcntl
+    try:
+        import fcntl
+    except ImportError:
+        return
 
     for path in sorted(folder.glob(".*.lock")):
         with contextlib.suppress(OSError):

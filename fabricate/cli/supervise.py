@@ -23,7 +23,7 @@ from typing import Callable, Iterable
 
 GRACE = 1.0
 """Seconds the work may take to unwind after a signal before it is killed."""
-FORWARDED = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+FORWARDED = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 _RECEIVED: list[int] = []
