@@ -128,7 +128,7 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
             runfolder.write_marker(tmp, {"name": config.name, "status": out["status"],
                                          "exit_code": out["exit_code"],
                                          "config_sha256": runfolder.config_hash(config)})
-            runfolder.check_target(target, force)  # still as it was (only this process may write it)
+            previous = runfolder.check_target(target, force)  # again: a person may have changed it since
             dest, beside = runfolder.publish_run(tmp, target, previous, out["exit_code"])
         except BaseException:
             remove_part(tmp)
