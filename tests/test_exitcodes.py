@@ -78,21 +78,22 @@ def test_broken_pipe_is_silent(tmp_path):
     assert err == "", err  # no traceback, no "Exception ignored ... BrokenPipeError"
 
 
-def test_paths_that_cannot_be_used_are_bad_input(tmp_path):
+def test_paths_that_cannot_be_used_are_bad_input(tmp_path, capsys):
     (tmp_path / "afile").write_text("x")
     cfg = tmp_path / "c.yaml"
     cfg.write_text("input:\n  shape: {name: dome}\n")
-    for out, fragment in ((tmp_path / "afile", "a file is in the way"),
-                          (tmp_path / "afile" / "deeper", "cannot create the folder"),
-                          (tmp_path / ("n" * 300), "cannot create the folder (File name too long)")):
-        proc = cli("run", str(cfg), "--out", str(out), "-q")
-        assert proc.returncode == 2, proc.stderr
-        assert fragment in proc.stderr and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
-    for args in (("check", "/nonexistent"), ("check", str(tmp_path))):
-        proc = cli(*args)
-        assert proc.returncode == 2 and "the output folder of a run" in proc.stderr, proc.stderr
-    proc = cli("measure", str(tmp_path / "missing.obj"))
-    assert proc.returncode == 2 and "missing.obj" in proc.stderr and "Traceback" not in proc.stderr
+    cases = [(["run", str(cfg), "--out", str(tmp_path / "afile"), "-q"], "a file is in the way"),
+             (["run", str(cfg), "--out", str(tmp_path / "afile" / "deeper"), "-q"], "cannot create the folder"),
+             (["run", str(cfg), "--out", str(tmp_path / ("n" * 300)), "-q"], "(File name too long)"),
+             (["check", "/nonexistent"], "/nonexistent: does not exist; expected the output folder of a run"),
+             (["check", str(tmp_path)], "is not the output folder of a run"),
+             (["measure", str(tmp_path / "missing.obj")], "missing.obj")]
+    for argv, fragment in cases:
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err
+        assert fragment in err and len(err.strip().splitlines()) == 1, (argv, err)
+    proc = cli("check", "/nonexistent")  # the same through the real entry point (supervised)
+    assert proc.returncode == 2 and proc.stderr.startswith("error: /nonexistent: does not exist"), proc.stderr
 
 
 def test_a_job_name_too_long_for_a_folder_is_a_bad_job(tmp_path):
