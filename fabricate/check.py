@@ -23,6 +23,9 @@ with it:
   relative) and the edge lengths (``1e-6`` mm) of a face of the STEP solid
   with the same id.
 - ``svg``: parses, one group per panel and beam.
+- ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
+  element / object / file per BOM row with the same id; IFC schema-valid with ifcopenshell's
+  volumes equal to the BOM's (not in the fast check: ``skip`` ``ifc_geometry``).
 
 A check whose file was not written is reported with ``pass: None`` and the
 reason, never silently left out.
@@ -40,7 +43,7 @@ from optimize.tolerances import DEFAULT, Tolerances
 
 log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
-         "dxf": "outlines.dxf", "svg": "outlines.svg"}
+         "dxf": "outlines.dxf", "svg": "outlines.svg", "ifc": "model.ifc", "3dm": "model.3dm", "nc1": "nc1"}
 VOLUME_REL_TOL = 1e-6
 AREA_REL_TOL = 1e-9
 EDGE_TOL_MM = 1e-6
@@ -52,9 +55,11 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
     ``pass`` is False when any check failed (``pass: False``); skipped checks
     (file not written) carry ``pass: None`` and ``skipped``.  Raises
     ExportError only when the folder or the bill of materials is unusable.
-    ``skip`` names files (keys of ``FILES``, e.g. ``{"step"}``) not to read:
+    ``skip`` names files (keys of ``FILES``, e.g. ``{"step"}``; ``ifc_geometry``: the IFC without
+    its schema validation and volumes) not to read:
     their checks, and the checks that need them, carry ``pass: None``.
     """
+    from .export import exchange_check
     from .export.bom import read_bom
 
     t0 = time.perf_counter()
@@ -74,7 +79,11 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
             ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
             ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
             ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"]), None)),
-            ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None))):
+            ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
+            ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
+                                                                     full="ifc_geometry" not in skip), None)),
+            ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
+            ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None))):
         t1 = time.perf_counter()
         if key in skip:
             checks[name] = {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}

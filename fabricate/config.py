@@ -110,6 +110,8 @@ class InputSection(Section):
     irregular: Literal["faces", "vertices", "nearest"] | None = None
     side: Literal["keep"] | tuple[float, float, float] | None = None
     radius: float | None = Field(default=None, gt=0)
+    layer: str | None = Field(default=None, min_length=1, max_length=500)
+    object: str | None = Field(default=None, min_length=1, max_length=500)
 
     _paths = field_validator("mesh", "control", "surface", mode="before")(_resolve_path)
 
@@ -129,6 +131,11 @@ class InputSection(Section):
             raise PydanticCustomError("irregular", "irregular applies only to a surface input")
         if self.surface is None and self.side is not None:
             raise PydanticCustomError("side", "side applies only to a surface input")
+        rhino = self.mesh is not None and self.mesh.suffix.lower() == ".3dm"
+        for key in ("layer", "object"):
+            if getattr(self, key) is not None and not rhino:
+                raise PydanticCustomError(key, "{key} picks a mesh in a .3dm file given as input.mesh",
+                                          {"key": key})
         if self.surface is None and self.radius is not None:
             raise PydanticCustomError("radius", "radius applies only to a surface input")
         if isinstance(self.side, tuple) and not (all(math.isfinite(c) for c in self.side) and any(self.side)):
@@ -236,6 +243,11 @@ class OutputsSection(Section):
     dxf: bool = True
     svg: bool = True
     bom: bool = True
+    ifc: bool = True
+    rhino: bool = Field(default=True, alias="3dm")
+    nc1: bool = True
+    gltf: bool = True
+    step_schema: Literal["AP214", "AP242"] = "AP214"
     pictures: bool = True
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"

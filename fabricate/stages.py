@@ -46,7 +46,7 @@ def stage_input(ctx) -> str:
         from optimize.io import read_mesh
 
         path = getattr(inp, kind)
-        mesh = read_mesh(path)
+        mesh = read_mesh(path, layer=inp.layer, name=inp.object)  # layer/object: .3dm only
         plan.update(source=str(path), units=cfg.units, levels=2 if kind == "control" else 0)
         factor = cfg.mm_per_unit
         if kind == "surface":
@@ -191,7 +191,9 @@ def count_parts(parts) -> int:
 # -- exports -------------------------------------------------------------------------
 EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl"),
            ("three_mf", "model.3mf", "write_3mf"), ("dxf", "outlines.dxf", "write_dxf"),
-           ("svg", "outlines.svg", "write_svg"), ("bom", "bom.csv", "write_bom"))
+           ("svg", "outlines.svg", "write_svg"), ("bom", "bom.csv", "write_bom"),
+           ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"), ("nc1", "nc1", "write_nc1"),
+           ("gltf", "parts.glb", "write_parts_gltf"))
 
 
 def stage_exports(ctx) -> str:
@@ -226,7 +228,9 @@ def stage_exports(ctx) -> str:
     for key, fname, fn in wanted:
         ctx.progress.advance("exports", 1, fname)
         try:
-            facts = getattr(export, fn)(ctx["parts"], out / fname)
+            extra = {"rhino": {"structure": structure}, "nc1": {"order": cfg.name or "roof"},
+                     "step": {"schema": cfg.outputs.step_schema}}.get(key, {})
+            facts = getattr(export, fn)(ctx["parts"], out / fname, **extra)
         except ExportError:
             raise
         except Exception as exc:  # an exporter bug or an OCC failure: exit 4, with the file named

@@ -1,4 +1,4 @@
-"""STEP (AP214, ISO 10303-21) of every part: one assembly, parts named by id, coloured by kind, mm.
+"""STEP (AP214 or AP242, ISO 10303-21) of every part: one assembly, parts named by id, coloured by kind, mm.
 
 Two engines write the same model:
 
@@ -108,9 +108,19 @@ class _Template:
         return src[:, self.fields]
 
 
-GLOBAL = """#1=APPLICATION_CONTEXT('core data for automotive mechanical design processes');
-#2=APPLICATION_PROTOCOL_DEFINITION('international standard','automotive_design',2000,#1);
-#3=PRODUCT_CONTEXT('',#1,'mechanical');
+SCHEMAS = {
+    "AP214": ("AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }",
+              "#1=APPLICATION_CONTEXT('core data for automotive mechanical design processes');\n"
+              "#2=APPLICATION_PROTOCOL_DEFINITION('international standard','automotive_design',2000,#1);\n"),
+    "AP242": ("AP242_MANAGED_MODEL_BASED_3D_ENGINEERING_MIM_LF { 1 0 10303 442 1 1 4 }",
+              "#1=APPLICATION_CONTEXT('managed model based 3d engineering');\n"
+              "#2=APPLICATION_PROTOCOL_DEFINITION('international standard',"
+              "'ap242_managed_model_based_3d_engineering',2011,#1);\n"),
+}
+"""``outputs.step_schema``: file schema and application protocol of each; the entities written are
+common to both (AP242 took over AP214's product structure, B-rep and presentation entities)."""
+
+GLOBAL = """#3=PRODUCT_CONTEXT('',#1,'mechanical');
 #4=PRODUCT_DEFINITION_CONTEXT('part definition',#1,'design');
 #5=(LENGTH_UNIT()NAMED_UNIT(*)SI_UNIT(.MILLI.,.METRE.));
 #6=(NAMED_UNIT(*)PLANE_ANGLE_UNIT()SI_UNIT($,.RADIAN.));
@@ -161,31 +171,36 @@ def _product(b: int, shell: int, name: str, index: int, style: int) -> str:
             f"#{b + 14}=STYLED_ITEM('color',(#{style}),#{b});\n")
 
 
-def write_step(parts, path, *, engine: str = "direct", name: str = "model", pcurve_limit: int = 500) -> dict:
+def write_step(parts, path, *, engine: str = "direct", name: str = "model", pcurve_limit: int = 500,
+               schema: str = "AP214") -> dict:
     """Write every part of ``parts`` to one STEP file (atomic).
 
     engine : ``direct`` (fast text writer) or ``occ`` (OpenCASCADE XCAF writer).
     name : name of the top assembly.  pcurve_limit : ``occ`` only: models with
     more parts are written without p-curves (about half the file).
+    schema : ``AP214`` (automotive design, read by every CAD program) or ``AP242`` (managed
+    model-based 3D engineering, its successor).
     Returns facts: ``file, bytes, parts, entities, schema, engine, pcurves, seconds``.
     Raises ExportError when the file cannot be written.
     """
     t0 = time.perf_counter()
     path = Path(path)
+    if schema not in SCHEMAS:
+        raise ExportError(f"{path.name}: STEP schema {schema!r}: expected one of {', '.join(SCHEMAS)}")
     if engine == "occ":
         from .step_occ import write_step_occ
 
-        facts = write_step_occ(parts, path, name=name, pcurves=len(parts) <= pcurve_limit)
+        facts = write_step_occ(parts, path, name=name, pcurves=len(parts) <= pcurve_limit, schema=schema)
     elif engine == "direct":
-        facts = _write_direct(parts, path, name)
+        facts = _write_direct(parts, path, name, schema)
     else:
         raise ExportError(f"{path.name}: STEP engine {engine!r}: expected 'direct' or 'occ'")
     facts.update(file=path.name, bytes=path.stat().st_size, parts=len(parts), engine=engine,
-                 schema="AP214 (AUTOMOTIVE_DESIGN)", units="mm", seconds=time.perf_counter() - t0)
+                 schema=f"{schema} ({SCHEMAS[schema][0].split()[0]})", units="mm", seconds=time.perf_counter() - t0)
     return facts
 
 
-def _write_direct(parts, path: Path, name: str) -> dict:
+def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
     groups = [g for g in parts.groups if len(g)]
     templates = [_Template(g.faces, g.vertices.shape[1]) for g in groups]
     style_base = {kind: N_GLOBAL + 1 + 7 * i for i, kind in enumerate(KINDS)}
@@ -203,8 +218,8 @@ def _write_direct(parts, path: Path, name: str) -> dict:
             fh.write("ISO-10303-21;\nHEADER;\n"
                      f"FILE_DESCRIPTION(('conical-fab model: {counts}; ids P=panel B=beam N=node; mm'),'2;1');\n"
                      f"FILE_NAME('{path.name}','{stamp}',(''),(''),'conical-fab','conical-fab','');\n"
-                     "FILE_SCHEMA(('AUTOMOTIVE_DESIGN { 1 0 10303 214 1 1 1 1 }'));\nENDSEC;\nDATA;\n")
-            fh.write(GLOBAL.replace("{name}", _safe(name)).replace(
+                     f"FILE_SCHEMA(('{SCHEMAS[schema][0]}'));\nENDSEC;\nDATA;\n")
+            fh.write(SCHEMAS[schema][1] + GLOBAL.replace("{name}", _safe(name)).replace(
                 "{placements}", "".join(f",#{int(i)}" for i in placements)))
             for kind in KINDS:
                 s = style_base[kind]

@@ -14,8 +14,8 @@ from ..cad.parts import COLOURS
 from .brep import group_solids
 
 
-def write_step_occ(parts, path: Path, *, name: str = "model", pcurves: bool = True) -> dict:
-    """Write ``parts`` with ``STEPCAFControl_Writer`` (AP214); returns ``{"pcurves": bool}``."""
+def write_step_occ(parts, path: Path, *, name: str = "model", pcurves: bool = True, schema: str = "AP214") -> dict:
+    """Write ``parts`` with ``STEPCAFControl_Writer`` (AP214 or AP242); returns ``{"pcurves": bool}``."""
     from OCP.IFSelect import IFSelect_ReturnStatus
     from OCP.Interface import Interface_Static
     from OCP.Message import Message, Message_Gravity
@@ -52,7 +52,7 @@ def write_step_occ(parts, path: Path, *, name: str = "model", pcurves: bool = Tr
     writer = STEPCAFControl_Writer(XSControl_WorkSession(), False)
     writer.SetColorMode(True)
     writer.SetNameMode(True)
-    Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
+    Interface_Static.SetCVal_s("write.step.schema", "AP242DIS" if schema == "AP242" else "AP214IS")
     Interface_Static.SetCVal_s("write.step.unit", "MM")
     Interface_Static.SetIVal_s("write.surfacecurve.mode", int(pcurves))
     if not writer.Transfer(doc, STEPControl_StepModelType.STEPControl_AsIs):

@@ -23,8 +23,8 @@ from .off import format_off, parse_off
 from .ply import ENCODINGS, format_ply, parse_ply
 from .stl import parse_stl
 
-#: Formats by name; ``fmt`` arguments and file extensions use these names (STL: read only).
-FORMATS = ("obj", "off", "ply", "stl")
+#: Formats by name; ``fmt`` arguments and file extensions use these names (STL, 3dm: read only).
+FORMATS = ("obj", "off", "ply", "stl", "3dm")
 
 
 def detect_format(path: str | os.PathLike, fmt: str | None = None) -> str:
@@ -38,16 +38,28 @@ def detect_format(path: str | os.PathLike, fmt: str | None = None) -> str:
     return key
 
 
-def read_mesh(path: str | os.PathLike, *, fmt: str | None = None) -> Mesh:
-    """Read a polygon mesh from an OBJ, OFF or PLY (ascii or binary) file, or a triangle surface
-    from an STL file (binary or ASCII; corners welded, see :mod:`optimize.io.stl`).
+def read_mesh(path: str | os.PathLike, *, fmt: str | None = None, layer: str | None = None,
+              name: str | None = None) -> Mesh:
+    """Read a polygon mesh from an OBJ, OFF or PLY (ascii or binary) file, a Rhino .3dm file
+    (one Mesh object, picked by ``layer`` and / or object ``name`` when there are several, see
+    :mod:`optimize.io.rhino`), or a triangle surface from an STL file (binary or ASCII; corners
+    welded, see :mod:`optimize.io.stl`).
 
     Returns a validated :class:`Mesh` named ``str(path)`` (with notes on
     anything skipped or repaired).  Raises :class:`MeshError` reading
     ``path:line: what was found, what was expected`` for every malformed input.
     """
-    name = str(path)
+    label = str(path)
     kind = detect_format(path, fmt)
+    if (layer is not None or name is not None) and kind != "3dm":
+        raise MeshError(f"{label}: a layer or object name picks a mesh in a .3dm file, not in a .{kind} file")
+    if kind == "3dm":
+        from .rhino import parse_3dm
+
+        if not Path(path).is_file():
+            raise MeshError(f"{label}: no such file, expected an existing .3dm file")
+        return build_mesh(parse_3dm(label, layer=layer, name=name), label)
+    name = label
     try:
         data = Path(path).read_bytes()
     except FileNotFoundError:
@@ -134,6 +146,9 @@ def write_mesh(path: str | os.PathLike, mesh: Mesh, *, fmt: str | None = None,
     if kind == "stl":
         raise MeshError(f"{path}: STL is read here, not written (it keeps no connectivity); "
                         "expected .obj, .off or .ply")
+    if kind == "3dm":
+        raise MeshError(f"{path}: a mesh alone is not written as .3dm (fabricate run writes model.3dm "
+                        "with every part); expected .obj, .off or .ply")
     if kind == "ply":
         payload = format_ply(mesh, ENCODINGS[1] if binary else ENCODINGS[0], comments)
     else:

@@ -45,8 +45,9 @@ class Parsed:
 
 
 def where(path: str, loc: int | None, kind: str = "line") -> str:
-    """``path:line`` or ``path: byte N`` (``path`` alone when ``loc`` is None)."""
-    if loc is None:
+    """``path:line`` or ``path: byte N`` (``path`` alone when ``loc`` is None or the file has no
+    positions: ``kind`` ``object``, a .3dm file)."""
+    if loc is None or kind == "object":
         return path
     return f"{path}:{loc}" if kind == "line" else f"{path}: byte {loc}"
 

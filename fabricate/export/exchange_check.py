@@ -1,0 +1,84 @@
+"""``fabricate check`` of the exchange files against the bill of materials.
+
+- ``ifc``: ifcopenshell opens ``model.ifc``; one element per BOM row with the
+  same id (Name and Tag); full mode also validates the file against the IFC4
+  schema and its express rules' attribute types (``ifcopenshell.validate``)
+  and compares every element's volume, from ifcopenshell's own geometry
+  kernel, with the BOM's within ``1e-6`` relative.
+- ``3dm``: rhino3dm reads ``model.3dm``; one named object per BOM row on the
+  layer of its kind, the BOM row in its user strings, units mm.
+- ``nc1``: one file per beam row, read by the reader written apart from the
+  writer (:mod:`.nc1_read`): piece id, plate thickness, weight within 1e-3.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+VOLUME_REL_TOL = 1e-6
+KIND_LAYER = {"panel": "glass", "beam": "steel", "node": "nodes"}
+
+
+def _ids_result(expected: set, found: set, extra: dict) -> dict:
+    missing, unknown = sorted(expected - found), sorted(found - expected)
+    return {"pass": not missing and not unknown and all(v == [] for k, v in extra.items() if k.startswith("bad")),
+            "elements": len(found), "missing": missing[:20], "unknown": unknown[:20], **extra}
+
+
+def check_ifc(path: Path, bom, *, full: bool = True) -> dict:
+    import ifcopenshell
+
+    f = ifcopenshell.open(str(path))
+    elements = {e.Name: e for e in f.by_type("IfcElement") if not e.is_a("IfcCurtainWall")}
+    rows = {r["id"]: r for r in bom}
+    bad_tag = sorted(n for n, e in elements.items() if e.Tag != n)[:20]
+    extra: dict = {"bad_tag": bad_tag}
+    if full:
+        import ifcopenshell.validate
+
+        from .ifc import read_ifc
+
+        log = ifcopenshell.validate.json_logger()
+        ifcopenshell.validate.validate(f, log)
+        extra["bad_schema"] = [str(s.get("message", s))[:200] for s in log.statements[:10]]
+        volumes = read_ifc(path)
+        errors = {pid: abs(item["volume_mm3"] / float(rows[pid]["volume_mm3"]) - 1.0)
+                  for pid, item in volumes.items() if pid in rows}
+        extra["volume_rel_error_max"] = max(errors.values(), default=0.0)
+        # no shape (NaN) is as bad as a wrong volume
+        extra["bad_volume"] = sorted(pid for pid, e in errors.items() if not e <= VOLUME_REL_TOL)[:20]
+    return _ids_result(set(rows), set(elements), extra)
+
+
+def check_3dm(path: Path, bom) -> dict:
+    from .rhino import read_3dm_parts
+
+    objects = read_3dm_parts(path)
+    rows = {r["id"]: r for r in bom}
+    found = {n for n, o in objects.items() if o["layer"] in KIND_LAYER.values()}
+    bad_layer = sorted(n for n in found & set(rows) if objects[n]["layer"] != KIND_LAYER[rows[n]["kind"]])[:20]
+    bad_strings = sorted(n for n in found & set(rows)
+                         if objects[n]["strings"].get("volume_mm3") != rows[n]["volume_mm3"])[:20]
+    bad_units = sorted(n for n in found if not str(objects[n].get("units", "")).endswith("Millimeters"))[:20]
+    return _ids_result(set(rows), found, {"bad_layer": bad_layer, "bad_strings": bad_strings,
+                                          "bad_units": bad_units})
+
+
+def check_nc1(folder: Path, bom) -> dict:
+    from .nc1_read import read_nc1
+
+    rows = {r["id"]: r for r in bom if r["kind"] == "beam"}
+    found, bad = set(), []
+    for path in sorted(Path(folder).glob("*.nc1")):
+        try:
+            h = read_nc1(path)["header"]
+        except ValueError as exc:
+            bad.append(f"{path.name}: {exc}")
+            continue
+        found.add(path.stem)
+        row = rows.get(path.stem)
+        weight = h["weight_per_m"] * h["length"] * 1e-3
+        if row is not None and (h["piece"] != path.stem
+                                or abs(h["web_thickness"] - float(row["thickness_mm"])) > 1e-3
+                                or abs(weight - float(row["weight_kg"])) > 1e-3 * max(float(row["weight_kg"]), 1.0)):
+            bad.append(path.stem)
+    return _ids_result(set(rows), found, {"bad_files": bad[:20]})

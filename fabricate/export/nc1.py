@@ -1,0 +1,137 @@
+"""DSTV NC1 files for steel CNC lines: one ``<id>.nc1`` per beam plate, in a ``nc1/`` folder.
+
+Written from the DSTV standard ("Standard Description for Information
+Exchange in Steel Construction", NC data interface), ASCII, one value per
+line, millimetres and degrees:
+
+``ST`` header block, after a ``**`` comment line, 24 lines in this order:
+order, drawing, phase, piece (the part id), steel grade, quantity, profile
+(``PL<thickness>``), profile code (``B``: plate), length (x extent of the
+contour), profile height (y extent: the plate's width), flange width and
+flange thickness (0: a plate has none), web thickness (the plate
+thickness), radius (0), weight per metre (kg/m: the part's weight over its
+length), painting surface per metre (m²/m: both faces and the edges), web
+start cut and web end cut (deg from square, in the plate plane), flange
+start cut and flange end cut (deg from square, across the thickness: the
+bevel), four text lines (the run name, the kind, the mesh edge, the
+neighbours).  For a plate the outer contour below defines the cut; the cut
+angles are given for the operator.
+
+``AK`` outer contour of the front face ``v`` (the outline the DXF draws on
+layer CUT, the same frame turned so that x runs along the beam): the first
+line carries the face flag, each line ``x y radius`` (radius 0: straight),
+the contour closed by repeating its first point.  ``SI`` marks the id on
+the face; ``EN`` ends the file.
+
+The reader that checks these files (``tests/dstv_reader.py``) is written
+separately from this writer, from the same description.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from optimize.atomic import atomic_open
+from optimize.errors import ExportError
+
+NUM = "{:10.3f}"
+
+
+def _end_angles(Q: np.ndarray) -> tuple[float, float]:
+    """Deviation from square (deg) of the start (x = min) and end (x = max) cuts of contour ``Q (k, 2)``.
+
+    At each end the cut is the chord between the contour's extreme points in y among the vertices
+    on that end's half; square = perpendicular to the length (the x axis).
+    """
+    mid = 0.5 * (Q[:, 0].min() + Q[:, 0].max())
+    out = []
+    for side in (Q[:, 0] <= mid, Q[:, 0] > mid):
+        P = Q[side]
+        a, b = P[np.argmin(P[:, 1])], P[np.argmax(P[:, 1])]
+        out.append(float(np.degrees(np.arctan2(abs(b[0] - a[0]), max(abs(b[1] - a[1]), 1e-300)))))
+    return out[0], out[1]
+
+
+def _bevels(group, i: int) -> tuple[float, float]:
+    """Largest bevel (deg from square) of the end faces at the start and at the end of beam ``i``.
+
+    End faces: neither the plate face nor its opposite, their normals more along the beam than across
+    it; start or end by the side of the beam's middle their centre lies on.  Bevel = angle between an
+    end face and the plate normal (0 when the end face is perpendicular to the plate).
+    """
+    V, n = group.vertices[i], group.normals[i]
+    plate = n[group.outline_face]
+    axis = _length_axis(V[list(group.faces[group.outline_face])])
+    s = V @ axis
+    mid = 0.5 * (s.min() + s.max())
+    out = [0.0, 0.0]
+    for j, face in enumerate(group.faces):
+        if j in (group.outline_face, group.bevel_face) or abs(n[j] @ axis) < 0.3:
+            continue
+        end = int(s[list(face)].mean() > mid)
+        out[end] = max(out[end], float(np.degrees(np.arcsin(min(1.0, abs(n[j] @ plate))))))
+    return out[0], out[1]
+
+
+def _length_axis(P: np.ndarray) -> np.ndarray:
+    """Unit direction of the longest vertex pair of ``P (k, 3)`` (a beam's plate face: its length)."""
+    d = P[:, None, :] - P[None, :, :]
+    a, b = np.unravel_index(np.argmax((d ** 2).sum(axis=2)), d.shape[:2])
+    return d[a, b] / np.linalg.norm(d[a, b])
+
+
+def contour(group, i: int) -> np.ndarray:
+    """(k, 2) the flat outline of part ``i`` with its lower-left corner at the origin, x along the length."""
+    Q = np.asarray(group.flat[i], dtype=float)
+    if np.ptp(Q[:, 1]) > np.ptp(Q[:, 0]):  # x along the longer side
+        Q = np.stack([Q[:, 1], -Q[:, 0]], axis=1)
+    return Q - Q.min(axis=0)
+
+
+def nc1_text(group, i: int, *, order: str, grade: str, density: float) -> str:
+    """The NC1 file of plate ``i`` of ``group`` (a beam group)."""
+    Q = contour(group, i)
+    length, height = float(Q[:, 0].max()), float(Q[:, 1].max())
+    t = float(group.thickness_mm[i])
+    weight = float(group.volume_mm3[i]) * density * 1e-9
+    perimeter = float(np.linalg.norm(np.roll(Q, -1, axis=0) - Q, axis=1).sum())
+    paint = (2.0 * float(group.area_mm2[i]) + perimeter * t) * 1e-6 / (length * 1e-3)
+    web = _end_angles(Q)
+    bevel = _bevels(group, i)
+    pid = group.ids[i]
+    head = [order, "conical-fab", "1", pid, grade, "1", f"PL{t:g}", "B"]
+    numbers = [length, height, 0.0, 0.0, t, 0.0, weight / (length * 1e-3), paint, web[0], web[1],
+               bevel[0], bevel[1]]
+    texts = [order, group.kind, f"mesh edge {int(group.element[i])}", " ".join(group.neighbours[i])[:60]]
+    lines = ["ST", f"** {pid}.nc1 written by conical-fab"]
+    lines += [f"  {v}" for v in head] + ["  " + NUM.format(v).strip() for v in numbers] + [f"  {v}" for v in texts]
+    lines.append("AK")
+    closed = np.vstack([Q, Q[:1]])
+    for j, (x, y) in enumerate(closed.tolist()):
+        lines.append(("  v " if j == 0 else "    ") + f"{NUM.format(x)} {NUM.format(y)} {NUM.format(0.0)}")
+    cx, cy = Q.mean(axis=0)
+    lines += ["SI", f"  v {NUM.format(cx)} {NUM.format(cy)} {NUM.format(0.0)} 10 {pid}", "EN", ""]
+    return "\n".join(lines)
+
+
+def write_nc1(parts, folder, *, order: str = "roof", grade: str = "S355") -> dict:
+    """One NC1 file per beam in ``folder`` (created; each file atomic).  Returns facts:
+    ``folder, files, bytes, seconds``."""
+    t0 = time.perf_counter()
+    folder = Path(folder)
+    files, size = 0, 0
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        for g in parts.of_kind("beam"):
+            density = parts.spec.density(g.kind)
+            for i, pid in enumerate(g.ids):
+                text = nc1_text(g, i, order=order, grade=grade, density=density)
+                with atomic_open(folder / f"{pid}.nc1", "w", encoding="ascii", newline="\r\n") as fh:
+                    fh.write(text)
+                files += 1
+                size += len(text)
+    except OSError as exc:
+        raise ExportError(f"{folder}: cannot write the NC1 files ({exc.strerror or exc})") from None
+    return {"file": folder.name + "/", "files": files, "bytes": size, "seconds": time.perf_counter() - t0}
