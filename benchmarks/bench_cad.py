@@ -13,6 +13,7 @@ caches), one after the other.  Prints a JSON line per side and the ratio.
     python benchmarks/bench_cad.py               # 5,000 panels
     python benchmarks/bench_cad.py --panels 500  # quick
     python benchmarks/bench_cad.py --check       # also time `fabricate check` on the output
+    python benchmarks/bench_cad.py --handoff     # also the CAD stage with the hand-off files (issue 18)
 
 On a shared machine the timings are noisy: compare ratios, not seconds.
 """
@@ -103,6 +104,42 @@ def run_baseline(panels: int, out: Path) -> dict:
     return {"side": "raw_occ_baseline", "panels": int(mesh.n_faces), "seconds": time.perf_counter() - t0}
 
 
+def run_handoff(panels: int, out: Path) -> dict:
+    """The CAD stage with the fabrication hand-off (issue 18): the files of :func:`run_stage` plus
+    flat.json, the three schedules, the nested cut files per material and thickness, the layout plan."""
+    from fabricate.config import NestingSection
+    from fabricate.export import (write_cut_files, write_flat, write_glass_schedule, write_layout_plan,
+                                  write_node_schedule, write_steel_cut_list)
+
+    t0 = time.perf_counter()
+    base = run_stage(panels, out)
+    from fabricate.cad import PartSpec, build_parts
+
+    parts = build_parts(structure(panels), PartSpec())
+    times = {}
+    for name, fn in (("flat.json", write_flat), ("glass_schedule.csv", write_glass_schedule),
+                     ("steel_cut_list.csv", write_steel_cut_list), ("node_schedule.csv", write_node_schedule),
+                     ("layout_plan.dxf", write_layout_plan)):
+        t = time.perf_counter()
+        fn(parts, out / name)
+        times[name] = time.perf_counter() - t
+    t = time.perf_counter()
+    write_cut_files(parts, out, NestingSection().model_dump())
+    times["cut files (nested)"] = time.perf_counter() - t
+    extra = sum(times.values())
+    return {"side": "handoff", "panels": base["panels"], "beams": base["beams"],
+            "seconds": base["seconds"] + extra, "stage_seconds": base["seconds"], "handoff_seconds": extra,
+            "parts_seconds": {k: round(v, 3) for k, v in times.items()}, "wall": time.perf_counter() - t0}
+
+
+def print_handoff(results: dict) -> None:
+    """Rows of the hand-off side: the previous file set against it, in the same run."""
+    h, st = results["handoff"], results["stage"]
+    print(f"hand-off: CAD stage with the previous files {st['seconds']:.2f} s; with flat data, schedules, "
+          f"nested cut files and layout plan {h['seconds']:.2f} s (of which the hand-off files "
+          f"{h['handoff_seconds']:.2f} s); ratio {h['seconds'] / st['seconds']:.2f} (goal <= 3.0)")
+
+
 def run_check(out: Path) -> dict:
     from fabricate.check import check_outputs
 
@@ -117,7 +154,7 @@ def child(side: str, panels: int, out: str) -> None:
     import logging
 
     logging.disable(logging.WARNING)
-    fn = {"stage": run_stage, "baseline": run_baseline}.get(side)
+    fn = {"stage": run_stage, "baseline": run_baseline, "handoff": run_handoff}.get(side)
     result = fn(panels, Path(out)) if fn else run_check(Path(out))
     result["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(json.dumps(result))
@@ -127,7 +164,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--panels", type=int, default=5000)
     ap.add_argument("--check", action="store_true", help="also time fabricate check on the stage output")
-    ap.add_argument("--child", choices=("stage", "baseline", "check"), help=argparse.SUPPRESS)
+    ap.add_argument("--handoff", action="store_true", help="also time the CAD stage with the hand-off files")
+    ap.add_argument("--child", choices=("stage", "baseline", "check", "handoff"), help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -135,7 +173,7 @@ def main() -> None:
         return
     with tempfile.TemporaryDirectory(prefix="bench_cad_") as tmp:
         results = {}
-        sides = ("baseline", "stage") + (("check",) if args.check else ())
+        sides = ("baseline", "stage") + (("check",) if args.check else ()) + (("handoff",) if args.handoff else ())
         for side in sides:
             cmd = [sys.executable, __file__, "--child", side, "--panels", str(args.panels), "--out", tmp]
             line = subprocess.run(cmd, check=True, capture_output=True, text=True,
@@ -151,6 +189,8 @@ def main() -> None:
           f"peak {base['peak_rss_mib']:.0f} MiB")
     print(f"ratio CAD stage / raw OCC writer = {ratio:.2f} (goal <= 2.0); peak memory "
           f"{stage['peak_rss_mib'] / 1024:.2f} GiB (goal < 4 GiB)")
+    if "handoff" in results:
+        print_handoff(results)
 
 
 if __name__ == "__main__":

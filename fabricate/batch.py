@@ -31,7 +31,7 @@ from typing import Any, Callable
 from optimize.atomic import atomic_open
 from optimize.errors import ConfigError, ConicalFabError
 
-from .config import RunConfig, load_config, parse_value
+from .config import RunConfig, load_config, override_values
 from .pipeline import EXIT_CODES, RunSummary, run_pipeline, worst
 
 log = logging.getLogger(__name__)
@@ -84,7 +84,7 @@ def parse_sets(items: list[str] | None) -> dict[str, list[Any]]:
             raise ConfigError(f"--set {item!r}: expected KEY=VALUE[,VALUE...], e.g. parts.glass_thickness=8,10,12")
         if key in sets:
             raise ConfigError(f"--set {key}: given twice; list all values in one --set {key}=a,b,c")
-        sets[key] = [parse_value(v) for v in split_values(text)]
+        sets[key] = override_values(key, split_values(text))  # a list key: the comma list is one list
     return sets
 
 

@@ -18,10 +18,13 @@ with it:
   ``cad_linear_mm x`` the smaller surface area).
 - ``bearing``: every panel touches each beam listed as its neighbour
   (manifold3d gap below ``cad_linear_mm``).
+- ``flat``: every panel and beam rebuilt from ``flat.json`` alone (outline,
+  bevels, thickness, transform) has the volume and, within 0.01 mm, the
+  corners of its STEP solid (3MF mesh in the fast check).
 - ``dxf``: ezdxf audit clean, units mm, one CUT outline (id in XDATA) and
   one ETCH id per panel and beam, and each outline has the area (``1e-9``
-  relative) and the edge lengths (``1e-6`` mm) of a face of the STEP solid
-  with the same id.
+  relative) and the edge lengths (``1e-6`` mm) of the flat data's outline
+  with the same id (without ``flat.json``: the BOM's area).
 - ``svg``: parses, one group per panel and beam.
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
   element / object / file per BOM row with the same id; IFC schema-valid with ifcopenshell's
@@ -43,7 +46,8 @@ from optimize.tolerances import DEFAULT, Tolerances
 
 log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
-         "dxf": "outlines.dxf", "svg": "outlines.svg", "ifc": "model.ifc", "3dm": "model.3dm", "nc1": "nc1"}
+         "dxf": "outlines.dxf", "svg": "outlines.svg", "flat": "flat.json", "ifc": "model.ifc", "3dm": "model.3dm",
+         "nc1": "nc1"}
 VOLUME_REL_TOL = 1e-6
 AREA_REL_TOL = 1e-9
 EDGE_TOL_MM = 1e-6
@@ -78,7 +82,8 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
             ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
             ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
             ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
-            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"]), None)),
+            ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
+            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"]), None)),
             ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
             ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
                                                                      full="ifc_geometry" not in skip), None)),
@@ -264,11 +269,29 @@ def _check_bearing(meshes, bom, tol):
     return bearing(meshes, supports, tol.cad_linear_mm)
 
 
-def _check_dxf(path, bom, solids_step):
-    from .export.dxf import read_outlines
-    from .export.verify import face_polygons, match_outline
+def _check_flat(path, bom, read):
+    from .export.flatdata import check_flat
 
+    return check_flat(path, bom, step_solids=read.get("step"), meshes=read.get("3mf"))
+
+
+def _check_dxf(path, bom, solids_step, flat_path=None):
+    """CUT outlines against the flat data's outlines (which the flat check holds to the STEP solids),
+    or, without flat.json, their areas against the BOM's."""
+    from .export.dxf import read_outlines
+    from .export.verify import match_outline
+
+    if flat_path is None or not Path(flat_path).exists():
+        from .check_fast import dxf_against_bom
+
+        return dxf_against_bom(path, bom)
     outlines, facts = read_outlines(path)
+    outline_of = {}
+    from .export.flatdata import read_flat
+
+    for g in read_flat(flat_path):
+        for pid, Q in zip(g["ids"], g["outline"]):
+            outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
     flat = [r["id"] for r in bom if r["kind"] in ("panel", "beam")]
     missing = sorted(set(flat) - set(outlines))
     worst_a, worst_e, worst_id, failures = 0.0, 0.0, None, []
@@ -277,7 +300,10 @@ def _check_dxf(path, bom, solids_step):
         if shape is None:
             failures.append({"id": pid, "error": "no STEP solid of that name"})
             continue
-        fi, rel, err = match_outline(Q, face_polygons(shape))
+        if pid not in outline_of:
+            failures.append({"id": pid, "error": "not in flat.json"})
+            continue
+        fi, rel, err = match_outline(Q, outline_of[pid])
         if err > worst_e:
             worst_e, worst_id = err, pid
         worst_a = max(worst_a, rel)

@@ -11,17 +11,29 @@ did-you-mean for misspelt keys::
 
     configs/dome.yaml:7: optimize.targte: unknown key (did you mean 'target'?); allowed: ...
 
-Files are read with ``yaml.safe_load`` only; paths in a config are resolved
-relative to the config file's folder.
+Files are read by :mod:`fabricate.config_yaml` (safe YAML, bounded in size,
+nesting and alias expansion, duplicate keys refused); paths in a config are
+resolved relative to the config file's folder.
+
+Types are strict: ``true`` is not a number, ``.inf`` / ``.nan`` are refused
+everywhere (no key takes them), an integer key takes integers only.  Every
+value with a physical meaning has a range (``configs/reference.yaml`` lists
+them); the message of a value outside it names the range.  YAML reads ``off``,
+``no``, ``on``, ``yes`` as booleans: a key whose allowed words include them
+(``outputs.check: off``) takes the boolean as that word.
+
+``--set KEY=VALUE`` values (:func:`override_values`): a comma list given to a
+key that takes a list is that list (``offset.distances=0,-200`` is
+``[0, -200]``); for any other key the commas separate the values of a sweep,
+which only ``fabricate batch`` runs (``fabricate batch --set
+offset.distances=[0,-200],[0,-300]`` sweeps two lists).
 """
 from __future__ import annotations
 
-import inspect
 import math
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal, get_args, get_origin
 
-import yaml
 from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, ValidationInfo,
                       field_validator, model_validator)
 from pydantic_core import PydanticCustomError
@@ -29,74 +41,112 @@ from pydantic_core import PydanticCustomError
 from optimize.errors import ConfigError
 from optimize.tolerances import Tolerances
 
-from .config_errors import did_you_mean, format_errors, key_lines
+from .config_design import MAX_FACES, DesignParamError, check_design, subdivided_faces
+from .config_errors import format_errors
+from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
+from .config_yaml import MAX_DEPTH, read_config
 
 UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
 
 
-class Section(BaseModel):
-    """A config section: unknown keys are errors (named with a did-you-mean by :func:`format_errors`)."""
+MAX_MM = 10_000.0
+"""Largest |layer distance| and beam depth (mm): 10 m."""
+MAX_ITER = 10_000
+"""Largest ``optimize.max_iter``."""
 
-    model_config = ConfigDict(extra="forbid", validate_default=True, populate_by_name=True)
+
+class Section(BaseModel):
+    """A config section: unknown keys are errors (named with a did-you-mean by :func:`format_errors`),
+    types are strict and numbers finite (see the module docstring)."""
+
+    model_config = ConfigDict(extra="forbid", validate_default=True, populate_by_name=True, strict=True,
+                              allow_inf_nan=False)
 
     @classmethod
     def allowed_keys(cls) -> list[str]:
         return [f.alias or name for name, f in cls.model_fields.items()]
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _yaml_words(cls, value: Any, info: ValidationInfo) -> Any:
+        """YAML's ``off`` / ``no`` (false) and ``on`` / ``yes`` (true) as the word, for a key that
+        allows the word and not a boolean."""
+        if isinstance(value, bool):
+            words = _bool_words(cls.model_fields[info.field_name].annotation)
+            if words is not None:
+                return words[value] if words[value] is not None else value
+        return value
+
+
+_FALSE, _TRUE = ("off", "no", "false"), ("on", "yes", "true")
+
+
+def _bool_words(annotation) -> dict[bool, str | None] | None:
+    """``{False: "off", True: None}`` for a Literal annotation allowing those words and no bool."""
+    words: list[str] = []
+    stack = [annotation]
+    while stack:
+        a = stack.pop()
+        if a is bool:
+            return None
+        if get_origin(a) is Literal:
+            words += [w for w in get_args(a) if isinstance(w, str)]
+        else:
+            stack.extend(get_args(a))
+    pick = {False: next((w for w in _FALSE if w in words), None), True: next((w for w in _TRUE if w in words), None)}
+    return pick if any(pick.values()) else None
 
 
 def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
     """A path relative to the config file's folder; the file must exist."""
     if value is None:
         return None
-    if not isinstance(value, (str, Path)) or not str(value).strip():
+    if not isinstance(value, (str, Path)) or not str(value).strip() or "\0" in str(value):
         raise PydanticCustomError("path", "expected a file path (a string)")
+    if len(str(value)) > 1024:
+        raise PydanticCustomError("path", "expected a file path of at most 1024 characters")
     base = Path((info.context or {}).get("base_dir", "."))
-    path = Path(value).expanduser()
-    full = (path if path.is_absolute() else base / path).resolve()
-    if not full.is_file():
+    try:
+        path = Path(value).expanduser()
+        full = (path if path.is_absolute() else base / path).resolve()
+        found, exists = full.is_file(), full.exists()
+    except (OSError, RuntimeError) as exc:  # a name too long, a symlink loop, no home folder
+        raise PydanticCustomError("path", "cannot use this path ({err})",
+                                  {"err": getattr(exc, "strerror", None) or str(exc)}) from None
+    if not found and exists:
+        what = "a folder" if full.is_dir() else "not a regular file (a device, a pipe, ...)"
+        raise PydanticCustomError("path_kind", "{full} is {what}; expected a mesh file",
+                                  {"full": str(full), "what": what})
+    if not found:
         raise PydanticCustomError("path_missing", "file not found: {full} (resolved relative to {base})",
                                   {"full": str(full), "base": str(base.resolve())})
     return full
 
 
 class ShapeInput(Section):
-    """A built-in design of :mod:`optimize.designs` with its parameters."""
+    """A built-in design of :mod:`optimize.designs` with its parameters (checked by
+    :func:`fabricate.config_design.check_design`)."""
 
     name: str
     params: dict[str, Any] = Field(default_factory=dict)
 
+    _faces: int = PrivateAttr(default=0)
+    _levels: int = PrivateAttr(default=0)
+    _scheme: str = PrivateAttr(default="catmull_clark")
+
     @model_validator(mode="after")
     def _known_design(self) -> "ShapeInput":
         try:
-            from optimize.designs import DESIGNS
+            design = check_design(self.name, self.params)
+        except DesignParamError as exc:
+            ctx = {"err": str(exc), **({"param": exc.key} if exc.key else {})}  # the param's line
+            raise PydanticCustomError("design_value", "{err}", ctx) from None
         except ImportError as exc:  # the modelling package is not installed
             raise PydanticCustomError("designs", "built-in designs are not available ({err})",
                                       {"err": str(exc)}) from None
-        if self.name not in DESIGNS:
-            raise PydanticCustomError(
-                "design", "unknown design '{name}'{hint} (allowed: {allowed})",
-                {"name": self.name, "hint": did_you_mean(self.name, DESIGNS),
-                 "allowed": ", ".join(sorted(DESIGNS))})
-        _check_params(DESIGNS[self.name], self.params)
-        try:  # the design checks its own parameter values; building a control mesh is cheap
-            DESIGNS[self.name](**self.params)
-        except ConfigError as exc:
-            raise PydanticCustomError("design_value", "{err}", {"err": str(exc)}) from None
+        self._faces, self._levels, self._scheme = design.mesh.n_faces, design.levels, design.scheme
         return self
-
-
-def _check_params(fn, params: dict[str, Any]) -> None:
-    """Raise for a parameter the design function does not take."""
-    sig = inspect.signature(fn)
-    if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
-        return
-    allowed = [n for n, p in sig.parameters.items() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)]
-    for key in params:
-        if key not in allowed:
-            raise PydanticCustomError(
-                "design_param", "unknown parameter '{key}'{hint} (allowed: {allowed})",
-                {"key": key, "hint": did_you_mean(key, allowed), "allowed": ", ".join(allowed) or "none"})
 
 
 class InputSection(Section):
@@ -106,14 +156,24 @@ class InputSection(Section):
     mesh: Path | None = None
     control: Path | None = None
     surface: Path | None = None
-    edge_length: float | None = Field(default=None, gt=0)
+    edge_length: float | None = Field(default=None, gt=0, le=1e7)
     irregular: Literal["faces", "vertices", "nearest"] | None = None
     side: Literal["keep"] | tuple[float, float, float] | None = None
-    radius: float | None = Field(default=None, gt=0)
+    radius: float | None = Field(default=None, gt=0, le=1e7)
     layer: str | None = Field(default=None, min_length=1, max_length=500)
     object: str | None = Field(default=None, min_length=1, max_length=500)
 
     _paths = field_validator("mesh", "control", "surface", mode="before")(_resolve_path)
+
+    @field_validator("side", mode="before")
+    @classmethod
+    def _side_list(cls, v):
+        return tuple(v) if isinstance(v, list) else v
+
+    @field_validator("layer", "object", mode="before")
+    @classmethod
+    def _number_as_name(cls, v):  # a layer or object named `12` is a name
+        return str(v) if isinstance(v, int) and not isinstance(v, bool) else v
 
     @model_validator(mode="after")
     def _exactly_one(self) -> "InputSection":
@@ -153,7 +213,7 @@ class SubdivisionSection(Section):
     0 otherwise); chaikin and lane_riesenfeld refine developable strips."""
 
     scheme: Literal["catmull_clark", "doo_sabin", "chaikin", "lane_riesenfeld"] | None = None
-    levels: int | None = Field(default=None, ge=0, le=6)
+    levels: int | None = Field(default=None, ge=0, le=6)  # Catmull-Clark: 4^6 = 4096 faces per face
 
 
 class OptimizeSection(Section):
@@ -162,42 +222,51 @@ class OptimizeSection(Section):
     formulation: Literal["auto", "auxiliary", "vertices"] = "auto"
     linear_solver: Literal["auto", "pardiso", "superlu", "cholespy", "eliminate"] = "auto"
     torsion_free_beams: Literal["auto"] | bool = "auto"
-    fairness: float = Field(default=1e-3, ge=0)
-    closeness: float = Field(default=1e-2, ge=0)
-    max_iter: int = Field(default=200, ge=1, le=100000)
+    fairness: float = Field(default=1e-3, ge=0, le=1e6)
+    closeness: float = Field(default=1e-2, ge=0, le=1e6)
+    max_iter: int = Field(default=200, ge=1, le=MAX_ITER)
     fixed: Literal["boundary", "corners"] | list[int] | None = None
     glide_boundary: bool = False
 
     @field_validator("fixed")
     @classmethod
     def _indices(cls, v):
-        if isinstance(v, list) and any(i < 0 for i in v):
-            raise PydanticCustomError("fixed", "vertex indices must be >= 0")
+        bad = [i for i in v if not 0 <= i < 2 ** 31] if isinstance(v, list) else []
+        if bad:  # whether an index is below the vertex count is checked once the mesh is read
+            raise PydanticCustomError("fixed", "vertex index {i}: vertex indices must be >= 0 and below 2^31",
+                                      {"i": bad[0]})
         return v
 
 
 _TOL = Tolerances()
+MEASURE_NAMES = ("planarity", "folded", "conical", "circular", "closeness", "offset_distance", "beam_planarity",
+                 "beam_planarity_boundary", "beam_twist", "axis_defect")
+"""What ``tolerances.requirements`` may name (``fabricate.requirements.MEASURES``)."""
 
 
 class TolerancesSection(Section):
     """Thresholds (see :class:`optimize.tolerances.Tolerances`): relative, radians, or mm."""
 
-    planarity: float = Field(default=_TOL.planarity, gt=0)
-    conical: float = Field(default=_TOL.conical, gt=0)
-    circular: float = Field(default=_TOL.circular, gt=0)
-    offset: float = Field(default=_TOL.offset, gt=0)
-    beam_planarity: float = Field(default=_TOL.beam_planarity, gt=0)
-    cad_linear_mm: float = Field(default=_TOL.cad_linear_mm, gt=0)
-    closeness: float = Field(default=_TOL.closeness, gt=0)
+    # relative and angular tolerances: 1e-12 is about what double precision can show; 1 is no test
+    planarity: float = Field(default=_TOL.planarity, ge=1e-12, le=1.0)
+    conical: float = Field(default=_TOL.conical, ge=1e-12, le=1.0)
+    circular: float = Field(default=_TOL.circular, ge=1e-12, le=1.0)
+    offset: float = Field(default=_TOL.offset, ge=1e-12, le=1.0)
+    beam_planarity: float = Field(default=_TOL.beam_planarity, ge=1e-12, le=1.0)
+    cad_linear_mm: float = Field(default=_TOL.cad_linear_mm, ge=1e-7, le=1.0)  # OpenCASCADE: 1e-7 mm
+    closeness: float = Field(default=_TOL.closeness, ge=1e-12, le=1.0)
+    beam_twist_mm: float = Field(default=_TOL.beam_twist_mm, ge=1e-9, le=1000.0)
+    requirements: list[Literal[MEASURE_NAMES]] | None = None
 
     def to_tolerances(self) -> Tolerances:
-        return Tolerances(**self.model_dump())
+        return Tolerances(**self.model_dump(exclude={"requirements"}))
 
 
 class OffsetSection(Section):
     """Layer distances in mm (signed, along the face normals); ``null``: ``[0, -beam_depth]``."""
 
-    distances: list[float] | None = Field(default=None, min_length=2)
+    distances: list[Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]] | None = Field(default=None, min_length=2,
+                                                                                   max_length=32)
     flip: bool = False
 
     @field_validator("distances")
@@ -208,18 +277,52 @@ class OffsetSection(Section):
         return v
 
 
+class LimitsSection(Section):
+    """What the shops can make; parts beyond it are flagged by id (see ``fabricate.cad.spec.Limits``)."""
+
+    min_corner_deg: float = Field(default=30.0, ge=0, lt=180)
+    min_edge_mm: float = Field(default=50.0, ge=0, le=10000.0)
+    sheet_mm: tuple[float, float] = (6000.0, 3210.0)
+    max_panel_kg: float = Field(default=250.0, gt=0, le=100000.0)
+
+    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+
+
 class PartsSection(Section):
     """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
 
-    glass_thickness: float = Field(default=10.0, gt=0)
-    joint_gap: float = Field(default=10.0, ge=0)
+    glass_thickness: float = Field(default=10.0, gt=0, le=200.0)
+    joint_gap: float = Field(default=10.0, ge=0, le=1000.0)
     edge: Literal["auto", "axis", "perpendicular"] = "auto"
-    beam_width: float = Field(default=60.0, gt=0)
-    beam_depth: float = Field(default=200.0, gt=0)
-    node_radius: float = Field(default=0.0, ge=0)
-    density_glass: float = Field(default=2500.0, gt=0)
-    density_steel: float = Field(default=7850.0, gt=0)
-    node_sides: int = Field(default=24, ge=6)
+    beam_width: float = Field(default=60.0, gt=0, le=2000.0)
+    beam_depth: float = Field(default=200.0, gt=0, le=MAX_MM)
+    node_radius: float = Field(default=0.0, ge=0, le=5000.0)
+    density_glass: float = Field(default=2500.0, gt=0, le=25000.0)
+    density_steel: float = Field(default=7850.0, gt=0, le=25000.0)
+    node_sides: int = Field(default=24, ge=6, le=256)
+    steel_grade: str = Field(default="S355", min_length=1, max_length=40)
+    limits: LimitsSection = Field(default_factory=LimitsSection)
+
+
+class SheetSection(Section):
+    """Stock sheets of one material for the nested cut files (mm)."""
+
+    sheet_mm: tuple[float, float]
+    margin_mm: float = Field(default=10.0, ge=0, le=1000.0)
+    kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
+    rotation: bool = True
+
+    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+
+
+class NestingSection(Section):
+    """Stock sheets per material: glass (jumbo 6000 x 3210, trimmed edges, room to grind between parts)
+    and steel plate (12000 x 2500, plasma or laser kerf)."""
+
+    glass: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(6000.0, 3210.0), margin_mm=20.0,
+                                                                     kerf_mm=10.0))
+    steel: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(12000.0, 2500.0), margin_mm=10.0,
+                                                                     kerf_mm=3.0))
 
 
 CHECK_AUTO_MAX_PARTS = 3000
@@ -242,6 +345,12 @@ class OutputsSection(Section):
     three_mf: bool = Field(default=True, alias="3mf")
     dxf: bool = True
     svg: bool = True
+    flat: bool | None = None
+    schedules: bool | None = None
+    cut_files: bool | None = None
+    stl_parts: bool = False
+    layout_plan: bool | None = None
+    nesting: NestingSection = Field(default_factory=NestingSection)
     bom: bool = True
     ifc: bool = True
     rhino: bool = Field(default=True, alias="3dm")
@@ -252,6 +361,15 @@ class OutputsSection(Section):
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"
     overwrite: bool = False  # replace an earlier finished run (as ``fabricate run --force``)
+
+    def wanted(self, key: str) -> bool:
+        """Whether the file of ``key`` is written: ``flat``, ``cut_files`` and ``layout_plan`` follow
+        ``dxf`` and ``schedules`` follows ``bom`` unless set."""
+        value = getattr(self, key)
+        if value is None:
+            return bool(getattr(self, {"flat": "dxf", "schedules": "bom", "cut_files": "dxf",
+                                       "layout_plan": "dxf"}[key]))
+        return bool(value)
 
     def check_mode(self, parts: int) -> str:
         """``full`` | ``fast`` | ``off`` for a model of ``parts`` parts (``auto`` resolved)."""
@@ -272,9 +390,14 @@ class RunConfig(Section):
     parts: PartsSection = Field(default_factory=PartsSection)
     outputs: OutputsSection = Field(default_factory=OutputsSection)
     units: Literal["mm", "cm", "m", "in", "ft"] = "mm"
-    scale: float = Field(default=1.0, gt=0)
+    scale: float = Field(default=1.0, ge=1e-6, le=1e6)
 
     _source: Path | None = PrivateAttr(default=None)
+
+    @field_validator("name", mode="before")
+    @classmethod
+    def _number_name(cls, v):  # `name: 2024` names a folder too
+        return str(v) if isinstance(v, int) and not isinstance(v, bool) else v
 
     @property
     def source(self) -> Path | None:
@@ -298,7 +421,7 @@ class RunConfig(Section):
 
 # -- loading ---------------------------------------------------------------
 def load_config(path: str | Path, overrides: dict[str, Any] | None = None) -> RunConfig:
-    """Read and validate a YAML config file.
+    """Read and validate a YAML config file (read by :func:`fabricate.config_yaml.read_config`).
 
     overrides : ``{"parts.glass_thickness": 8, ...}`` applied to the YAML data
         before validation (the ``--set`` of ``fabricate run`` / ``batch``).
@@ -306,24 +429,13 @@ def load_config(path: str | Path, overrides: dict[str, Any] | None = None) -> Ru
     Raises ConfigError naming the file, line, key path, value and what is allowed.
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(f"{path}: cannot read the config file ({exc.strerror or exc})") from None
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{path}:{mark.line + 1}" if mark else str(path)
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise ConfigError(f"{where}: not valid YAML: {problem}") from None
+    data, lines = read_config(path)
     if data is None:
         data = {}
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: expected a mapping of sections (name, input, ...), "
                           f"found {type(data).__name__}")
-    cfg = parse_config(data, source=path, overrides=overrides, lines=key_lines(text))
-    return cfg
+    return parse_config(data, source=path, overrides=overrides, lines=lines)
 
 
 def parse_config(data: dict[str, Any], *, source: str | Path = "<config>", base_dir: str | Path | None = None,
@@ -332,9 +444,9 @@ def parse_config(data: dict[str, Any], *, source: str | Path = "<config>", base_
     default the folder of ``source``)."""
     source = Path(source)
     base = Path(base_dir) if base_dir is not None else source.parent
-    data = _copy(data)
+    data = _copy(data, source)
     for key, value in (overrides or {}).items():
-        set_key(data, key, value, source=source)
+        set_key(data, key, _copy(value, source), source=source)
     try:
         cfg = RunConfig.model_validate(data, context={"base_dir": base})
     except ValidationError as exc:
@@ -346,25 +458,40 @@ def parse_config(data: dict[str, Any], *, source: str | Path = "<config>", base_
     return cfg
 
 
+def _at(source: Path, lines: dict[tuple, int], *keys: tuple) -> str:
+    line = next((lines[k] for k in keys if k in lines), None)
+    return f"{source}:{line}" if line else str(source)
+
+
 def _cross_checks(cfg: RunConfig, source: Path, lines: dict[tuple, int]) -> None:
     if cfg.input.shape is not None and "units" in cfg.model_fields_set and cfg.units != "mm":
-        line = lines.get(("units",))
-        raise ConfigError(f"{source}{f':{line}' if line else ''}: units: {cfg.units!r} applies to mesh files; "
+        raise ConfigError(f"{_at(source, lines, ('units',))}: units: {cfg.units!r} applies to mesh files; "
                           "built-in designs are in mm (their sizes are parameters); expected mm or no units key "
                           "(scale still applies)")
+    shape = cfg.input.shape
+    if shape is not None:
+        levels = shape._levels if cfg.subdivision.levels is None else cfg.subdivision.levels
+        scheme = cfg.subdivision.scheme or shape._scheme
+        faces = subdivided_faces(shape._faces, scheme, levels)
+        if faces > MAX_FACES:
+            where = _at(source, lines, ("subdivision", "levels"), ("input", "shape"))
+            raise ConfigError(f"{where}: input.shape: design {shape.name} has {shape._faces:,} faces; {levels} "
+                              f"rounds of {scheme} make about {faces:,}, more than {MAX_FACES:,} (the largest "
+                              "design run); expected fewer quads (the design's count parameters) or fewer "
+                              "subdivision.levels")
     parts = cfg.parts
     if parts.joint_gap >= parts.beam_width:
-        line = lines.get(("parts", "joint_gap")) or lines.get(("parts", "beam_width"))
-        raise ConfigError(f"{source}{f':{line}' if line else ''}: parts.joint_gap: {parts.joint_gap:g} mm is not "
+        where = _at(source, lines, ("parts", "joint_gap"), ("parts", "beam_width"))
+        raise ConfigError(f"{where}: parts.joint_gap: {parts.joint_gap:g} mm is not "
                           f"below parts.beam_width {parts.beam_width:g} mm; expected a smaller gap so that the "
                           "panels bear on the beams")
     if cfg.offset.distances is not None and "beam_depth" in cfg.parts.model_fields_set:
         span = abs(cfg.offset.distances[-1] - cfg.offset.distances[0])
         if abs(span - cfg.parts.beam_depth) > 1e-9 * max(span, 1.0):
-            line = lines.get(("parts", "beam_depth"))
             raise ConfigError(
-                f"{source}{f':{line}' if line else ''}: parts.beam_depth: {cfg.parts.beam_depth} disagrees with offset.distances "
-                f"{cfg.offset.distances} (first to last layer = {span:g} mm); give one of them, or make them agree")
+                f"{_at(source, lines, ('parts', 'beam_depth'))}: parts.beam_depth: {cfg.parts.beam_depth} disagrees "
+                f"with offset.distances {cfg.offset.distances} (first to last layer = {span:g} mm); give one of "
+                "them, or make them agree")
 
 
 def _safe_name(stem: str) -> str:
@@ -372,34 +499,13 @@ def _safe_name(stem: str) -> str:
     return out or "run"
 
 
-def _copy(data: Any) -> Any:
+def _copy(data: Any, source: Path | str, depth: int = 0) -> Any:
+    """A deep copy of nested dicts and lists (YAML aliases become separate copies), at most
+    :data:`~fabricate.config_yaml.MAX_DEPTH` deep."""
+    if depth > MAX_DEPTH:
+        raise ConfigError(f"{source}: nested deeper than {MAX_DEPTH} levels; expected a config of sections and keys")
     if isinstance(data, dict):
-        return {k: _copy(v) for k, v in data.items()}
-    if isinstance(data, list):
-        return [_copy(v) for v in data]
+        return {k: _copy(v, source, depth + 1) for k, v in data.items()}
+    if isinstance(data, (list, tuple)):
+        return [_copy(v, source, depth + 1) for v in data]
     return data
-
-
-def set_key(data: dict[str, Any], dotted: str, value: Any, *, source: str | Path = "--set") -> None:
-    """Set ``data["a"]["b"] = value`` for ``dotted = "a.b"``, creating sections as needed."""
-    parts = [p for p in dotted.split(".")]
-    if not dotted or any(not p for p in parts):
-        raise ConfigError(f"{source}: --set {dotted}={value!r}: expected a key path like parts.glass_thickness")
-    node = data
-    for i, key in enumerate(parts[:-1]):
-        child = node.get(key)
-        if child is None:
-            child = node[key] = {}
-        if not isinstance(child, dict):
-            raise ConfigError(f"{source}: --set {dotted}: {'.'.join(parts[:i + 1])} is {child!r}, "
-                              "not a section with keys")
-        node = child
-    node[parts[-1]] = value
-
-
-def parse_value(text: str) -> Any:
-    """A ``--set`` value: YAML scalar or list (``8`` -> 8, ``true`` -> True, ``[0, -200]`` -> list)."""
-    try:
-        return yaml.safe_load(text) if text.strip() else ""
-    except yaml.YAMLError:
-        return text

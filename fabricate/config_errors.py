@@ -1,48 +1,56 @@
 """Config error messages: ``file:line: key.path: value ...: what is allowed``.
 
 Turns a pydantic ``ValidationError`` into one line per problem (sorted by
-line), naming the YAML line of the key (found with ``yaml.compose``: the node
-tree only, no objects are built), the dotted key path, the value given, what
-is allowed, and a did-you-mean (difflib) for misspelt keys and choices.
+line), naming the YAML line of the key (from :mod:`fabricate.config_yaml`),
+the dotted key path, the value given (cut to :data:`SHORT` characters), what
+is allowed (a number key's range, from its schema field: :func:`field_range`),
+and a did-you-mean (difflib) for misspelt keys and choices.
 """
 from __future__ import annotations
 
 import difflib
+import re
 from pathlib import Path
-from typing import Any, get_args
+from typing import Any, get_args, get_origin
 
-import yaml
+import annotated_types as at
 from pydantic import BaseModel, ValidationError
+
+SHORT = 60
+"""Longest value repr quoted in a message (longer ones are cut with '...')."""
+
+
+def short(value: Any, limit: int = SHORT) -> str:
+    """``repr(value)``, cut to ``limit`` characters (a message quotes a value, not a file)."""
+    text = repr(value) if len(str(value)) <= 4 * limit else repr(str(value)[:limit])
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def printable(text: str) -> str:
+    """``text`` with every character that would break or hide a line escaped (``\\x1e``, ``\\u2028``)."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii") for c in text)
 
 
 def did_you_mean(word: str, allowed) -> str:
     """``" (did you mean 'x'?)"`` for the closest of ``allowed``, or ``""``."""
+    if len(str(word)) > 100:
+        return ""
     close = difflib.get_close_matches(str(word), [str(a) for a in allowed], n=1, cutoff=0.6)
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
 def key_lines(text: str) -> dict[tuple, int]:
-    """Map key paths to 1-based line numbers (from the YAML node tree; no objects built)."""
-    out: dict[tuple, int] = {}
+    """Map key paths to 1-based line numbers (bounded like every config read: see
+    :mod:`fabricate.config_yaml`); ``{}`` for text that is not a valid config."""
+    from optimize.errors import ConfigError
+
+    from .config_yaml import load_yaml
     try:
-        root = yaml.compose(text, Loader=yaml.SafeLoader)
-    except yaml.YAMLError:
-        return out
-
-    def walk(node, path):
-        if isinstance(node, yaml.MappingNode):
-            for k, v in node.value:
-                key = path + (k.value,)
-                out[key] = k.start_mark.line + 1
-                walk(v, key)
-        elif isinstance(node, yaml.SequenceNode):
-            for i, v in enumerate(node.value):
-                out[path + (i,)] = v.start_mark.line + 1
-                walk(v, path + (i,))
-
-    if root is not None:
-        walk(root, ())
-    return out
+        return load_yaml(text, "<text>")[1]
+    except ConfigError:
+        return {}
 
 
 def _clean_loc(loc: tuple) -> tuple:
@@ -84,18 +92,20 @@ def format_errors(exc: ValidationError, source: Path, lines: dict[tuple, int],
     errors = [dict(e, loc=_clean_loc(e["loc"])) for e in exc.errors(include_url=False)]
     for err in errors:
         loc = err["loc"]
-        key = ".".join(str(p) for p in loc) or "(top level)"
+        key = printable(".".join(str(p) for p in loc)) or "(top level)"
+        param = (err.get("ctx") or {}).get("param")
+        at = loc + ("params", param) if param else loc  # a design parameter: its own line
         if key in seen:  # one message per key (a union reports each alternative)
             continue
         if err["type"] == "literal_error" and any(
                 len(e["loc"]) > len(loc) and e["loc"][:len(loc)] == loc for e in errors):
             continue  # a list given where a word or a list is allowed: the list's error says more
         seen.add(key)
-        line = next((lines[loc[:i]] for i in range(len(loc), 0, -1) if loc[:i] in lines), None)
+        line = next((lines[at[:i]] for i in range(len(at), 0, -1) if at[:i] in lines), None)
         where = f"{source}:{line}" if line else str(source)
-        via = next((f" (from --set {k}={v!r})" for k, v in overrides.items()
+        via = next((f" (from --set {k}={short(v)})" for k, v in overrides.items()
                     if tuple(k.split(".")) == loc[:len(k.split("."))]), "")
-        messages.append((line or 0, f"{where}: {key}: {_message(err, loc, root)}{via}"))
+        messages.append((line or 0, printable(f"{where}: {key}: {_message(err, loc, root)}{via}")))
     messages = [m for _, m in sorted(messages, key=lambda m: m[0])]
     if len(messages) == 1:
         return messages[0]
@@ -112,17 +122,73 @@ def _message(err: dict, loc: tuple, root: type[BaseModel]) -> str:
     if kind == "missing":
         return "required key is missing"
     if kind == "string_pattern_mismatch":
-        return f"value {value!r}: expected letters, digits and _ . = + - only (it names a folder)"
+        return f"value {short(value)}: expected letters, digits and _ . = + - only (it names a folder)"
     if kind == "literal_error":
         expected = err.get("ctx", {}).get("expected", "")
-        return f"value {value!r} is not allowed{did_you_mean(value, _literal_values(expected))}; " \
+        return f"value {short(value)} is not allowed{did_you_mean(value, _literal_values(expected))}; " \
                f"expected one of {expected}"
     for a, b in (("Input should be", "expected"), ("List should have", "expected"),
                  ("Value error, ", ""), (" after validation", "")):
         msg = msg.replace(a, b)
+    msg = re.sub(r" or instance of \w+", "", msg)  # pydantic's words for a section given as a value
+    allowed = field_range(root, loc)
+    if allowed and kind in _RANGE_ERRORS:
+        msg = f"expected {allowed}"
+    if kind in ("int_type", "float_type", "bool_type") and isinstance(value, (bool, str)):
+        msg += f" (YAML reads {short(value)} as a {'string' if isinstance(value, str) else 'boolean'}" + (
+            ")" if kind == "bool_type" else ", not a number)")
     if isinstance(value, dict) or (isinstance(value, list) and kind not in ("too_short", "too_long")):
         return msg
-    return f"value {value!r}: {msg}"
+    return f"value {short(value)}: {msg}"
+
+
+_RANGE_ERRORS = {"greater_than", "greater_than_equal", "less_than", "less_than_equal", "finite_number",
+                 "int_type", "float_type", "int_parsing", "float_parsing"}
+
+
+def field_range(root: type[BaseModel], loc: tuple) -> str | None:
+    """``"6..256"`` / ``"(0, 200]"`` for the number key at ``loc`` (a list item: its list's items), or None."""
+    keys = tuple(p for p in loc if isinstance(p, str))
+    if not keys:
+        return None
+    section = _section_at(root, keys[:-1])
+    field = None
+    if section is not None:
+        field = section.model_fields.get(keys[-1]) or next(
+            (f for f in section.model_fields.values() if f.alias == keys[-1]), None)
+    if field is None:
+        return None
+    metadata = list(field.metadata)
+    if isinstance(loc[-1], int):  # an item: the bounds of the list's item type
+        metadata = [m for a in _annotations(field.annotation) for m in getattr(a, "__metadata__", ())]
+        metadata += [m for a in _annotations(field.annotation) for m in getattr(a, "metadata", ())]
+    lo = next(((m.ge, "[") for m in metadata if isinstance(m, at.Ge)), None) or \
+        next(((m.gt, "(") for m in metadata if isinstance(m, at.Gt)), None)
+    hi = next(((m.le, "]") for m in metadata if isinstance(m, at.Le)), None) or \
+        next(((m.lt, ")") for m in metadata if isinstance(m, at.Lt)), None)
+    if lo is None and hi is None:
+        return None
+    integer = int in _annotations(field.annotation)
+    if integer and lo and hi and lo[1] == "[" and hi[1] == "]":
+        return f"an integer in {number(lo[0])}..{number(hi[0])}"
+    left = f"{lo[1]}{number(lo[0])}" if lo else "(-inf"
+    right = f"{number(hi[0])}{hi[1]}" if hi else "inf)"
+    return f"{'an integer' if integer else 'a number'} in {left}, {right}"
+
+
+def number(x: float) -> str:
+    """``1e-12``, ``1e6``, ``200``: a bound as a person writes it."""
+    return f"{x:g}".replace("e+0", "e").replace("e+", "e").replace("e-0", "e-")
+
+
+def _annotations(annotation) -> list:
+    out, stack = [], [annotation]
+    while stack:
+        a = stack.pop()
+        out.append(a)
+        if get_origin(a) is not None or getattr(a, "__metadata__", None):
+            stack.extend(get_args(a))
+    return out
 
 
 def _literal_values(expected: str) -> list[str]:

@@ -30,6 +30,7 @@ from . import runfolder, stages
 from .config import RunConfig
 from .progress import NullProgress
 from .report.measures import collect_measures
+from .requirements import apply_requirements, warnings
 
 log = logging.getLogger(__name__)
 
@@ -120,7 +121,9 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
             ctx = RunContext(config=config, workdir=tmp, progress=progress)
             for name in STAGES[:-1]:
                 _run_stage(ctx, name)
-            ctx.values["measures"] = collect_measures(ctx)
+            tol = config.tolerances
+            ctx.values["measures"] = apply_requirements(collect_measures(ctx), ctx.get("structure"),
+                                                        tol.requirements, ctx["plan"]["target"], tol.beam_twist_mm)
             ctx.values["outcome"] = outcome(ctx)
             ctx.timings["before_report"] = time.perf_counter() - t_start
             _run_stage(ctx, "report")
@@ -188,7 +191,13 @@ def outcome(ctx: RunContext) -> dict[str, Any]:
         if skipped:
             parts.append(skipped)
     status = worst(found)
-    message = "; ".join(parts) if parts else "every tolerance reached"
+    if parts:
+        message = "; ".join(parts)
+    else:
+        built = ctx.get("parts")
+        warn = warnings(measures, built.report.get("limits") if built is not None else None)
+        message = "every requirement met" + (f"; {len(warn)} warning(s): " + "; ".join(warn)
+                                             if warn else ", every tolerance reached")
     failed = tol_failed + [f"check:{k}" for k in check_failed]
     return {"status": status, "exit_code": EXIT_CODES[status], "failed": failed, "message": message}
 

@@ -191,7 +191,11 @@ def count_parts(parts) -> int:
 # -- exports -------------------------------------------------------------------------
 EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl"),
            ("three_mf", "model.3mf", "write_3mf"), ("dxf", "outlines.dxf", "write_dxf"),
-           ("svg", "outlines.svg", "write_svg"), ("bom", "bom.csv", "write_bom"),
+           ("svg", "outlines.svg", "write_svg"), ("flat", "flat.json", "write_flat"),
+           ("schedules", "glass_schedule.csv", "write_glass_schedule"),
+           ("schedules", "steel_cut_list.csv", "write_steel_cut_list"),
+           ("schedules", "node_schedule.csv", "write_node_schedule"),
+           ("layout_plan", "layout_plan.dxf", "write_layout_plan"), ("bom", "bom.csv", "write_bom"),
            ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"), ("nc1", "nc1", "write_nc1"),
            ("gltf", "parts.glb", "write_parts_gltf"))
 
@@ -224,7 +228,7 @@ def stage_exports(ctx) -> str:
     if ctx.get("parts") is None:  # the CAD stage built nothing (folded panels): meshes only
         ctx.values["check"] = {"pass": None, "mode": "off", "checks": {}, "skipped": ctx.get("cad_skipped")}
         return f"{len(ctx.files)} files (no CAD files: {ctx.get('cad_skipped')})"
-    wanted = [(key, fname, fn) for key, fname, fn in EXPORTS if getattr(cfg.outputs, key)]
+    wanted = [(key, fname, fn) for key, fname, fn in EXPORTS if cfg.outputs.wanted(key)]
     for key, fname, fn in wanted:
         ctx.progress.advance("exports", 1, fname)
         try:
@@ -236,6 +240,12 @@ def stage_exports(ctx) -> str:
         except Exception as exc:  # an exporter bug or an OCC failure: exit 4, with the file named
             raise ExportError(f"{fname}: export failed: {type(exc).__name__}: {exc}") from exc
         ctx.files[fname] = dict(facts or {})
+    if cfg.outputs.wanted("cut_files"):  # one nested DXF and SVG per material and thickness
+        ctx.progress.advance("exports", 1, "nested cut files")
+        ctx.files.update(export.write_cut_files(ctx["parts"], out, cfg.outputs.nesting.model_dump()))
+    if cfg.outputs.stl_parts:  # one STL per part (a welding viewer fuses the touching parts of model.stl)
+        ctx.progress.advance("exports", 1, "one STL per part")
+        ctx.files["stl/"] = export.write_stl_parts(ctx["parts"], out / "stl")
     if not cfg.outputs.bom:  # the checks compare every file with the bill of materials
         ctx.values["check"] = {"pass": None, "mode": "off", "checks": {},
                                "skipped": "bom.csv was not written (outputs.bom: false)"}

@@ -62,19 +62,35 @@ class Design:
 
 # -- parameter checks ----------------------------------------------------------------
 
-def _int(design: str, key: str, value, lo: int, hi: int = 10 ** 6) -> int:
+def _int(design: str, key: str, value, lo: int, hi: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
         raise ConfigError(f"design {design}: parameter {key}={value!r}, expected an integer in {lo}..{hi}")
     return int(value)
 
 
-def _pos(design: str, key: str, value, zero: bool = False) -> float:
+MAX_SIZE_MM = 1e6
+"""Largest length parameter of a design (1 km): beyond it the numbers mean a mistake, not a roof."""
+MAX_NOISE = 1.0
+"""Largest ``noise`` (a fraction of the mean edge length)."""
+MAX_COUNT = 300
+"""Largest quad count along one direction of a design (300 x 300 = 90,000 quads, built in well
+under a second): the counts are bounded so that checking a config, which builds the design, stays
+cheap; the subdivided size is bounded by the config (``fabricate.config.MAX_FACES``)."""
+
+
+def _pos(design: str, key: str, value, zero: bool = False, hi: float = MAX_SIZE_MM) -> float:
+    """A finite number in ``(0, hi]`` (``[0, hi]`` with ``zero``); ConfigError naming the range."""
     ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
-        and np.isfinite(value) and (value >= 0 if zero else value > 0)
+        and bool(np.isfinite(value)) and (value >= 0 if zero else value > 0) and value <= hi
     if not ok:
-        raise ConfigError(f"design {design}: parameter {key}={value!r}, expected a "
-                          f"{'non-negative' if zero else 'positive'} number")
+        top = f"{hi:g}".replace("e+0", "e").replace("e+", "e")
+        raise ConfigError(f"design {design}: parameter {key}={value!r}, expected a number in "
+                          f"{'[0' if zero else '(0'}, {top}]")
     return float(value)
+
+
+def _noise(design: str, value) -> float:
+    return _pos(design, "noise", value, zero=True, hi=MAX_NOISE)
 
 
 def _noisy(mesh: Mesh, noise: float, seed: int) -> Mesh:
@@ -104,9 +120,9 @@ def railway_station(*, length: float = 80000.0, width: float = 24000.0, rise: fl
     L, W, H = (_pos(name, k, p[k]) for k in ("length", "width", "rise"))
     A = _pos(name, "wave", wave, zero=True)
     k = _int(name, "waves", waves, 0, 100)
-    nu, nv = _int(name, "nu", nu, 2, 500), _int(name, "nv", nv, 2, 500)
+    nu, nv = _int(name, "nu", nu, 2, MAX_COUNT), _int(name, "nv", nv, 2, MAX_COUNT)
     levels = _int(name, "levels", levels, 0, 6)
-    noise = _pos(name, "noise", noise, zero=True)
+    noise = _noise(name, noise)
 
     def lift(X, Y):
         s = np.sin(2 * np.pi * k * X / L)
@@ -161,10 +177,12 @@ def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 
     p = dict(locals())  # the parameters as given
     name = "trefoil_band"
     s, w = _pos(name, "scale", scale), _pos(name, "width", width)
+    if not isinstance(twist, (bool, np.bool_)):
+        raise ConfigError(f"design {name}: parameter twist={twist!r}, expected true or false")
     if w >= 1.2 * s:
         raise ConfigError(f"design {name}: parameter width={width!r}, expected less than 1.2 x scale "
                           f"= {1.2 * s:g} mm (wider bands run through the neighbouring strand)")
-    r = _int(name, "rulings", rulings, 6, 100000)
+    r = _int(name, "rulings", rulings, 6, 2000)
     levels = _int(name, "levels", levels, 0, 8)
     t = np.linspace(0.0, 2 * np.pi, r, endpoint=False)
     c, N, B, D = _frenet(t, s)
@@ -173,7 +191,7 @@ def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 
     else:  # nearly developable from the start: the optimizer moves little, no ruling collapses
         d = D
     mesh = strip_mesh(c - 0.5 * w * d, c + 0.5 * w * d, closed=True, twist=bool(twist), name=name)
-    mesh = _noisy(mesh, _pos(name, "noise", noise, zero=True), _int(name, "seed", seed, 0, 2 ** 31))
+    mesh = _noisy(mesh, _noise(name, noise), _int(name, "seed", seed, 0, 2 ** 31))
     return Design(name, mesh, levels, "chaikin", "strip",
                   f"{'Moebius' if twist else 'closed'} band along a trefoil knot, {r} control rulings", p)
 
@@ -207,12 +225,13 @@ def developable_strips(*, count: int = 4, rulings: int = 9, length: float = 8000
     """
     p = dict(locals())  # the parameters as given
     name = "developable_strips"
-    n = _int(name, "count", count, 1, 1000)
-    r = _int(name, "rulings", rulings, 3, 100000)
+    n = _int(name, "count", count, 1, 50)
+    r = _int(name, "rulings", rulings, 3, 2000)
     L, w = _pos(name, "length", length), _pos(name, "width", width)
     g, A = _pos(name, "gap", gap, zero=True), _pos(name, "amplitude", amplitude, zero=True)
-    if not np.isfinite(turn_deg):
-        raise ConfigError(f"design {name}: parameter turn_deg={turn_deg!r}, expected a finite number")
+    if isinstance(turn_deg, bool) or not isinstance(turn_deg, (int, float, np.integer, np.floating)) \
+            or not -90.0 <= turn_deg <= 90.0:
+        raise ConfigError(f"design {name}: parameter turn_deg={turn_deg!r}, expected a number in [-90, 90]")
     turn = np.radians(float(turn_deg))
     levels = _int(name, "levels", levels, 0, 8)
     k = 2 * np.pi / L  # wave number: one wave along the length
@@ -235,7 +254,7 @@ def developable_strips(*, count: int = 4, rulings: int = 9, length: float = 8000
         psi = _strip_psi(turn, A * k, th)
         d = (across + np.tan(psi)[:, None] * t)  # a ruling reaching `width` across the centre line
         strips.append(strip_mesh(centre - 0.5 * w * d, centre + 0.5 * w * d, name=f"{name}{i}"))
-    mesh = _noisy(join_meshes(strips, name=name), _pos(name, "noise", noise, zero=True),
+    mesh = _noisy(join_meshes(strips, name=name), _noise(name, noise),
                   _int(name, "seed", seed, 0, 2 ** 31))
     return Design(name, mesh, levels, "chaikin", "strip",
                   f"{n} wavy strips {L / 1000:g} m long, {w / 1000:g} m wide, turning {turn_deg:g} deg", p)
@@ -284,8 +303,8 @@ def hypar_roof(*, size: float = 12000.0, rise: float = 3000.0, n: int = 12, grid
     p = dict(locals())  # the parameters as given
     name = "hypar_roof"
     s, h = _pos(name, "size", size), _pos(name, "rise", rise)
-    n = _int(name, "n", n, 1, 2000)
-    if grid_kind not in ("parabolas", "rulings"):
+    n = _int(name, "n", n, 1, MAX_COUNT)
+    if not isinstance(grid_kind, str) or grid_kind not in ("parabolas", "rulings"):
         raise ConfigError(f"design {name}: parameter grid_kind={grid_kind!r}, "
                           "expected 'parabolas' or 'rulings'")
     u = np.linspace(-0.5 * s, 0.5 * s, n + 1)
@@ -297,7 +316,7 @@ def hypar_roof(*, size: float = 12000.0, rise: float = 3000.0, n: int = 12, grid
         a = np.stack([0.5 * u, 0.5 * u, 4 * h * u ** 2 / s ** 2], axis=1)
         b = np.stack([0.5 * u, -0.5 * u, -4 * h * u ** 2 / s ** 2], axis=1)
         m = translational(a, b, name=name)
-    mesh = _noisy(m, _pos(name, "noise", noise, zero=True), _int(name, "seed", seed, 0, 2 ** 31))
+    mesh = _noisy(m, _noise(name, noise), _int(name, "seed", seed, 0, 2 ** 31))
     return Design(name, mesh, 0, "catmull_clark", "conical",
                   f"hyperbolic paraboloid, {n} x {n} quads on its {grid_kind} grid", p)
 
@@ -316,9 +335,9 @@ def dome(*, radius: float = 10000.0, rise: float = 4000.0, meridians: int = 24, 
     p = dict(locals())  # the parameters as given
     name = "dome"
     R, h = _pos(name, "radius", radius), _pos(name, "rise", rise)
-    m = revolution(dome_profile(R, h, _int(name, "rings", rings, 2, 10000)),
-                   _int(name, "meridians", meridians, 3, 100000), name=name)
-    mesh = _noisy(m, _pos(name, "noise", noise, zero=True), _int(name, "seed", seed, 0, 2 ** 31))
+    m = revolution(dome_profile(R, h, _int(name, "rings", rings, 2, MAX_COUNT)),
+                   _int(name, "meridians", meridians, 3, MAX_COUNT), name=name)
+    mesh = _noisy(m, _noise(name, noise), _int(name, "seed", seed, 0, 2 ** 31))
     return Design(name, mesh, 0, "catmull_clark", "conical",
                   f"dome of revolution, {R / 1000:g} m radius, {h / 1000:g} m rise", p)
 
@@ -342,15 +361,15 @@ def torus_patch(*, major: float = 10000.0, minor: float = 4000.0, sweep_deg: flo
     R, r = _pos(name, "major", major), _pos(name, "minor", minor)
     if r >= R:
         raise ConfigError(f"design {name}: parameter minor={minor!r}, expected less than major={major!r}")
-    sweep, arc = _pos(name, "sweep_deg", sweep_deg), _pos(name, "arc_deg", arc_deg)
+    sweep, arc = _pos(name, "sweep_deg", sweep_deg, hi=360.0), _pos(name, "arc_deg", arc_deg, hi=360.0)
     if sweep > 360 or arc >= 360:
         raise ConfigError(f"design {name}: sweep_deg={sweep_deg!r}, arc_deg={arc_deg!r}, "
                           "expected at most 360 and less than 360")
-    nu, nv = _int(name, "nu", nu, 1, 100000), _int(name, "nv", nv, 1, 100000)
+    nu, nv = _int(name, "nu", nu, 1, MAX_COUNT), _int(name, "nv", nv, 1, MAX_COUNT)
     al = np.radians(np.linspace(-arc / 2, arc / 2, nv + 1))
     profile = np.stack([R + r * np.cos(al), r * np.sin(al)], axis=1)
     m = revolution(profile, nu if sweep == 360 else nu + 1, np.radians(sweep), name=name)
-    mesh = _noisy(m, _pos(name, "noise", noise, zero=True), _int(name, "seed", seed, 0, 2 ** 31))
+    mesh = _noisy(m, _noise(name, noise), _int(name, "seed", seed, 0, 2 ** 31))
     return Design(name, mesh, 0, "catmull_clark", "circular",
                   f"torus patch {sweep:g} deg x {arc:g} deg, radii {R / 1000:g} / {r / 1000:g} m", p)
 
@@ -373,7 +392,7 @@ def freeform_canopy(*, length: float = 30000.0, width: float = 20000.0, height: 
     p = dict(locals())  # the parameters as given
     name = "freeform_canopy"
     L, W, H = (_pos(name, k, p[k]) for k in ("length", "width", "height"))
-    k = _int(name, "bumps", bumps, 0, 1000)
+    k = _int(name, "bumps", bumps, 0, 100)
     seed = _int(name, "seed", seed, 0, 2 ** 31)
     rng = np.random.default_rng(seed)
     cx, cy = rng.uniform(0.2, 0.8, k) * L, rng.uniform(0.25, 0.75, k) * W
@@ -386,9 +405,9 @@ def freeform_canopy(*, length: float = 30000.0, width: float = 20000.0, height: 
             Z = Z + amp[i] * np.exp(-((X - cx[i]) ** 2 + (Y - cy[i]) ** 2) / (2 * sig[i] ** 2))
         return Z
 
-    m = grid(_int(name, "nu", nu, 2, 5000) + 1, _int(name, "nv", nv, 2, 5000) + 1, (L, W),
+    m = grid(_int(name, "nu", nu, 2, MAX_COUNT) + 1, _int(name, "nv", nv, 2, MAX_COUNT) + 1, (L, W),
              height=lift, name=name)
-    mesh = _noisy(m, _pos(name, "noise", noise, zero=True), seed + 1)
+    mesh = _noisy(m, _noise(name, noise), seed + 1)
     return Design(name, mesh, _int(name, "levels", levels, 0, 6), "catmull_clark", "conical",
                   f"height-field canopy {L / 1000:g} x {W / 1000:g} m with {k} bumps", p)
 

@@ -22,6 +22,7 @@ class Tolerances:
     cad_linear_mm : absolute, OpenCASCADE's modelling tolerance in mm.
     closeness : relative to the bounding-box diagonal, max distance to the
         reference surface (reported, not enforced by the optimizer).
+    beam_twist_mm : absolute, the largest twist of a beam a steel shop takes.
     """
 
     planarity: float = 1e-6
@@ -31,6 +32,7 @@ class Tolerances:
     beam_planarity: float = 1e-6
     cad_linear_mm: float = 1e-3
     closeness: float = 5e-3
+    beam_twist_mm: float = 1.0
 
     def replace(self, **changes: float) -> "Tolerances":
         """Return a copy with some thresholds changed."""

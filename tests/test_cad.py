@@ -111,10 +111,12 @@ def test_overlap_is_detected(parts):
 
 
 def test_flat_outlines_keep_edge_lengths_and_area(parts):
+    """The bevel reference line is the bearing face (panels) or the beam quad (beams, planar here)
+    moved rigidly into the sheet; the cut outline (``flat``) holds it and has the BOM's area."""
     for g in parts.groups:
-        P = g.vertices[:, list(g.faces[g.outline_face])]
+        P = g.vertices[:, list(g.ring)]
         e3 = np.linalg.norm(np.roll(P, -1, axis=1) - P, axis=2)
-        e2 = np.linalg.norm(np.roll(g.flat, -1, axis=1) - g.flat, axis=2)
+        e2 = np.linalg.norm(np.roll(g.bevel_ref, -1, axis=1) - g.bevel_ref, axis=2)
         np.testing.assert_allclose(e2, e3, rtol=0, atol=1e-9)
         np.testing.assert_allclose(polygon_area_2d(g.flat), g.area_mm2, rtol=1e-12)
         assert np.all(g.flat.min(axis=1) > -1e-9) and np.all(g.flat.max(axis=1) <= g.rect + 1e-9)

@@ -51,7 +51,7 @@ def test_minimal_config_fills_defaults_and_resolves_paths(folder):
 
 
 def test_tolerance_section_mirrors_the_tolerances_object():
-    assert set(TolerancesSection.model_fields) == set(Tolerances().as_dict())
+    assert set(TolerancesSection.model_fields) - {"requirements"} == set(Tolerances().as_dict())
 
 
 def test_units_scale_and_overrides(folder):
@@ -104,13 +104,13 @@ CASES = {
     "bad choice": ("input: {mesh: ../data/grid.obj}\noptimize: {method: sqpp}\n",
                    ["job.yaml:2", "optimize.method", "'sqpp'", "did you mean 'sqp'", "'penalty'"]),
     "bad number": ("input: {mesh: ../data/grid.obj}\nparts:\n  glass_thickness: thick\n",
-                   ["job.yaml:3", "parts.glass_thickness", "'thick'", "valid number"]),
+                   ["job.yaml:3", "parts.glass_thickness", "'thick'", "expected a number in (0, 200]"]),
     "out of range": ("input: {mesh: ../data/grid.obj}\noptimize: {max_iter: 0}\n",
-                     ["optimize.max_iter", "value 0", "greater than or equal to 1"]),
+                     ["optimize.max_iter", "value 0", "an integer in 1..10000"]),
     "negative gap": ("input: {mesh: ../data/grid.obj}\nparts: {joint_gap: -1}\n",
-                     ["parts.joint_gap", "value -1", "greater than or equal to 0"]),
+                     ["parts.joint_gap", "value -1", "a number in [0, 1000]"]),
     "zero tolerance": ("input: {mesh: ../data/grid.obj}\ntolerances: {planarity: 0}\n",
-                       ["tolerances.planarity", "value 0", "greater than 0"]),
+                       ["tolerances.planarity", "value 0", "a number in [1e-12, 1]"]),
     "missing input": ("name: x\n", ["job.yaml", "input", "required key is missing"]),
     "two inputs": ("input: {mesh: ../data/grid.obj, control: ../data/grid.obj}\n",
                    ["job.yaml:1", "input", "exactly one of shape, mesh, control, surface", "mesh, control"]),
@@ -126,7 +126,7 @@ CASES = {
     "zero side": ("input: {surface: ../data/grid.obj, edge_length: 2, side: [0, 0, 0]}\n",
                   ["input", "side [0.0, 0.0, 0.0]", "nonzero"]),
     "negative radius": ("input: {surface: ../data/grid.obj, edge_length: 2, radius: -1}\n",
-                        ["input.radius", "value -1", "greater than 0"]),
+                        ["input.radius", "value -1", "a number in (0, 1e7]"]),
     "side without surface": ("input: {mesh: ../data/grid.obj, side: keep}\n",
                              ["input", "side applies only to a surface"]),
     "irregular without surface": ("input: {mesh: ../data/grid.obj, irregular: faces}\n",
@@ -199,3 +199,26 @@ def test_override_errors_name_the_set_option(folder):
     assert "from --set parts.glas_thickness=8" in message
     message = error_of(path, overrides={"input.mesh.x": 1})
     assert "input.mesh is" in message and "not a section" in message
+
+
+def test_reference_config_states_every_range():
+    """Every key with a range has it on its line of configs/reference.yaml, as the messages write it."""
+    from fabricate.config_errors import field_range
+    lines = (REPO / "configs" / "reference.yaml").read_text().splitlines()
+    checked = 0
+    for section, field in RunConfig.model_fields.items():
+        model = next((a for a in getattr(field.annotation, "__args__", (field.annotation,))
+                      if hasattr(a, "model_fields")), None)
+        keys = [(section, k.alias or n) for n, k in model.model_fields.items()] if model else [(section,)]
+        for loc in keys:
+            allowed = field_range(RunConfig, loc) or field_range(RunConfig, loc + (0,))
+            if allowed is None:
+                continue
+            text = allowed.split(" in ", 1)[1]
+            start = next(i for i, ln in enumerate(lines) if ln.startswith(f"{loc[0]}:"))
+            at = start if len(loc) == 1 else next(
+                i for i in range(start + 1, len(lines)) if lines[i].lstrip("# ").startswith(f"{loc[1]}:"))
+            block = " ".join(lines[at:at + 2])
+            assert text in block, (loc, text, block)
+            checked += 1
+    assert checked >= 20

@@ -120,7 +120,7 @@ def test_3mf_round_trip_names_and_vertices(parts, tmp_path):
         assert len(T) == sum(len(f) - 2 for f in p.faces)
 
 
-def test_dxf_outlines_equal_the_step_faces(parts, step_file, tmp_path):
+def test_dxf_outlines_are_the_flat_outlines_and_the_step_faces_lie_in_them(parts, step_file, tmp_path):
     facts = write_dxf(parts, tmp_path / "o.dxf")
     assert facts["outlines"] == len(parts.panels) + len(parts.beams) and "audit clean" in facts["audit"]
     outlines, info = read_outlines(tmp_path / "o.dxf")
@@ -128,16 +128,24 @@ def test_dxf_outlines_equal_the_step_faces(parts, step_file, tmp_path):
     assert sorted(outlines) == sorted(p.id for p in parts.panels + parts.beams)
     solids = dict(read_step(step_file[0])[0])
     for pid, Q in outlines.items():
-        fi, rel, err = match_outline(Q, face_polygons(solids[pid]))
         part = parts.by_id[pid]
-        assert fi >= 0 and rel < 1e-12 and err < 1e-9
-        assert len(Q) == len(part.faces[part.group.outline_face])
+        flat3 = np.concatenate([part.flat, np.zeros((len(part.flat), 1))], axis=1)
+        fi, rel, err = match_outline(Q, [flat3])
+        assert fi == 0 and rel < 1e-12 and err < 1e-9
+        # every corner of the STEP solid, seen in the part frame, lies inside the cut outline
+        M = part.transform
+        X = np.concatenate(face_polygons(solids[pid]))
+        local = (X - M[:3, 3]) @ M[:3, :3]
+        F = part.flat
+        E = np.roll(F, -1, axis=0) - F
+        cross = E[:, None, 0] * (local[None, :, 1] - F[:, None, 1]) - E[:, None, 1] * (local[None, :, 0] - F[:, None, 0])
+        assert (cross / np.linalg.norm(E, axis=1)[:, None]).min() > -1e-6
 
 
 @pytest.mark.parametrize("sheet", [(7000.0, 3000.0), (3000.0, 7000.0)])
 def test_nesting_packs_parts_on_sheets_without_overlap(parts, sheet):
     lay = layout(parts, sheet=sheet, spacing=15.0)
-    assert lay.rotated.any() == (sheet[0] < sheet[1])
+    assert "rectpack" in lay.algorithm
     W, H = lay.size
     assert lay.sheets >= 1 and np.all((lay.utilisation > 0) & (lay.utilisation <= 1))
     rect = np.array([parts.by_id[i].rect for i in lay.ids])
@@ -151,10 +159,26 @@ def test_nesting_packs_parts_on_sheets_without_overlap(parts, sheet):
         apart = ((x1[:, None] + 15 <= x0[None, :] + 1e-9) | (x1[None, :] + 15 <= x0[:, None] + 1e-9)
                  | (y1[:, None] + 15 <= y0[None, :] + 1e-9) | (y1[None, :] + 15 <= y0[:, None] + 1e-9))
         assert np.all(apart | np.eye(len(i), dtype=bool))
+    assert np.all(lay.rotated[rect[:, 0] > W - 30])  # too long for the sheet: turned
     area = sum(parts.by_id[i].area_mm2 for i in lay.ids)
     assert lay.utilisation.sum() * W * H == pytest.approx(area)
     with pytest.raises(ConfigError, match="does not fit"):
         layout(parts, sheet=(500.0, 400.0))
+
+
+def test_nesting_keeps_the_kerf_and_turns_no_part_when_rotation_is_off(parts):
+    lay = layout(parts, sheet=(7000.0, 3000.0), spacing=20.0, kerf=4.0, rotation=False)
+    assert not lay.rotated.any() and lay.facts()["kerf_mm"] == 4.0
+    rect = np.array([parts.by_id[i].rect for i in lay.ids])
+    for s in range(lay.sheets):
+        i = np.nonzero(lay.sheet == s)[0]
+        x0, y0, x1, y1 = lay.x[i], lay.y[i], lay.x[i] + rect[i, 0], lay.y[i] + rect[i, 1]
+        apart = ((x1[:, None] + 4 <= x0[None, :] + 1e-9) | (x1[None, :] + 4 <= x0[:, None] + 1e-9)
+                 | (y1[:, None] + 4 <= y0[None, :] + 1e-9) | (y1[None, :] + 4 <= y0[:, None] + 1e-9))
+        assert np.all(apart | np.eye(len(i), dtype=bool))
+    assert [f["id"] for f in lay.facts()["per_sheet"]][:1] == ["S-S01"]
+    with pytest.raises(ConfigError, match="rotation not allowed"):
+        layout(parts, sheet=(3000.0, 7000.0), rotation=False)
 
 
 def test_svg_has_one_group_per_flat_part(parts, tmp_path):

@@ -9,10 +9,11 @@ from cad_fixtures import dome_structure
 from fabricate.cad import PartSpec, build_parts
 from fabricate.check import check_outputs
 from fabricate.cli import main
-from fabricate.export import write_3mf, write_bom, write_dxf, write_step, write_stl, write_svg
+from fabricate.export import write_3mf, write_bom, write_dxf, write_flat, write_step, write_stl, write_svg
 
 FILES = (("model.step", write_step), ("model.stl", write_stl), ("model.3mf", write_3mf),
-         ("outlines.dxf", write_dxf), ("outlines.svg", write_svg), ("bom.csv", write_bom))
+         ("outlines.dxf", write_dxf), ("outlines.svg", write_svg), ("flat.json", write_flat),
+         ("bom.csv", write_bom))
 
 
 def _write(parts, folder):
@@ -43,6 +44,8 @@ def test_a_written_run_passes_every_check(run_dir, parts):
     assert c["bearing"]["pairs"] == sum(len([n for n in p.neighbours if n[0] == "B"]) for p in parts.panels)
     assert c["dxf"]["outlines"] == len(parts.panels) + len(parts.beams) and c["dxf"]["audit_errors"] == 0
     assert c["svg"]["pass"]
+    assert c["flat"]["pass"] and c["flat"]["against"] == "step" and c["flat"]["parts"] == c["dxf"]["expected"]
+    assert c["flat"]["hausdorff_mm_max"] < 1e-6
 
 
 def test_cli_check_exit_codes(run_dir, tmp_path, capsys):

@@ -289,7 +289,7 @@ def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
     made = surfaces.holed_roof(scale=6000.0)  # the shipped file is what the docstring says it is
     assert shipped.n_faces == made.n_faces and abs(shipped.V - made.V).max() < 1e-6
     cfg = load_config(REPO / "configs" / "atrium_roof.yaml",
-                      {"outputs.pictures": "false", "outputs.html": "false", "outputs.3mf": "false"})
+                      {"outputs.pictures": False, "outputs.html": False, "outputs.3mf": False})
     summary = run_pipeline(cfg, tmp_path)
     assert summary.exit_code == 0 and summary.status == "ok", summary.message
     out = tmp_path / "atrium_roof"

@@ -46,6 +46,9 @@ FACES = ((4, 5, 6, 7), (8, 11, 10, 9), (0, 1, 5, 4), (0, 8, 9, 1), (3, 7, 6, 2),
          (0, 4, 7, 3), (0, 3, 11, 8), (1, 2, 6, 5), (1, 9, 10, 2))
 FACE_NAMES = ("F+", "F-", "T0+", "T0-", "T1+", "T1-", "Ea+", "Ea-", "Eb+", "Eb-")
 OUTLINE_FACE, BEVEL_FACE = 0, 1
+RING = (0, 1, 2, 3)
+"""The flat outline of a beam: its centre line corners (the ridge under the glass, the V tips on the
+node axes, the bottom ridge), counter-clockwise seen from the ``+`` side; edge 0 is the glass side."""
 
 
 def beam_planes(structure) -> dict[str, np.ndarray]:

@@ -15,9 +15,11 @@ import numpy as np
 
 from optimize.errors import ConfigError, MeshError
 
-from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, beam_planes, beam_solids
+from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, RING, beam_planes, beam_solids
 from .diagnose import CONVEX_MIN, beam_hint, min_turn, panel_failure
-from .geometry import dot, flat_frame, min_area_rectangle, polygon_area_normal, rotate2d, to_plane, unit, volumes
+from .flat import flat_data
+from .limits import check_limits
+from .geometry import dot, polygon_area_2d, unit, volumes
 from .nodes import node_solids
 from .parts import PartGroup, Parts, part_ids
 from .spec import PartSpec
@@ -64,6 +66,9 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                              np.zeros(len(f)), nb, spec))
     beams = beam_solids(structure, P0, spec.beam_width, spec.node_radius, s_beam)
     e = np.arange(len(topo.edges))
+    Qb = bp["quad"]  # the beam's edge at the last layer as a fraction of it at the first (< 0: reversed)
+    shrink = dot(Qb[:, 2] - Qb[:, 3], Qb[:, 1] - Qb[:, 0]) / np.maximum(dot(Qb[:, 1] - Qb[:, 0],
+                                                                            Qb[:, 1] - Qb[:, 0]), 1e-300)
     X = beams["vertices"]
     along = unit(X[:, 1] - X[:, 0])
     proj = dot(X, along[:, None, :])
@@ -73,7 +78,8 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
         nb.append(tuple(pid[sorted({fp, fm})]) + tuple(bid[sorted(set(others))])
                   + (tuple(nid[topo.edges[i]]) if with_nodes else ()))
     _validate("beam", bid, e, X, FACES, beams["normals"],
-              lambda i: beam_hint(float(beams["planarity_mm"][i]), spec.beam_width))
+              lambda i: beam_hint(float(beams["planarity_mm"][i]), spec.beam_width, float(shrink[i]),
+                                  abs(d[-1] - d[0])))
     groups.append(_group("beam", bid, e, X, FACES, beams["normals"], OUTLINE_FACE, BEVEL_FACE,
                          beams["planarity_mm"], np.full(len(e), spec.beam_width),
                          proj.max(axis=1) - proj.min(axis=1), nb, spec))
@@ -90,6 +96,7 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                              np.zeros(len(v)), np.full(len(v), 2 * spec.node_radius), nodes["length"], nb, spec))
         node_facts = {"theta_max_deg": float(np.degrees(nodes["theta_max"].max()))}
     report = _report(groups, spec, mode, s_beam, d, beams, node_facts)
+    report["limits"] = check_limits(groups, spec)
     return Parts(groups=tuple(groups), spec=spec, edge_mode=mode, report=report, mesh=mesh)
 
 
@@ -126,22 +133,15 @@ def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thi
     for fi, face in enumerate(faces):  # loop over the faces of one combinatorial type
         h = dot(V[:, list(face)], normals[:, fi][:, None, :])
         residual = np.maximum(residual, h.max(axis=1) - h.min(axis=1))
-    P = V[:, list(faces[outline])]
-    origin, ex, ey = flat_frame(P, normals[:, outline])
-    Q = to_plane(P, origin, ex, ey)
-    Qb = to_plane(V[:, list(faces[bevel])], origin, ex, ey) if bevel >= 0 else None
-    both = Q if Qb is None else np.concatenate([Q, Qb], axis=1)
-    ang, _, _ = min_area_rectangle(both)
-    Q = rotate2d(Q, ang)
-    both = rotate2d(both, ang)
-    low = both.min(axis=1, keepdims=True)
-    Q = Q - low
-    Qb = None if Qb is None else rotate2d(Qb, ang) - low
-    rect = (both - low).max(axis=1)
-    area, _ = polygon_area_normal(P)
+    ring = RING if kind == "beam" else tuple(faces[outline])
+    fd = flat_data(V, normals, faces, ring, outline, bevel)
+    area = polygon_area_2d(fd["outline"])
     return PartGroup(kind=kind, ids=tuple(str(i) for i in ids), element=element, vertices=V, faces=tuple(faces),
-                     normals=normals, volume_mm3=vol, outline_face=outline, bevel_face=bevel, flat=Q,
-                     flat_bevel=Qb, rect=rect, area_mm2=area, length_mm=np.asarray(length, dtype=float),
+                     normals=normals, volume_mm3=vol, outline_face=outline, bevel_face=bevel, flat=fd["outline"],
+                     flat_bevel=fd["bottom_flat"] if kind != "beam" else fd["top_flat"], rect=fd["rect"],
+                     bevel_ref=fd["ref"], bevel_ref_z=fd["ref_z"], bevel_deg=fd["bevel_deg"],
+                     transform=fd["transform"],
+                     flat_faces=(fd["top_flat"], fd["bottom_flat"]), cuts=fd["cuts"], ring=ring, area_mm2=area, length_mm=np.asarray(length, dtype=float),
                      thickness_mm=np.asarray(thickness, dtype=float),
                      planarity_mm=np.asarray(planarity, dtype=float), residual_mm=residual,
                      neighbours=tuple(tuple(str(x) for x in nb) for nb in neighbours))

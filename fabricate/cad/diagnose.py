@@ -108,8 +108,16 @@ def panel_failure(ids, faces_index, face_name: str, turn: float, P: np.ndarray, 
                        "quads regular (design parameters, optimize.fairness) avoids them")
 
 
-def beam_hint(planarity_mm: float, width: float) -> str:
-    """What to change for a beam that folds, given how far its quad is off its plate's mid-plane."""
+def beam_hint(planarity_mm: float, width: float, shrink: float = 1.0, depth: float = 0.0) -> str:
+    """What to change for a beam that folds, given how far its quad is off its plate's mid-plane,
+    ``shrink`` (its edge at the last layer over its edge at the first, negative when reversed) and
+    ``depth`` (mm, first to last layer)."""
+    if shrink < 0.25 and depth > 0:  # the node axes of its ends meet within the beam's depth
+        zero = depth / (1.0 - shrink) if shrink < 1.0 else depth
+        what = "reversed" if shrink < 0 else f"{shrink:.0%} of its length"
+        return (f"the node axes of its two ends meet about {zero:.0f} mm from the glass, within the beam depth "
+                f"of {depth:g} mm (its edge at the last layer is {what}): the beams are deeper than the "
+                "surface's curvature allows there; reduce parts.beam_depth (or the last of offset.distances)")
     if planarity_mm > 0.25 * width:
         return (f"its quad twists: corners up to {planarity_mm:.1f} mm off the plate's mid-plane (beam width "
                 f"{width:g} mm), the mesh is not conical there; optimize.target: conical makes the beams "

@@ -46,11 +46,26 @@ class PartGroup:
         the beams; beams: the face on their ``+`` side; nodes: the cap).
     bevel_face : index of the parallel opposite face (drawn as a second
         outline in the plane of the first), or -1.
-    flat : (p, k, 2) float, mm: the outline face in its own plane, rotated so
-        its smallest bounding rectangle is axis-aligned (a rigid motion: exact
-        edge lengths), seen from outside the part (counter-clockwise).
-    flat_bevel : (p, k2, 2) float or None: the bevel face in the same frame.
-    rect : (p, 2) float: width >= height of that bounding rectangle.
+    flat : (p, k, 2) float, mm: the true outline the shop cuts (panel: the face
+        bearing on the beams; beam: its full profile with the V ends reaching the
+        node axes and the ridge under the glass), in the part frame of
+        :mod:`fabricate.cad.flat`: rotated so its smallest bounding rectangle is
+        axis-aligned (a rigid motion: exact edge lengths), seen from outside
+        (counter-clockwise).
+    flat_bevel : (p, k2, 2) float or None: the bevel line drawn dashed (panel: the opposite
+        face; beam: its ``+`` plate face, where the bevels of the ``+`` side end).
+    rect : (p, 2) float: width >= height of a rectangle (axis-aligned in the flat frame)
+        that holds every vertex of the part: the stock it is cut from.
+    bevel_ref : (p, k, 2) float: the line each edge's bevels are measured from (panel: the
+        bearing face; beam: its ridges and V tips), edge ``j`` of it under edge ``j`` of ``flat``.
+    bevel_ref_z : (p, k) float: height of each of its corners in the part frame (the sheet
+        is ``-thickness <= z <= 0``; panels 0, beams about ``-thickness / 2``).
+    bevel_deg : (p, k, 2) float: per edge, the cut face's angle from square on the ``+z`` and
+        ``-z`` side, positive when the part narrows toward that face (:mod:`fabricate.cad.flat`).
+    transform : (p, 4, 4) float: part frame -> model (mm), rigid.
+    flat_faces : the two sheet faces ``((p, kt, 2), (p, kb, 2))`` in the part frame.
+    cuts : (k, 2) int: the face cut along each outline edge [+z side, -z side].
+    ring : the vertices of ``bevel_ref`` (panel: the bearing face; beam: its centre line).
     area_mm2, length_mm, thickness_mm : (p,) float: outline area, length along
         the part (0 for panels), thickness across the outline plane.
     planarity_mm : (p,) float: how far the source polygon (mesh face at the
@@ -73,6 +88,13 @@ class PartGroup:
     flat: np.ndarray
     flat_bevel: np.ndarray | None
     rect: np.ndarray
+    bevel_ref: np.ndarray
+    bevel_ref_z: np.ndarray
+    bevel_deg: np.ndarray
+    transform: np.ndarray
+    flat_faces: tuple
+    cuts: np.ndarray
+    ring: tuple[int, ...]
     area_mm2: np.ndarray
     length_mm: np.ndarray
     thickness_mm: np.ndarray
@@ -124,7 +146,7 @@ class Part:
     def __getattr__(self, name: str) -> Any:
         if name in ("volume_mm3", "area_mm2", "length_mm", "thickness_mm", "planarity_mm", "residual_mm"):
             return float(getattr(self.group, name)[self.index])
-        if name in ("flat", "rect", "normals", "neighbours"):
+        if name in ("flat", "rect", "normals", "neighbours", "bevel_ref", "bevel_ref_z", "bevel_deg", "transform"):
             return getattr(self.group, name)[self.index]
         raise AttributeError(name)
 
@@ -183,6 +205,27 @@ class Parts:
         lo = np.min([g.vertices.reshape(-1, 3).min(axis=0) for g in self.groups], axis=0)
         hi = np.max([g.vertices.reshape(-1, 3).max(axis=0) for g in self.groups], axis=0)
         return np.stack([lo, hi])
+
+    def to_build123d(self, kinds=KINDS):
+        """A labelled build123d assembly to continue modelling with: a ``Compound`` labelled ``model``
+        with one child ``Compound`` per kind (``panels``, ``beams``, ``nodes``) holding one
+        ``Solid`` per part, labelled with its id and coloured by kind (the same exact B-rep solids
+        as ``model.step``: one plane per face, shared edges)."""
+        from build123d import Color, Compound, Solid
+
+        from fabricate.export.brep import group_solids
+
+        children = []
+        for kind in kinds:
+            solids = []
+            for g in self.of_kind(kind):
+                for pid, shape in zip(g.ids, group_solids(g)):  # one wrapper per part
+                    solid = Solid(shape)
+                    solid.label, solid.color = pid, Color(*COLOURS[kind])
+                    solids.append(solid)
+            if solids:
+                children.append(Compound(label=kind + "s", children=solids))
+        return Compound(label="model", children=children)
 
     def local_origin(self) -> np.ndarray:
         """(3,) float: an offset that brings a far-from-origin model near the origin.

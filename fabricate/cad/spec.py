@@ -10,6 +10,32 @@ EDGE_OPTIONS = ("auto", "axis", "perpendicular")
 
 
 @dataclass(frozen=True)
+class Limits:
+    """What the shops can make (mm, degrees, kg); parts beyond them are flagged by id.
+
+    min_corner_deg : smallest panel corner a glass supplier cuts without a special order.
+    min_edge_mm : shortest panel or beam outline edge.
+    sheet_mm : the largest glass sheet (jumbo / PLF 6000 x 3210): a panel's stock rectangle must fit.
+    max_panel_kg : heaviest panel the site can lift into place.
+    """
+
+    min_corner_deg: float = 30.0
+    min_edge_mm: float = 50.0
+    sheet_mm: tuple[float, float] = (6000.0, 3210.0)
+    max_panel_kg: float = 250.0
+
+    def __post_init__(self) -> None:
+        for key in ("min_corner_deg", "min_edge_mm", "max_panel_kg"):
+            value = getattr(self, key)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise ConfigError(f"parts.limits.{key} = {value!r}: expected a number >= 0")
+        sheet = tuple(self.sheet_mm)
+        if len(sheet) != 2 or not all(isinstance(v, (int, float)) and v > 0 for v in sheet):
+            raise ConfigError(f"parts.limits.sheet_mm = {self.sheet_mm!r}: expected [width, height] > 0 (mm)")
+        object.__setattr__(self, "sheet_mm", (float(max(sheet)), float(min(sheet))))
+
+
+@dataclass(frozen=True)
 class PartSpec:
     """Dimensions of panels, beams and nodes (mm) and densities (kg/m3).
 
@@ -31,6 +57,8 @@ class PartSpec:
         node axis, and the beams stop short of it.
     node_sides : number of sides of the node prism (a polygonal cylinder, so
         that STEP, STL and the analytic volume describe the same solid).
+    steel_grade : written on the steel cut list (EN 10025 grade, e.g. S355).
+    limits : :class:`Limits` the parts are held to (flagged in the report).
     """
 
     glass_thickness: float = 10.0
@@ -42,8 +70,12 @@ class PartSpec:
     density_glass: float = 2500.0
     density_steel: float = 7850.0
     node_sides: int = 24
+    steel_grade: str = "S355"
+    limits: Limits = Limits()
 
     def __post_init__(self) -> None:
+        if isinstance(self.limits, dict):
+            object.__setattr__(self, "limits", Limits(**self.limits))
         positive = ("glass_thickness", "beam_width", "beam_depth", "density_glass", "density_steel")
         for key in positive:
             value = getattr(self, key)

@@ -15,7 +15,9 @@ def register(sub) -> None:
                "more on its own. 130 interrupted (workers stopped, temporary folders removed).")
     p.add_argument("configs", nargs="+", metavar="CONFIG", help="YAML run configurations")
     p.add_argument("--set", metavar="KEY=V1[,V2...]", action="append", default=[], dest="sets",
-                   help="override / sweep a config value (repeatable; the sweep is the product of all)")
+                   help="override / sweep a config value (repeatable; the sweep is the product of all); a list "
+                        "key's comma list is one list (offset.distances=0,-200), bracket lists to sweep "
+                        "them (offset.distances=[0,-200],[0,-300])")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="parallel worker processes (default: one per core, at most one per job)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,

@@ -23,7 +23,8 @@ def register(sub) -> None:
     p.add_argument("--out", metavar="DIR", default="outputs",
                    help="parent folder of the run folder (default: ./outputs)")
     p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], dest="sets",
-                   help="override a config value, e.g. --set parts.glass_thickness=8 (repeatable)")
+                   help="override a config value, e.g. --set parts.glass_thickness=8 (repeatable); a list key "
+                        "takes a comma list: --set offset.distances=0,-200")
     p.add_argument("--force", action="store_true",
                    help="replace an earlier finished run in OUT/<name>/ (never a folder this tool did "
                         "not write, nor one with files added or changed since)")

@@ -37,8 +37,14 @@ def run(args) -> int:
     design = DESIGNS[args.name](**params)
     mesh = design.mesh
     if args.refined and design.levels:
+        from fabricate.config_design import MAX_FACES, subdivided_faces
         from optimize.subdivision import subdivide
 
+        if subdivided_faces(mesh.n_faces, design.scheme, design.levels) > MAX_FACES:
+            raise ConfigError(f"fabricate shapes {args.name} --refined: {mesh.n_faces:,} faces and {design.levels} "
+                              f"rounds of {design.scheme} make about "
+                              f"{subdivided_faces(mesh.n_faces, design.scheme, design.levels):,} faces, more than "
+                              f"{MAX_FACES:,}; expected smaller counts or --param levels=...")
         mesh, _ = subdivide(mesh, design.scheme, design.levels)
     if args.output is None:
         print(f"{design.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces ({design.units}); "

@@ -2,15 +2,17 @@
 
 IFC and .3dm load their libraries (ifcopenshell, rhino3dm) only when called."""
 from .bom import write_bom
+from .cutfiles import write_cut_files, write_layout_plan
 from .dxf import write_dxf
+from .flatdata import write_flat
 from .gltf import write_parts_gltf
 from .nc1 import write_nc1
 from .nesting import Layout, layout
+from .schedules import write_glass_schedule, write_node_schedule, write_steel_cut_list
 from .step import write_step
-from .stl import write_stl
+from .stl import write_stl, write_stl_parts
 from .svg import write_svg
 from .threemf import write_3mf
-
 
 
 def write_ifc(parts, path, **kwargs) -> dict:
@@ -27,4 +29,6 @@ def write_3dm(parts, path, **kwargs) -> dict:
     return write(parts, path, **kwargs)
 
 
-__all__ = ["write_ifc", "write_3dm", "write_nc1", "write_parts_gltf", "Layout", "layout", "write_3mf", "write_bom", "write_dxf", "write_step", "write_stl", "write_svg"]
+__all__ = ["Layout", "layout", "write_3dm", "write_3mf", "write_bom", "write_cut_files", "write_dxf", "write_flat",
+           "write_glass_schedule", "write_ifc", "write_layout_plan", "write_nc1", "write_node_schedule",
+           "write_parts_gltf", "write_steel_cut_list", "write_step", "write_stl", "write_stl_parts", "write_svg"]

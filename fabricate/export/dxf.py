@@ -1,9 +1,12 @@
 """DXF (R2010, mm) of the flat outlines of every panel and beam, laid out or nested.
 
-Layers: ``CUT`` the outline (the panel face bearing on the beams; the beam
-face on its ``+`` side), ``BEVEL`` (dashed) the parallel opposite face where
-it differs (bevelled edges), ``ETCH`` the id (TEXT) and the orientation
-arrow, ``SHEET`` the stock sheets when nested.  Every CUT outline carries
+Layers: ``CUT`` the outline to cut from sheet (``PartGroup.flat``: the
+whole part seen from above, the V ends and ridges of a beam included),
+``BEVEL`` (dashed) the bevel reference line and the two sheet faces' outlines
+where they differ from the cut, and each edge's bevel angles as TEXT
+(``+a/-b`` degrees from square on the upper / lower side, ``+a`` for one
+plane through the thickness, none for a square edge), ``ETCH`` the id (TEXT)
+and the orientation arrow, ``SHEET`` the stock sheets when nested.  Every CUT outline carries
 the part id as XDATA (application ``CONICAL_FAB``, group 1000), so CAM
 software and ``fabricate check`` can pair it with the STEP solid.
 
@@ -30,7 +33,8 @@ from optimize.errors import ExportError
 from .flat import flat_group
 from .nesting import Layout, layout as make_layout, sheet_gap
 
-LAYERS = {"CUT": 1, "BEVEL": 3, "ETCH": 5, "SHEET": 8}
+LAYERS = {"CUT": 1, "INNER": 2, "BEVEL": 3, "ETCH": 5, "SHEET": 8}
+"""INNER holds inner contours (holes); the parts built today have none, the layer is there for CAM set-ups."""
 APPID = "CONICAL_FAB"
 AUDIT_SAMPLE = 24
 
@@ -53,7 +57,8 @@ def _skeleton(lay: Layout):
             x0 = s * step
             msp.add_lwpolyline([(x0, 0), (x0 + W, 0), (x0 + W, H), (x0, H)], close=True,
                                dxfattribs={"layer": "SHEET"})
-            msp.add_text(f"sheet {s + 1}: {W:g} x {H:g} mm, {100 * lay.utilisation[s]:.1f} % used",
+            msp.add_text(f"{lay.sheet_id(s)}: {W:g} x {H:g} mm, margin {lay.margin:g} mm, kerf {lay.kerf:g} mm, "
+                         f"{int((lay.sheet == s).sum())} parts, yield {100 * lay.utilisation[s]:.1f} %",
                          height=0.01 * W, dxfattribs={"layer": "SHEET", "insert": (x0, H + 0.01 * W)})
     return doc
 
@@ -66,8 +71,10 @@ def _polyline(layer: str, k: int, closed: bool, xdata: bool) -> str:
     return head + " 10\n%.17g\n 20\n%.17g\n" * k + tail
 
 
-TEXT = ("  0\nTEXT\n  5\n%s\n330\n%s\n100\nAcDbEntity\n  8\nETCH\n100\nAcDbText\n 10\n%.17g\n 20\n%.17g\n 30\n0.0\n"
+TEXT_TEMPLATE = ("  0\nTEXT\n  5\n%s\n330\n%s\n100\nAcDbEntity\n  8\n{layer}\n100\nAcDbText\n 10\n%.17g\n 20\n%.17g\n 30\n0.0\n"
         " 40\n%.6g\n  1\n%s\n 72\n1\n 11\n%.17g\n 21\n%.17g\n 31\n0.0\n100\nAcDbText\n 73\n2\n")
+TEXT = TEXT_TEMPLATE.replace("{layer}", "ETCH")
+ANGLE_TEXT = TEXT_TEMPLATE.replace("{layer}", "BEVEL")
 
 
 def _placed(lay: Layout, rows: np.ndarray, rect_h: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -93,22 +100,27 @@ def _entities(parts, lay: Layout, owner: str, seed: int, limit: int | None = Non
         rows = np.array([row_of[i] for i in g.ids[:take]])
         h = g.rect[:take, 1]
         cut = _placed(lay, rows, h, fg.outline[:take]).reshape(take, -1).tolist()
-        bevel = None if fg.bevel is None else _placed(lay, rows, h, fg.bevel[:take]).reshape(take, -1).tolist()
+        bevels = [_placed(lay, rows, h, b[:take]).reshape(take, -1).tolist() for b in fg.bevels]
         arrow = _placed(lay, rows, h, fg.arrow[:take]).reshape(take, -1).tolist()
         text_at = _placed(lay, rows, h, fg.text_at[:take, None, :])[:, 0].tolist()
+        angle_at = _placed(lay, rows, h, fg.angle_at[:take]).tolist()
         t_cut = _polyline("CUT", fg.outline.shape[1], True, True)
-        t_bevel = _polyline("BEVEL", fg.bevel.shape[1], True, False) if bevel is not None else ""
+        t_bevels = [_polyline("BEVEL", b.shape[1], True, False) for b in fg.bevels]
         t_arrow = _polyline("ETCH", 5, False, False)
-        for i in range(take):  # four small templates per part
+        for i in range(take):  # a few small templates per part
             pid = g.ids[i]
             out.append(t_cut % ((f"{handle:X}", owner) + tuple(cut[i]) + (pid,)))
             out.append(t_arrow % ((f"{handle + 1:X}", owner) + tuple(arrow[i])))
             (x, y), th = text_at[i], fg.text_height[i]
             out.append(TEXT % (f"{handle + 2:X}", owner, x, y, th, pid, x, y))
             handle += 3
-            if bevel is not None:
-                out.append(t_bevel % ((f"{handle:X}", owner) + tuple(bevel[i])))
+            for t_b, b in zip(t_bevels, bevels):
+                out.append(t_b % ((f"{handle:X}", owner) + tuple(b[i])))
                 handle += 1
+            for (x, y), label in zip(angle_at[i], fg.angle_text[i]):
+                if label != "0":
+                    out.append(ANGLE_TEXT % (f"{handle:X}", owner, x, y, 0.5 * th, label, x, y))
+                    handle += 1
         n += take
     return "".join(out), handle, n
 

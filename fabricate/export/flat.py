@@ -18,16 +18,21 @@ import numpy as np
 class FlatGroup:
     """Drawing data of one :class:`fabricate.cad.PartGroup` (``p`` parts).
 
-    outline : (p, k, 2).  bevel : (p, k2, 2) or None.  arrow : (p, 5, 2) polyline
+    outline : (p, k, 2) the CUT line.  bevels : tuple of (p, k_i, 2) closed lines drawn
+    dashed where they differ from it: the bevel reference (panel bearing face; beam ridge and
+    V tips) and the two sheet faces (where the bevels end).  arrow : (p, 5, 2) polyline
     (tail, tip, barb, tip, barb).  text_at : (p, 2) centre of the id.
-    text_height : (p,) mm.
+    text_height : (p,) mm.  angle_at : (p, k, 2) where each edge's bevel label goes;
+    angle_text : (p, k) str, ``"+a/-b"`` degrees on the +z / -z side (``"0"`` square).
     """
 
     outline: np.ndarray
-    bevel: np.ndarray | None
+    bevels: tuple
     arrow: np.ndarray
     text_at: np.ndarray
     text_height: np.ndarray
+    angle_at: np.ndarray
+    angle_text: np.ndarray
 
 
 def mark_edge(faces: tuple[tuple[int, ...], ...], outline_face: int) -> int:
@@ -55,8 +60,22 @@ def flat_group(group) -> FlatGroup:
     perp = np.stack([-u[:, 1], u[:, 0]], axis=1)
     barb = 0.6 * h[:, None]
     arrow = np.stack([tail, tip, tip - barb * (u + 0.5 * perp), tip, tip - barb * (u - 0.5 * perp)], axis=1)
-    bevel = group.flat_bevel
-    if bevel is not None:  # drop a bevel outline that coincides with the outline (square edges)
-        gap = np.linalg.norm(bevel[:, :, None, :] - Q[:, None, :, :], axis=3).min(axis=2).max()
-        bevel = None if gap < 1e-6 else bevel
-    return FlatGroup(outline=Q, bevel=bevel, arrow=arrow, text_at=centre, text_height=h)
+    bevels = []
+    for line in (group.bevel_ref,) + tuple(group.flat_faces):  # drop lines on the cut line (square edges)
+        d = np.linalg.norm(line[:, :, None, :] - Q[:, None, :, :], axis=3).min(axis=2).max()
+        if d > 1e-6 and not any(line.shape == b.shape and np.abs(line - b).max() < 1e-6 for b in bevels):
+            bevels.append(line)
+    mids = 0.5 * (Q + np.roll(Q, -1, axis=1))
+    angle_at = mids + 0.25 * (centre[:, None, :] - mids)
+    angle_text = np.vectorize(_angles)(group.bevel_deg[..., 0], group.bevel_deg[..., 1])
+    return FlatGroup(outline=Q, bevels=tuple(bevels), arrow=arrow, text_at=centre, text_height=h,
+                     angle_at=angle_at, angle_text=angle_text)
+
+
+def _angles(top: float, bottom: float) -> str:
+    """Bevel label of one edge: degrees on the +z / -z side, ``0`` for a square edge."""
+    if abs(top) < 0.05 and abs(bottom) < 0.05:
+        return "0"
+    if abs(top + bottom) < 0.05:
+        return f"{top:+.1f}"       # one plane through the thickness
+    return f"{top:+.1f}/{bottom:+.1f}"

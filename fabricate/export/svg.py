@@ -39,12 +39,12 @@ def write_svg(parts, path, *, sheet: tuple[float, float] | None = None, spacing:
     where = {pid: k for k, pid in enumerate(lay.ids)}
     body = []
     for gi, g in enumerate(parts.groups):
-        if g.kind not in ("panel", "beam") or not len(g):
-            continue
+        if g.kind not in ("panel", "beam") or not len(g) or g.ids[0] not in where:
+            continue  # a layout of some groups only (one material and thickness)
         fg = flat_group(g)
         k_out = fg.outline.shape[1]
         pts = " ".join(["%.4f,%.4f"] * k_out)
-        bpts = " ".join(["%.4f,%.4f"] * fg.bevel.shape[1]) if fg.bevel is not None else ""
+        bpts = [" ".join(["%.4f,%.4f"] * b.shape[1]) for b in fg.bevels]
         apts = " ".join(["%.4f,%.4f"] * 5)
         for i, pid in enumerate(g.ids):  # text per part
             k = where[pid]
@@ -55,8 +55,8 @@ def write_svg(parts, path, *, sheet: tuple[float, float] | None = None, spacing:
             tx, ty = fg.text_at[i]
             parts_svg = [f'<g id="{pid}" transform="{place}">',
                          f'<polygon class="cut" points="{pts % tuple(fg.outline[i].ravel())}"/>']
-            if fg.bevel is not None:
-                parts_svg.append(f'<polygon class="bevel" points="{bpts % tuple(fg.bevel[i].ravel())}"/>')
+            for b, fmt in zip(fg.bevels, bpts):
+                parts_svg.append(f'<polygon class="bevel" points="{fmt % tuple(b[i].ravel())}"/>')
             parts_svg.append(f'<polyline class="etch" points="{apts % tuple(fg.arrow[i].ravel())}"/>')
             parts_svg.append(f'<text transform="translate({tx:.4f} {ty:.4f}) scale(1 -1)" '
                              f'font-size="{fg.text_height[i]:.3f}">{escape(pid)}</text></g>\n')

@@ -28,6 +28,7 @@ table{border-collapse:collapse;margin:8px 0;font-size:13px}
 td,th{border:1px solid #d7dce2;padding:3px 8px;text-align:left;vertical-align:top}
 th{background:#f1f3f6}td.num{text-align:right;font-variant-numeric:tabular-nums}
 .pass{color:#17602a;font-weight:600}.fail{color:#c0271b;font-weight:700}
+.caution{background:#fff4d6;color:#6b4600;border:2px solid #e0a800}.warnword{color:#8a5a00;font-weight:700}.warnings{color:#8a5a00;margin:0 0 12px}
 .pics{display:grid;grid-template-columns:repeat(auto-fill,minmax(480px,1fr));gap:14px}
 .pics figure{margin:0}.pics img{width:100%;border:1px solid #d7dce2}
 .viewer{width:100%;height:520px;border:1px solid #d7dce2;background:#f4f5f7;position:relative}
@@ -92,10 +93,12 @@ def _table(head: list[str], rows: list[list[Any]], raw: set[int] = frozenset()) 
 
 def _passfail(m: dict) -> str:
     p = m.get("pass")
-    if p is None:
+    if p is None or m.get("role") == "reported":
         return "reported"
+    if not p and not m.get("enforced"):  # information beyond its tolerance: a warning, not a failure
+        return '<span class="warnword">warning</span> (information)'
     word = "pass" if p else "FAIL"
-    return f'<span class="{"pass" if p else "fail"}">{word}</span>' + ("" if m.get("enforced") else " (not enforced)")
+    return f'<span class="{"pass" if p else "fail"}">{word}</span>' + ("" if m.get("enforced") else " (information)")
 
 
 def _measure_rows(measures: dict[str, dict]) -> list[list[Any]]:
@@ -115,9 +118,15 @@ def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: boo
     """The page as a string (``pictures``: file name -> caption)."""
     name = escape(report["name"])
     ok = report["status"] == "ok"
-    banner = (f'<div class="banner ok">OK: {escape(report["message"])}</div>' if ok else
+    from fabricate.requirements import warnings
+
+    warn = warnings(report.get("measures", {}), ((report.get("parts") or {}).get("cad_report") or {}).get("limits"))
+    head = "OK: every requirement met" if not warn else f"OK with {len(warn)} warning(s): every requirement met"
+    banner = (f'<div class="banner {"ok" if not warn else "caution"}">{escape(head)}</div>' if ok else
               f'<div class="banner warn">{escape(report["status"].replace("_", " ").upper())}: '
               f'{escape(report["message"])} (results written and marked)</div>')
+    if warn:
+        banner += "<ul class=\"warnings\">" + "".join(f"<li>warning: {escape(w)}</li>" for w in warn) + "</ul>"
     mesh = report.get("result_mesh") or {}
     parts = report.get("parts") or {}
     inp = report.get("input") or {}

@@ -1,0 +1,58 @@
+"""Shop limits: corner angles, edge lengths, panel size against the stock sheet, panel weight.
+
+Measured on the flat data (``PartGroup.bevel_ref``: the panel's bearing face,
+the beam's profile; ``rect``: the stock rectangle), vectorized per group.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def corner_angles_deg(Q: np.ndarray) -> np.ndarray:
+    """(p, k) interior angles (degrees) of counter-clockwise 2D polygons ``Q (p, k, 2)``."""
+    e_in = Q - np.roll(Q, 1, axis=1)
+    e_out = np.roll(Q, -1, axis=1) - Q
+    cross = e_in[..., 0] * e_out[..., 1] - e_in[..., 1] * e_out[..., 0]
+    dot = (e_in * e_out).sum(axis=2)
+    return 180.0 - np.degrees(np.arctan2(cross, dot))
+
+
+def edge_lengths(Q: np.ndarray) -> np.ndarray:
+    """(p, k) lengths of edge ``j -> j + 1`` of polygons ``Q (p, k, d)``."""
+    return np.linalg.norm(np.roll(Q, -1, axis=1) - Q, axis=2)
+
+
+def check_limits(groups, spec) -> dict:
+    """Parts beyond ``spec.limits``: ``{limit: {"limit", "count", "ids", "worst", "worst_id"}}`` (JSON-ready).
+
+    ``corner``: panels with a corner below ``min_corner_deg``; ``edge``: panels and beams with an
+    outline edge below ``min_edge_mm``; ``sheet``: panels whose stock rectangle does not fit the
+    sheet ``sheet_mm`` either way round; ``weight``: panels heavier than ``max_panel_kg``.
+    """
+    lim = spec.limits
+    W, H = lim.sheet_mm
+    found: dict[str, list] = {"corner": [], "edge": [], "sheet": [], "weight": []}
+    for g in groups:
+        if g.kind not in ("panel", "beam"):
+            continue
+        edge = edge_lengths(g.bevel_ref).min(axis=1)
+        found["edge"] += [(i, float(e)) for i, e in zip(g.ids, edge) if e < lim.min_edge_mm]
+        if g.kind != "panel":
+            continue
+        corner = corner_angles_deg(g.bevel_ref).min(axis=1)
+        found["corner"] += [(i, float(c)) for i, c in zip(g.ids, corner) if c < lim.min_corner_deg]
+        w, h = g.rect[:, 0], g.rect[:, 1]
+        fits = ((w <= W) & (h <= H)) | ((w <= H) & (h <= W))
+        found["sheet"] += [(i, f"{a:.0f} x {b:.0f}") for i, a, b, ok in zip(g.ids, w, h, fits) if not ok]
+        kg = g.volume_mm3 * spec.density("panel") * 1e-9
+        found["weight"] += [(i, float(m)) for i, m in zip(g.ids, kg) if m > lim.max_panel_kg]
+    limit = {"corner": f">= {lim.min_corner_deg:g} deg", "edge": f">= {lim.min_edge_mm:g} mm",
+             "sheet": f"within {W:g} x {H:g} mm", "weight": f"<= {lim.max_panel_kg:g} kg"}
+    out = {}
+    for key, rows in found.items():
+        entry = {"limit": limit[key], "count": len(rows), "ids": [r[0] for r in rows]}
+        if rows:
+            worst = (max if key == "weight" else min)(rows, key=lambda r: r[1]) if key != "sheet" else rows[0]
+            entry.update(worst=worst[1], worst_id=worst[0])
+        out[key] = entry
+    return out

@@ -1,0 +1,137 @@
+"""Cut files by material and thickness, nested on stock sheets, and the layout plan of the roof.
+
+``write_cut_files`` writes, for every material and thickness (glass panels of
+each thickness, steel plates of each thickness), ``cut_<material>_<t>mm.dxf``
+and ``.svg``: the parts nested on the material's stock sheets
+(:func:`fabricate.export.nesting.layout`: sheet size, margin, kerf,
+rotation), every sheet framed on layer SHEET with its id
+(``GLASS-10-S01``), its part count and its yield.  A part larger than the
+sheet is not nested: it is listed under ``oversize`` (and, for glass, flagged
+by the sheet limit); ``outlines.dxf`` still draws it.
+
+``write_layout_plan`` writes ``layout_plan.dxf``: the roof seen from above
+(model x, y in mm), every panel's bearing outline (layer PANELS) and every
+beam's glass-side edge (layer BEAMS) with its id where it sits.
+"""
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from optimize.atomic import atomic_open
+from optimize.errors import ExportError
+
+from .nesting import layout
+
+MATERIAL = {"panel": "glass", "beam": "steel"}
+
+
+def _batches(parts):
+    """``[(material, thickness_mm, kind)]`` of the flat parts, in order."""
+    seen = []
+    for g in parts.groups:
+        if g.kind in MATERIAL and len(g):
+            key = (MATERIAL[g.kind], round(float(g.thickness_mm[0]), 3), g.kind)
+            if key not in seen:
+                seen.append(key)
+    return seen
+
+
+def write_cut_files(parts, folder, nesting: dict) -> dict:
+    """Every material and thickness nested on its sheets: DXF and SVG per batch (atomic, each).
+
+    nesting : ``{"glass": {"sheet_mm", "margin_mm", "kerf_mm", "rotation"}, "steel": {...}}``.
+    Returns ``{file name: facts}`` (the DXF's facts carry the layout: sheets with ids and yields).
+    """
+    from .dxf import write_dxf
+    from .svg import write_svg
+
+    folder = Path(folder)
+    out = {}
+    for material, t, kind in _batches(parts):
+        opts = nesting[material]
+        W, H = (float(v) for v in opts["sheet_mm"])
+        margin, kerf = float(opts["margin_mm"]), float(opts["kerf_mm"])
+        rot = bool(opts["rotation"])
+        big = []
+        for g in parts.groups:  # parts that fit no sheet are listed, not nested
+            if g.kind == kind and np.isclose(g.thickness_mm[0], t):
+                w, h = g.rect[:, 0] + 2 * margin, g.rect[:, 1] + 2 * margin
+                fits = ((w <= W) & (h <= H)) | (rot & (w <= H) & (h <= W))
+                big += [i for i, ok in zip(g.ids, fits) if not ok]
+        sub = parts if not big else _without(parts, set(big))
+        stem = f"cut_{material}_{t:g}mm"
+        name = f"{material.upper()}-{t:g}"
+        try:
+            lay = layout(sub, (W, H), margin, kerf=kerf, rotation=rot, kinds=(kind,), thickness=t, name=name)
+        except ValueError as exc:
+            raise ExportError(f"{stem}: nesting failed ({exc})") from None
+        facts = write_dxf(sub, folder / f"{stem}.dxf", lay=lay)
+        facts.update(material=material, thickness_mm=t, oversize=big)
+        out[f"{stem}.dxf"] = facts
+        out[f"{stem}.svg"] = dict(write_svg(sub, folder / f"{stem}.svg", lay=lay), material=material,
+                                  thickness_mm=t)
+    return out
+
+
+def _without(parts, drop: set):
+    """A view of ``parts`` without the ids in ``drop`` (groups filtered; used for the oversize parts)."""
+    import dataclasses
+
+    groups = []
+    for g in parts.groups:
+        keep = np.array([i not in drop for i in g.ids])
+        if keep.all():
+            groups.append(g)
+            continue
+        if not keep.any():
+            continue
+        changes = {}
+        for f in dataclasses.fields(g):
+            v = getattr(g, f.name)
+            if isinstance(v, np.ndarray) and v.ndim >= 1 and len(v) == len(g) and f.name != "cuts":
+                changes[f.name] = v[keep]
+            elif f.name in ("ids", "neighbours"):
+                changes[f.name] = tuple(x for x, k in zip(v, keep) if k)
+            elif f.name == "flat_faces":
+                changes[f.name] = tuple(a[keep] for a in v)
+        groups.append(dataclasses.replace(g, **changes))
+    return dataclasses.replace(parts, groups=tuple(groups))
+
+
+def write_layout_plan(parts, path) -> dict:
+    """``layout_plan.dxf``: every panel and beam with its id where it sits on the roof (plan view, mm)."""
+    import ezdxf
+
+    t0 = time.perf_counter()
+    path = Path(path)
+    doc = ezdxf.new("R2010", units=ezdxf.units.MM)
+    for name, colour in (("PANELS", 4), ("BEAMS", 8), ("IDS", 5)):
+        doc.layers.add(name, color=colour)
+    msp = doc.modelspace()
+    n = 0
+    for g in parts.groups:
+        if g.kind not in MATERIAL or not len(g):
+            continue
+        P = g.vertices[:, list(g.ring)][..., :2]
+        if g.kind == "beam":
+            P = P[:, :2]                                   # the glass-side edge A0 B0
+        size = np.linalg.norm(P.max(axis=1) - P.min(axis=1), axis=1)
+        h = np.clip(0.06 * size, 20.0, 400.0)
+        centre = P.mean(axis=1)
+        layer = "PANELS" if g.kind == "panel" else "BEAMS"
+        for i, pid in enumerate(g.ids):  # ezdxf entities per part (a plan, not a cut file)
+            msp.add_lwpolyline(P[i].tolist(), close=g.kind == "panel", dxfattribs={"layer": layer})
+            msp.add_text(pid, height=float(h[i]) * (0.5 if g.kind == "beam" else 1.0),
+                         dxfattribs={"layer": "IDS"}).set_placement(tuple(centre[i]),
+                                                                    align=ezdxf.enums.TextEntityAlignment.MIDDLE_CENTER)
+            n += 1
+    try:
+        with atomic_open(path, "w", encoding="utf-8", newline="\n") as fh:
+            doc.write(fh)
+    except OSError as exc:
+        raise ExportError(f"{path}: cannot write the layout plan ({exc.strerror or exc})") from None
+    return {"file": path.name, "bytes": path.stat().st_size, "parts": n, "view": "plan (model x, y), mm",
+            "seconds": time.perf_counter() - t0}

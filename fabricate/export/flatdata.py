@@ -1,0 +1,153 @@
+"""``flat.json``: the flat data of every part cut from sheet, and the check that it defines the part.
+
+For every panel and beam: the outline to cut (mm, in the part frame, as the
+DXF draws it before nesting), the bevel reference line with its corner
+heights, the bevel angle of every edge on both sides, the sheet thickness
+and the 4 x 4 transform that places the part in the model (see
+:mod:`fabricate.cad.flat` for the frame).  Per group: the face list, which
+face each edge's bevel cuts and the reference corners, so a reader can
+rebuild the solid without this package: :func:`check_flat` does that from
+the file alone and compares the result with the STEP (or 3MF) solid of the
+same id: volume and Hausdorff distance within :data:`TOL_MM`.
+"""
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from optimize.atomic import atomic_open
+from optimize.errors import ExportError
+
+TOL_MM = 0.01
+"""Largest accepted Hausdorff distance (mm); the volume may differ by this times the outline area."""
+FLAT_KINDS = ("panel", "beam")
+FORMAT = "conical-fab flat data 1"
+
+
+def write_flat(parts, path) -> dict:
+    """Write ``flat.json`` (atomic).  Returns facts: ``file, bytes, parts, seconds``."""
+    t0 = time.perf_counter()
+    path = Path(path)
+    groups, n = [], 0
+    for g in parts.groups:
+        if g.kind not in FLAT_KINDS or not len(g):
+            continue
+        groups.append({
+            "kind": g.kind, "faces": [list(f) for f in g.faces], "top_face": g.outline_face,
+            "bottom_face": g.bevel_face, "cuts": g.cuts.tolist(), "reference_corners": list(g.ring),
+            "ids": list(g.ids), "thickness_mm": g.thickness_mm.tolist(), "outline": g.flat.tolist(),
+            "bevel_reference": g.bevel_ref.tolist(), "bevel_reference_z_mm": g.bevel_ref_z.tolist(),
+            "bevel_deg": g.bevel_deg.tolist(), "transform": g.transform.tolist(), "rect_mm": g.rect.tolist()})
+        n += len(g)
+    doc = {"format": FORMAT, "units": "mm", "frame": (
+        "part frame: the sheet lies between z = -thickness and z = 0 (the reference face: panel bearing "
+        "face, beam + plate face) seen from +z; outline counter-clockwise; transform maps part frame to "
+        "model; bevel_deg[j] = [+z side, -z side] of edge j -> j+1, degrees from square, positive when "
+        "the part narrows toward that face; cut face of edge j side s passes through the bevel reference "
+        "edge j at its corner heights"), "groups": groups}
+    try:
+        with atomic_open(path, "w", encoding="utf-8") as fh:
+            json.dump(doc, fh, separators=(",", ":"))
+    except OSError as exc:
+        raise ExportError(f"{path}: cannot write the flat data ({exc.strerror or exc})") from None
+    return {"file": path.name, "bytes": path.stat().st_size, "parts": n, "seconds": time.perf_counter() - t0}
+
+
+def read_flat(path) -> list[dict]:
+    """The groups of a ``flat.json`` with their arrays as numpy arrays."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            doc = json.load(fh)
+    except (OSError, ValueError) as exc:
+        raise ExportError(f"{path}: not a readable flat data file ({exc})") from None
+    if doc.get("format") != FORMAT:
+        raise ExportError(f"{path}: format {doc.get('format')!r}, expected {FORMAT!r}")
+    out = []
+    for g in doc["groups"]:
+        g = dict(g)
+        for key in ("thickness_mm", "outline", "bevel_reference", "bevel_reference_z_mm", "bevel_deg",
+                    "transform", "rect_mm"):
+            g[key] = np.asarray(g[key], dtype=float)
+        g["cuts"] = np.asarray(g["cuts"], dtype=np.int64)
+        g["faces"] = tuple(tuple(f) for f in g["faces"])
+        out.append(g)
+    return out
+
+
+def rebuild(g: dict) -> np.ndarray:
+    """(p, nv, 3): the corners of every solid of a flat.json group, rebuilt from its flat data (mm)."""
+    from fabricate.cad.flat import corner_triples, face_planes, solid_from_flat
+
+    N, O = face_planes(g["bevel_reference"], g["bevel_reference_z_mm"], g["bevel_deg"], g["thickness_mm"],
+                       g["cuts"], len(g["faces"]), g["top_face"], g["bottom_face"], g["transform"])
+    return solid_from_flat(N, O, corner_triples(g["faces"], N), g["reference_corners"], g["bevel_reference"],
+                           g["bevel_reference_z_mm"], g["transform"])
+
+
+def solid_corners(shape) -> np.ndarray:
+    """(m, 3) distinct vertex points of an OpenCASCADE shape."""
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_VERTEX
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    pts = []
+    ex = TopExp_Explorer(shape, TopAbs_VERTEX)
+    while ex.More():
+        p = BRep_Tool.Pnt_s(TopoDS.Vertex(ex.Current()))
+        pts.append((p.X(), p.Y(), p.Z()))
+        ex.Next()
+    return np.unique(np.array(pts, dtype=float), axis=0)
+
+
+def check_flat(path, bom: list[dict], step_solids: dict | None = None, meshes: dict | None = None) -> dict:
+    """The flat data against the solids: every panel and beam of the BOM is in ``flat.json``; the
+    solid rebuilt from its outline, bevels, thickness and transform has the solid's volume (the BOM's
+    analytic one, which the STEP and 3MF checks hold to their files) and its corners are within
+    :data:`TOL_MM` of the STEP solid's (``step_solids``: name -> OCC shape) or else the 3MF mesh's
+    (``meshes``: name -> object with ``V``) corners: a Hausdorff bound of the two polyhedra.
+    The volume tolerance is :data:`TOL_MM` times the part's outline area (a 0.01 mm skin)."""
+    from fabricate.cad.geometry import volumes
+
+    groups = read_flat(path)
+    expected = {r["id"]: r for r in bom if r["kind"] in FLAT_KINDS}
+    against = "step" if step_solids else "3mf" if meshes else None
+    seen, failures = set(), []
+    worst_h, worst_v, worst_id = 0.0, 0.0, None
+    for g in groups:
+        X = rebuild(g)
+        vol = volumes(X, g["faces"])
+        for i, pid in enumerate(g["ids"]):  # one comparison per part (OCC vertices are per solid)
+            seen.add(pid)
+            row = expected.get(pid)
+            if row is None:
+                failures.append({"id": pid, "error": "no BOM row of that id"})
+                continue
+            dv = abs(vol[i] - float(row["volume_mm3"]))
+            area = float(row["area_m2"]) * 1e6
+            h = None
+            if against == "step" and pid in step_solids:
+                h = _hausdorff(X[i], solid_corners(step_solids[pid]))
+            elif against == "3mf" and pid in meshes:
+                h = _hausdorff(X[i], np.unique(meshes[pid].V, axis=0))
+            if h is not None and h > worst_h:
+                worst_h, worst_id = h, pid
+            worst_v = max(worst_v, dv)
+            if dv > TOL_MM * area or (h is not None and h > TOL_MM) or (h is None and against):
+                failures.append({"id": pid, "volume_error_mm3": dv, "hausdorff_mm": h})
+    missing = sorted(set(expected) - seen)
+    ok = not missing and not failures
+    return {"pass": ok, "parts": len(seen), "expected": len(expected), "missing": missing[:20],
+            "against": against or "bom volumes only", "hausdorff_mm_max": worst_h, "worst": worst_id,
+            "volume_error_mm3_max": worst_v, "tolerance_mm": TOL_MM, "failures": failures[:20],
+            "failed": len(failures),
+            "how": "each solid rebuilt from flat.json alone (outline, bevels, thickness, transform); "
+                   "Hausdorff bound = largest distance between the two corner sets"}
+
+
+def _hausdorff(A: np.ndarray, B: np.ndarray) -> float:
+    D = np.linalg.norm(A[:, None, :] - B[None, :, :], axis=2)
+    return float(max(D.min(axis=1).max(), D.min(axis=0).max()))

@@ -1,0 +1,92 @@
+"""Cut files per material and thickness nested on stock sheets; the layout plan; one STL per part."""
+import numpy as np
+import pytest
+from cad_fixtures import dome_structure
+
+from fabricate.cad import PartSpec, build_parts
+from fabricate.config import NestingSection
+from fabricate.export import write_cut_files, write_layout_plan, write_stl_parts
+from fabricate.export.dxf import read_outlines
+from fabricate.export.stl import read_stl
+
+
+@pytest.fixture(scope="module")
+def parts():
+    return build_parts(dome_structure(n_around=6, k=3), PartSpec(glass_thickness=8.0))
+
+
+@pytest.fixture(scope="module")
+def cut(parts, tmp_path_factory):
+    out = tmp_path_factory.mktemp("cut")
+    return out, write_cut_files(parts, out, NestingSection().model_dump())
+
+
+def test_one_nested_file_per_material_and_thickness(parts, cut):
+    out, facts = cut
+    assert sorted(facts) == ["cut_glass_8mm.dxf", "cut_glass_8mm.svg", "cut_steel_60mm.dxf", "cut_steel_60mm.svg"]
+    glass, _ = read_outlines(out / "cut_glass_8mm.dxf")
+    steel, info = read_outlines(out / "cut_steel_60mm.dxf")
+    big = facts["cut_glass_8mm.dxf"]["oversize"]  # this dome's largest panels exceed a jumbo sheet
+    assert sorted(list(glass) + big) == sorted(p.id for p in parts.panels) and len(glass) > 0
+    assert sorted(steel) == sorted(b.id for b in parts.beams)
+    assert info["audit_errors"] == 0 and info["units"] == 4
+    lay = facts["cut_steel_60mm.dxf"]["layout"]
+    assert lay["sheet_mm"] == [12000.0, 2500.0] and lay["kerf_mm"] == 3.0 and lay["margin_mm"] == 10.0
+    assert [s["id"] for s in lay["per_sheet"]][0] == "STEEL-60-S01"
+    assert sum(s["parts"] for s in lay["per_sheet"]) == len(parts.beams)
+    assert all(0 < s["yield"] <= 1 for s in lay["per_sheet"])
+    # every outline lies on its sheet, inside the margin, and the DXF keeps each outline's edge lengths
+    W, H = lay["sheet_mm"]
+    step = W + 0.1 * W
+    for pid, Q in steel.items():
+        x = Q[:, 0] - np.floor(Q[:, 0].min() / step) * step
+        assert x.min() >= 10 - 1e-6 and x.max() <= W - 10 + 1e-6 and Q[:, 1].min() >= 10 - 1e-6
+        F = parts.by_id[pid].flat
+        np.testing.assert_allclose(np.linalg.norm(np.roll(Q, -1, 0) - Q, axis=1),
+                                   np.linalg.norm(np.roll(F, -1, 0) - F, axis=1), atol=1e-9)
+
+
+def test_a_part_larger_than_the_sheet_is_listed_not_nested(parts, tmp_path):
+    nest = NestingSection().model_dump()
+    nest["steel"]["sheet_mm"] = (3000.0, 2500.0)
+    facts = write_cut_files(parts, tmp_path, nest)
+    big = facts["cut_steel_60mm.dxf"]["oversize"]
+    assert big and all(parts.by_id[i].rect[0] + 20 > 3000 for i in big)
+    steel, _ = read_outlines(tmp_path / "cut_steel_60mm.dxf")
+    assert not set(big) & set(steel) and len(steel) + len(big) == len(parts.beams)
+
+
+def test_layout_plan_names_every_part_where_it_sits(parts, tmp_path):
+    import ezdxf
+
+    write_layout_plan(parts, tmp_path / "plan.dxf")
+    doc = ezdxf.readfile(str(tmp_path / "plan.dxf"))
+    assert not doc.audit().has_errors
+    texts = {t.dxf.text: np.array(t.dxf.align_point)[:2] for t in doc.modelspace().query("TEXT")}
+    assert set(texts) == {p.id for p in parts.panels + parts.beams}
+    for p in parts.panels:  # the id sits at the panel's centre in plan
+        np.testing.assert_allclose(texts[p.id], p.vertices[list(p.group.ring)][:, :2].mean(axis=0), atol=1e-6)
+
+
+def test_one_stl_per_part_stays_one_piece_when_welded(parts, tmp_path):
+    import manifold3d
+
+    facts = write_stl_parts(parts, tmp_path / "stl")
+    assert facts["files"] == len(parts)
+    for p in list(parts)[::7]:  # a sample: weld each file by coordinates, it is one closed solid
+        P, head = read_stl(tmp_path / "stl" / f"{p.id}.stl")
+        V, T = np.unique(P.reshape(-1, 3), axis=0, return_inverse=True)
+        m = manifold3d.Manifold(manifold3d.Mesh(vert_properties=V.astype(np.float32),
+                                                tri_verts=T.reshape(-1, 3).astype(np.uint32)))
+        assert m.status().name == "NoError" and m.genus() == 0
+        assert m.volume() == pytest.approx(p.volume_mm3, rel=1e-5) and head["parts"] == 1
+
+
+def test_to_build123d_is_a_labelled_assembly_of_the_exact_solids(parts):
+    model = parts.to_build123d()
+    assert model.label == "model" and [c.label for c in model.children] == ["panels", "beams"]
+    by_label = {s.label: s for c in model.children for s in c.children}
+    assert set(by_label) == {p.id for p in parts}
+    for p in list(parts)[::9]:
+        s = by_label[p.id]
+        assert s.is_valid and s.volume == pytest.approx(p.volume_mm3, rel=1e-9)
