@@ -366,6 +366,7 @@ class OutputsSection(Section):
     pictures: bool = True
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"
+    overwrite: bool = False  # replace an earlier finished run (as ``fabricate run --force``)
 
     def wanted(self, key: str) -> bool:
         """Whether the file of ``key`` is written: ``flat``, ``cut_files`` and ``layout_plan`` follow

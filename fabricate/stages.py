@@ -189,7 +189,19 @@ def stage_cad(ctx) -> str:
         ctx.values["cad_skipped"] = msg
         ctx.notes.append(msg)
         return "skipped: offset faces turn over"
-    parts = build_parts(ctx["structure"], spec)
+    try:
+        parts = build_parts(ctx["structure"], spec)
+    except (ConfigError, MeshError) as exc:
+        if result is None or result.success:
+            raise  # the design or the part settings: bad input
+        # the optimizer did not reach its target and no parts can be cut from its mesh: write what
+        # there is (mesh, layers, report) and end marked as a missed tolerance (exit 3)
+        msg = (f"no panels or beams built from the unconverged mesh (optimization {result.status}: "
+               f"{result.message}): {exc}")
+        ctx.values["parts"] = None
+        ctx.values["cad_skipped"] = msg
+        ctx.notes.append(msg)
+        return f"skipped: optimization {result.status}, parts cannot be built"
     ctx.values["parts"] = parts
     counts = {k: sum(len(g) for g in parts.of_kind(k)) for k in ("panel", "beam", "node")}
     return ", ".join(f"{n} {k}s" for k, n in counts.items())

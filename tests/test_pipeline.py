@@ -90,7 +90,7 @@ def test_progress_reports_every_stage_in_order(tmp_path):
     assert [s for e, s, _ in rec.events if e == "done"] == list(STAGES)
     assert summary.status == "ok", summary.message
     assert sorted(p.name for p in (tmp_path / "out" / "tiny").iterdir()) == \
-        ["config.yaml", "layer_0.obj", "layer_1.obj", "mesh.obj", "report.json"]
+        [".conical-fab-run.json", "config.yaml", "layer_0.obj", "layer_1.obj", "mesh.obj", "report.json"]
 
 
 def test_tolerance_not_reached_is_written_and_marked(tmp_path):
@@ -183,10 +183,10 @@ def test_rerun_replaces_only_when_complete(tmp_path, monkeypatch):
     before = (out / "tiny" / "report.json").read_text()
     monkeypatch.setattr(stages, "stage_report", lambda ctx: (_ for _ in ()).throw(RuntimeError("late")))
     with pytest.raises(RuntimeError):
-        run_pipeline(tiny_config(tmp_path), out)
+        run_pipeline(tiny_config(tmp_path), out, force=True)
     assert (out / "tiny" / "report.json").read_text() == before  # the previous result is untouched
     monkeypatch.undo()
-    second = run_pipeline(tiny_config(tmp_path), out)
+    second = run_pipeline(tiny_config(tmp_path), out, force=True)
     assert second.status == first.status
     assert [p.name for p in out.iterdir()] == ["tiny"]  # no temporary or old folder left
     assert json.loads((out / "tiny" / "report.json").read_text())["created_utc"]

@@ -10,7 +10,8 @@ def register(sub) -> None:
                                    "materials: STEP solids valid (closed planar polyhedra; BRepCheck with --occ) with the analytic volumes and "
                                    "names, STL/3MF manifold with the same volumes, no two parts overlapping, "
                                    "panels touching their beams, DXF audit clean with outlines equal to the "
-                                   "3D faces. Exit 0 when every check passes, 4 otherwise.")
+                                   "3D faces. Exit 0 when every check passes, 4 otherwise; 2 when "
+                                   "OUTDIR is not a run's output folder.")
     p.add_argument("outdir", help="a run's output folder (with bom.csv, model.step, ...)")
     p.add_argument("--json", action="store_true", help="print the full result as JSON")
     p.add_argument("--fast", action="store_true",
@@ -25,6 +26,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from fabricate.check_fast import run_check
 
+    require_run_folder(args.outdir)
     from optimize.errors import ConfigError
 
     if args.fast and args.occ:
@@ -56,3 +58,19 @@ def _summary(name: str, r: dict) -> str:
             "svg": ("groups", "expected"), "ifc": ("elements", "volume_rel_error_max", "missing", "bad_schema"),
             "3dm": ("elements", "missing", "bad_strings"), "nc1": ("elements", "missing", "bad_files")}.get(name, ())
     return ", ".join(f"{k}={r[k]:.3g}" if isinstance(r.get(k), float) else f"{k}={r.get(k)}" for k in keys)
+
+
+def require_run_folder(outdir) -> None:
+    """ConfigError (exit 2) unless ``outdir`` is a folder a run wrote (its marker, report.json or
+    bom.csv): a wrong path is bad input, not a failed check."""
+    from pathlib import Path
+
+    from fabricate.runfolder import MARKER
+    from optimize.errors import ConfigError
+
+    path = Path(outdir)
+    if not path.is_dir():
+        what = "does not exist" if not path.exists() else "is not a folder"
+        raise ConfigError(f"{outdir}: {what}; expected the output folder of a run (with bom.csv, model.step, ...)")
+    if not any((path / name).exists() for name in (MARKER, "report.json", "bom.csv")):
+        raise ConfigError(f"{outdir}: is not the output folder of a run (no {MARKER}, report.json or bom.csv)")
