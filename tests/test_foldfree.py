@@ -112,7 +112,7 @@ def test_cli_optimize_prints_distance_fairness_and_folds(tmp_path, capsys):
     write_mesh(src, conjugate_grid())
     assert main(["optimize", str(src), "-o", str(tmp_path / "out.obj")]) == 0
     out = capsys.readouterr().out
-    assert "% of the bbox diagonal), mean" in out and "fairness (mean second difference" in out
+    assert "mm diagonal (" in out and "%), mean" in out and "fairness (mean second difference" in out
     assert "folded faces: 0" in out
     strip = shapes.perturbed(shapes.grid(6, 2, size=(5, 1), height=lambda x, y: 0.1 * x * y), 0.1, seed=3)
     write_mesh(src, strip)

@@ -108,11 +108,11 @@ def run(args) -> int:
     for line in _other_defects(res, tol):
         print(line)
     dist, fair = d.get("distance"), d.get("fairness")
+    diag = (reference or mesh).bbox_diagonal()
     if dist:
-        print(f"  distance to the reference: max {dist['max']:.3g} mm ({100 * dist['max_relative']:.3g}% of the "
-              f"bbox diagonal), mean {dist['mean']:.3g} mm ({100 * dist['mean_relative']:.3g}%)")
+        print(f"  distance to the reference: max {dist['max']:.3g} mm of {diag:,.0f} mm diagonal "
+              f"({100 * dist['max_relative']:.3g}%), mean {dist['mean']:.3g} mm ({100 * dist['mean_relative']:.3g}%)")
     else:
-        diag = (reference or mesh).bbox_diagonal()
         print(f"  max distance to the reference: {res.max_distance:.3g} of the bbox diagonal "
               f"({res.max_distance * diag:.3g} mm of {diag:,.0f} mm)")
     if fair:
