@@ -12,8 +12,15 @@ caches), one after the other.  Prints a JSON line per side and the ratio.
 
     python benchmarks/bench_cad.py               # 5,000 panels
     python benchmarks/bench_cad.py --panels 500  # quick
-    python benchmarks/bench_cad.py --check       # also time `fabricate check` on the output
+    python benchmarks/bench_cad.py --check       # the file check against the export it checks
     python benchmarks/bench_cad.py --handoff     # also the CAD stage with the hand-off files (issue 18)
+
+``--check`` (issue 14): for the railway station (configs/railway_station.yaml,
+run with the check off) and the dome of ``--panels`` panels, one child process
+each writes the files (the run's exports stage / every writer), then times
+the fast check and the full check (the STEP read by the independent text
+reader) on them, and prints check / export ratios (goal: full <= 1.0);
+``--occ`` adds the full check with OpenCASCADE reading the STEP back.
 
 On a shared machine the timings are noisy: compare ratios, not seconds.
 """
@@ -140,46 +147,107 @@ def print_handoff(results: dict) -> None:
           f"{h['handoff_seconds']:.2f} s); ratio {h['seconds'] / st['seconds']:.2f} (goal <= 3.0)")
 
 
-def run_check(out: Path) -> dict:
-    from fabricate.check import check_outputs
+def time_checks(out: Path, export_s: float, occ: bool) -> dict:
+    """Fast and full check (and OCC with ``occ``) on ``out``, with their ratios to ``export_s``."""
+    from fabricate.check_fast import run_check
 
+    res = {"export_s": round(export_s, 3)}
+    for mode in ("fast", "full") + (("occ",) if occ else ()):
+        t0 = time.perf_counter()
+        r = run_check(out, mode)
+        dt = time.perf_counter() - t0
+        res[f"check_{mode}_s"] = round(dt, 3)
+        res[f"check_{mode}_per_export"] = round(dt / export_s, 2)
+        res[f"check_{mode}_pass"] = r["pass"]
+        res[f"check_{mode}_parts_s"] = {k: v.get("seconds") for k, v in r["checks"].items()}
+    return res
+
+
+def check_railway(out: Path, occ: bool) -> dict:
+    """configs/railway_station.yaml run with the check off; its exports stage time is the export."""
+    from fabricate.config import load_config
+    from fabricate.pipeline import run_pipeline
+
+    cfg = load_config(ROOT / "configs" / "railway_station.yaml", overrides={"outputs.check": "off"})
+    summary = run_pipeline(cfg, out)
+    folder = Path(summary.out_dir)
+    report = json.loads((folder / "report.json").read_text())
+    return {"case": "railway_station", "parts": report["parts"]["total"]["count"],
+            **time_checks(folder, report["timings_s"]["exports"], occ)}
+
+
+def check_dome(panels: int, out: Path, occ: bool) -> dict:
+    """The dome of ``panels`` panels: every writer of the exports stage, then the checks."""
+    from fabricate.cad import PartSpec, build_parts
+    from fabricate.export import write_3mf, write_bom, write_dxf, write_step, write_stl, write_svg
+
+    parts = build_parts(structure(panels), PartSpec())
     t0 = time.perf_counter()
-    r = check_outputs(out)
-    return {"side": "check", "pass": r["pass"], "seconds": time.perf_counter() - t0,
-            "checks_seconds": {k: v.get("seconds") for k, v in r["checks"].items()}}
+    for name, fn in (("model.step", write_step), ("model.stl", write_stl), ("model.3mf", write_3mf),
+                     ("outlines.dxf", write_dxf), ("outlines.svg", write_svg), ("bom.csv", write_bom)):
+        fn(parts, out / name)
+    return {"case": f"dome_{panels}", "parts": len(parts), **time_checks(out, time.perf_counter() - t0, occ)}
 
 
-def child(side: str, panels: int, out: str) -> None:
+def child(side: str, panels: int, out: str, occ: bool = False) -> None:
     sys.path.insert(0, str(ROOT))
     import logging
 
     logging.disable(logging.WARNING)
-    fn = {"stage": run_stage, "baseline": run_baseline, "handoff": run_handoff}.get(side)
-    result = fn(panels, Path(out)) if fn else run_check(Path(out))
+    if side == "railway":
+        result = check_railway(Path(out), occ)
+    elif side == "dome_check":
+        result = check_dome(panels, Path(out), occ)
+    else:
+        result = {"stage": run_stage, "baseline": run_baseline, "handoff": run_handoff}[side](panels, Path(out))
     result["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(json.dumps(result))
+
+
+def _child(side: str, panels: int, out: str, occ: bool = False) -> dict:
+    cmd = [sys.executable, __file__, "--child", side, "--panels", str(panels), "--out", out] + (
+        ["--occ"] if occ else [])
+    line = subprocess.run(cmd, check=True, capture_output=True, text=True,
+                          env=dict(os.environ, PYTHONPATH=str(ROOT))).stdout.strip().splitlines()[-1]
+    print(line, flush=True)
+    return json.loads(line)
+
+
+def main_check(panels: int, occ: bool) -> None:
+    """The check against the export it checks, railway station and the dome, in one run."""
+    rows = []
+    for side in ("railway", "dome_check"):
+        with tempfile.TemporaryDirectory(prefix="bench_check_") as tmp:
+            rows.append(_child(side, panels, tmp, occ))
+    for r in rows:
+        extra = (f", occ {r['check_occ_s']:.2f} s = {r['check_occ_per_export']:.2f} x"
+                 if "check_occ_s" in r else "")
+        print(f"{r['case']} ({r['parts']} parts): export {r['export_s']:.2f} s; check fast "
+              f"{r['check_fast_s']:.2f} s = {r['check_fast_per_export']:.2f} x export, full "
+              f"{r['check_full_s']:.2f} s = {r['check_full_per_export']:.2f} x export (goal <= 1.0){extra}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--panels", type=int, default=5000)
-    ap.add_argument("--check", action="store_true", help="also time fabricate check on the stage output")
+    ap.add_argument("--check", action="store_true",
+                    help="time the fast and full file check against the export (railway station, dome)")
+    ap.add_argument("--occ", action="store_true", help="with --check: also the check with OpenCASCADE")
     ap.add_argument("--handoff", action="store_true", help="also time the CAD stage with the hand-off files")
-    ap.add_argument("--child", choices=("stage", "baseline", "check", "handoff"), help=argparse.SUPPRESS)
+    ap.add_argument("--child", choices=("stage", "baseline", "railway", "dome_check", "handoff"),
+                    help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
-        child(args.child, args.panels, args.out)
+        child(args.child, args.panels, args.out, args.occ)
+        return
+    if args.check:
+        main_check(args.panels, args.occ)
         return
     with tempfile.TemporaryDirectory(prefix="bench_cad_") as tmp:
         results = {}
-        sides = ("baseline", "stage") + (("check",) if args.check else ()) + (("handoff",) if args.handoff else ())
-        for side in sides:
-            cmd = [sys.executable, __file__, "--child", side, "--panels", str(args.panels), "--out", tmp]
-            line = subprocess.run(cmd, check=True, capture_output=True, text=True,
-                                  env=dict(os.environ, PYTHONPATH=str(ROOT))).stdout.strip().splitlines()[-1]
-            results[side] = json.loads(line)
-            print(line, flush=True)
+        for side in ("baseline", "stage") + (("handoff",) if args.handoff else ()):
+            results[side] = _child(side, args.panels, tmp)
         sizes = {p.name: p.stat().st_size for p in Path(tmp).iterdir()}
     stage, base = results["stage"], results["baseline"]
     ratio = stage["seconds"] / base["seconds"]

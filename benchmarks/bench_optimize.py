@@ -1,6 +1,7 @@
 """Benchmark of the default optimizer against libigl and mpfp, measured in the same run.
 
     python benchmarks/bench_optimize.py              # table + PQ scaling curve to 30k faces
+    python benchmarks/bench_optimize.py --foldfree-only --data ../shared/data   # folds, old vs new
     python benchmarks/bench_optimize.py --large      # scaling curve up to 100k faces
     python benchmarks/bench_optimize.py --linalg     # the sparse solver backends on one system
     python benchmarks/bench_optimize.py --no-peers   # ours only
@@ -18,9 +19,18 @@ better for us).  Timings on a shared 2-core machine are noisy.
 
 Columns: mesh, faces, target, method, seconds, final max and mean defect
 (planarity, or the target's angle defect), max distance to the input surface
-relative to its bbox diagonal, iterations, faces folded (convex in the input,
-dented or flipped in the output: planar but not cuttable; our status then
-says ``folded``), and the ratio to each peer.
+in % of its bbox diagonal, iterations, faces folded (convex in the input,
+dented, flipped or collapsed in the output: planar but not cuttable; every
+method's status then says ``folded``), and the ratio to each peer.
+
+The fold-free table (first; ``--foldfree-only``) runs, on wave900, hypar900,
+conjugate900+noise, a skew torus and a blob (closed, their mesh lines not
+conjugate) and the shared meshes (``--data DIR``): the new default
+(``ours``: convexity rows, fairness weight falling with the defect), the old
+one (``ours-old``: ``convex=False`` and the fairness weight in full), the
+remeshed route (``ours+rm``: ``optimize.routes``, remeshed along principal
+directions; closed meshes cannot be remeshed), the paper's penalty / SQP /
+hybrid and libigl / mpfp, each with its fold count and distance.
 The scaling curve runs every size in a fresh process and reports its peak
 resident memory.
 """
@@ -41,10 +51,11 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optimize import measures, optimize_mesh, shapes  # noqa: E402
+from optimize import Mesh, measures, optimize_mesh, shapes  # noqa: E402
 from optimize.closeness import Reference  # noqa: E402
 
-DATA = ROOT.parent / "shared" / "data"
+TUNNEL = ROOT / "configs" / "meshes" / "tunnel.off"  # the built-in design tunnel, in metres
+DATA = None  # --data PATH: a folder with halftunnel.off and cylinder.obj (the shared meshes), else skipped
 
 
 # -- meshes -------------------------------------------------------------------
@@ -78,10 +89,64 @@ def revolution(faces: int, noise: float = 0.005):
     return shapes.perturbed(base, noise, seed=1, name=f"dome{n * n}+noise")
 
 
-def halftunnel():
+def real_mesh(path=None):
+    """The shipped forking tunnel (784 quads, irregular vertices, three loops), or ``--mesh PATH``."""
     from optimize.io import read_mesh
 
-    return read_mesh(DATA / "halftunnel.off")
+    return read_mesh(path or TUNNEL)
+
+
+def halftunnel():
+    """The shared halftunnel.off (``--data DIR``)."""
+    from optimize.io import read_mesh
+
+    return read_mesh(Path(DATA) / "halftunnel.off")
+
+
+def cylinder():
+    from optimize.io import read_mesh
+
+    return read_mesh(Path(DATA) / "cylinder.obj")
+
+
+def skew_torus(nu: int = 40, nv: int = 20, R: float = 3.0, r: float = 1.0):
+    """A closed torus meshed by its parallels and by helices (vertex ``(i, j)`` at angles
+    ``u = 2 pi (i / nu + j / nv)``, ``v = 2 pi j / nv``): the helices are not conjugate to the
+    parallels, so no fold-free PQ mesh is near; closed, so it cannot be remeshed either."""
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    u, v = 2 * np.pi * (i / nu + j / nv), 2 * np.pi * j / nv
+    V = np.stack([(R + r * np.cos(v)) * np.cos(u), (R + r * np.cos(v)) * np.sin(u), r * np.sin(v)], axis=-1)
+    idx = lambda a, b: (a % nu) * nv + (b % nv)  # noqa: E731
+    F = np.stack([idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)], axis=-1).reshape(-1, 4)
+    return Mesh(V.reshape(-1, 3), F, name=f"skew-torus{len(F)}")
+
+
+def blob(n: int = 12):
+    """A closed quad mesh of a smooth blob: a cube's faces cut into ``n x n`` quads, projected to
+    the unit sphere and bumped (``r = 1 + 0.25 sin(2x) cos(3y) + 0.15 z^2``); its mesh lines follow
+    the cube, not a conjugate net of the blob (eight valence-3 vertices)."""
+    t = np.linspace(-1.0, 1.0, n + 1)
+    A, B = np.meshgrid(t, t, indexing="ij")
+    pts, faces, base = [], [], 0
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            P = np.zeros((n + 1, n + 1, 3))
+            P[..., axis] = sign
+            P[..., (axis + 1) % 3] = A if sign > 0 else B
+            P[..., (axis + 2) % 3] = B if sign > 0 else A
+            pts.append(P.reshape(-1, 3))
+            k = np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]
+            faces.append(base + np.stack([k, k + n + 1, k + n + 2, k + 1], axis=-1).reshape(-1, 4))
+            base += (n + 1) ** 2
+    V = np.concatenate(pts)
+    key = np.round(V * 1e6).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    V, F = V[first], inverse.ravel()[np.concatenate(faces)]
+    V = V / np.linalg.norm(V, axis=1, keepdims=True)
+    rad = 1 + 0.25 * np.sin(2 * V[:, 0]) * np.cos(3 * V[:, 1]) + 0.15 * V[:, 2] ** 2
+    mesh = Mesh(V * rad[:, None], F, name=f"blob{len(F)}")
+    outward = np.einsum("ij,ij->", measures.face_normals(mesh), mesh.V[mesh.F[:, 0]])
+    return mesh if outward > 0 else Mesh(mesh.V, mesh.F[:, ::-1], name=mesh.name)
 
 
 # -- measuring ----------------------------------------------------------------
@@ -110,6 +175,76 @@ def ours(mesh, target, **kw):
     r = row(mesh, mesh.name, target, "ours", time.perf_counter() - t, res.mesh.V, res.nit)
     r["status"] = res.status
     return r
+
+
+def result_row(mesh0, name, target, method, seconds, res):
+    """A row from an OptimizeResult (any connectivity: the remeshed route's too)."""
+    d = res.defects
+    out = res.mesh
+    p = measures.planarity(out)
+    return {"mesh": name, "faces": out.n_faces, "target": target, "method": method, "seconds": seconds,
+            "max": float(defect_of(out, target).max()), "mean": float(defect_of(out, target).mean()),
+            "planarity": float(p.max()), "distance": float(d["distance"]["max_relative"]), "nit": res.nit,
+            "folded": int(d["folded"]["count"]), "status": res.status,
+            "fair": f"fair {d['fairness']['input']:.3g}->{d['fairness']['result']:.3g}"}
+
+
+def foldfree_table(args):
+    """Old (no convexity rows, fairness weight in full) and new default, the paper's methods,
+    the remeshed route and libigl / mpfp where installed, with folds and distances."""
+    from optimize import guided
+    from optimize.conjugacy import net_defect
+    from optimize.routes import optimize_routes
+
+    igl = mpfp = None
+    if not args.no_peers:
+        igl = ensure("igl", "libigl", not args.no_install)
+        mpfp = ensure("mpfp", "mpfp", not args.no_install)
+    cases = [(height_field(900), "pq"), (height_field(900, "hypar"), "pq"), (height_field(900, "conjugate"), "pq"),
+             (skew_torus(), "pq"), (blob(), "pq"), (blob(), "conical")]
+    if DATA is not None:
+        cases += [(halftunnel(), "pq"), (halftunnel(), "conical"), (halftunnel(), "circular"), (cylinder(), "pq")]
+    print("\nFold-free table: 'fold' = faces convex in the input, dented / flipped / collapsed in the result;")
+    print("'dist' = max distance to the input surface in % of its bbox diagonal; ratio = time / new default")
+    warm = shapes.perturbed(shapes.grid(6, 6, height=lambda x, y: 0.1 * x * y), 0.05, seed=0)
+    optimize_mesh(warm, "pq")
+    rows = []
+    for mesh, target in cases:
+        net = net_defect(mesh)
+        print(f"\n{mesh.name} {target}: {net.line(target)}")
+        t = time.perf_counter()
+        res = optimize_mesh(mesh, target)
+        new_t = time.perf_counter() - t
+        group = [result_row(mesh, mesh.name, target, "ours", new_t, res)]
+        far, guided.FAR = guided.FAR, None
+        try:
+            t = time.perf_counter()
+            old = optimize_mesh(mesh, target, convex=False)
+            group.append(result_row(mesh, mesh.name, target, "ours-old", time.perf_counter() - t, old))
+        finally:
+            guided.FAR = far
+        t = time.perf_counter()
+        chosen, routes = optimize_routes(mesh, target, remesh="always", original=res)
+        if len(routes) > 1 and routes[1].result is not None:
+            group.append(result_row(mesh, mesh.name, target, "ours+rm", routes[1].seconds, routes[1].result))
+        elif len(routes) > 1:
+            group[0]["note"] = routes[1].note[:60]
+        for method in args.paper_methods:
+            if mesh.n_faces > args.paper_max_faces:
+                continue
+            t = time.perf_counter()
+            pr = optimize_mesh(mesh, target, method=method, max_iter=args.paper_iter)
+            group.append(result_row(mesh, mesh.name, target, method, time.perf_counter() - t, pr))
+        if target == "pq":
+            for pname, lib, fn in (("libigl", igl, run_libigl), ("mpfp", mpfp, run_mpfp)):
+                if lib is not None:
+                    p = fn(lib, mesh, args.peer_budget)
+                    group.append(p)
+        for r in group[1:]:
+            r["ratio"] = f"time x{r['seconds'] / max(new_t, 1e-9):.2f}"
+        print_table(group, percent=True)
+        rows += group
+    return rows
 
 
 def ensure(module, package, allow):
@@ -172,16 +307,18 @@ def run_mpfp(mpfp, mesh, budget):
     return r
 
 
-def print_table(rows):
-    head = f"{'mesh':22s} {'faces':>7s} {'target':8s} {'method':7s} {'time s':>8s} {'max':>9s} " \
-           f"{'mean':>9s} {'planar':>9s} {'dist':>8s} {'nit':>5s} {'fold':>4s}  ratio / note"
+def print_table(rows, percent: bool = True):
+    """``dist``: max distance to the input surface in % of its bbox diagonal."""
+    head = f"{'mesh':22s} {'faces':>7s} {'target':8s} {'method':8s} {'time s':>8s} {'max':>9s} " \
+           f"{'mean':>9s} {'planar':>9s} {'dist %':>8s} {'nit':>5s} {'fold':>4s}  status / ratio / note"
     print(head)
     print("-" * len(head))
     for r in rows:
-        extra = "; ".join(x for x in (r.get("status", ""), r.get("ratio", ""), r.get("note", "")) if x)
-        print(f"{r['mesh'][:22]:22s} {r['faces']:7d} {r['target']:8s} {r['method']:7s} "
+        extra = "; ".join(x for x in (r.get("status", ""), r.get("fair", ""), r.get("ratio", ""),
+                                      r.get("note", "")) if x)
+        print(f"{r['mesh'][:22]:22s} {r['faces']:7d} {r['target']:8s} {r['method']:8s} "
               f"{r['seconds']:8.2f} {r['max']:9.2e} {r['mean']:9.2e} {r['planarity']:9.2e} "
-              f"{r['distance']:8.2e} {r['nit']:5d} {r.get('folded', 0):4d}  {extra}")
+              f"{100 * r['distance']:8.3f} {r['nit']:5d} {r.get('folded', 0):4d}  {extra}", flush=True)
 
 
 def comparison(args):
@@ -189,12 +326,13 @@ def comparison(args):
     if not args.no_peers:
         igl = ensure("igl", "libigl", not args.no_install)
         mpfp = ensure("mpfp", "mpfp", not args.no_install)
+    shared = [(halftunnel(), "pq"), (halftunnel(), "conical"), (halftunnel(), "circular")] if DATA else []
     cases = [(height_field(900, "conjugate"), "pq"), (height_field(900), "pq"), (height_field(900, "hypar"), "pq"),
-             (halftunnel(), "pq"), (halftunnel(), "conical"), (halftunnel(), "circular"),
-             (revolution(10000), "pq"), (revolution(10000), "conical"), (revolution(2500), "circular"),
+             (real_mesh(args.mesh), "pq"), (real_mesh(args.mesh), "conical"), (real_mesh(args.mesh), "circular"),
+             *shared, (revolution(10000), "pq"), (revolution(10000), "conical"), (revolution(2500), "circular"),
              (height_field(10000), "pq")]
     if args.quick:
-        cases = cases[:6]
+        cases = cases[:6 + len(shared)]
     # one-time costs (MKL and OpenMP start-up, first sparse factorizations) outside the clock
     warm = shapes.perturbed(shapes.grid(6, 6, height=lambda x, y: 0.1 * x * x), 0.05, seed=0)
     for kw in ({}, {"linear_solver": "superlu"}):
@@ -331,6 +469,7 @@ def linalg(args):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="small cases only")
+    ap.add_argument("--mesh", metavar="PATH", help="a quad mesh to use instead of configs/meshes/tunnel.off")
     ap.add_argument("--large", action="store_true", help="scaling curve up to 100k faces")
     ap.add_argument("--full", action="store_true", help="run mpfp on the large meshes too (minutes)")
     ap.add_argument("--no-peers", action="store_true")
@@ -342,14 +481,28 @@ def main():
     ap.add_argument("--to-1e3", type=float, default=180.0, metavar="S",
                     help="seconds libigl may take to reach planarity 1e-3 on meshes up to 3k faces "
                          "(the issue's 100x goal is against that time; 0 to skip)")
+    ap.add_argument("--data", metavar="DIR", help="folder with halftunnel.off and cylinder.obj "
+                                                 "(the shared meshes): their rows too")
+    ap.add_argument("--foldfree-only", action="store_true", help="only the fold-free table")
+    ap.add_argument("--no-foldfree", action="store_true", help="skip the fold-free table")
+    ap.add_argument("--paper-methods", nargs="*", default=["penalty", "sqp", "hybrid"],
+                    help="the paper's methods in the fold-free table")
+    ap.add_argument("--paper-max-faces", type=int, default=1000, help="meshes up to this size get paper rows")
+    ap.add_argument("--paper-iter", type=int, default=200, help="iteration budget of the paper's methods")
     ap.add_argument("--one", nargs=2, metavar=("TARGET", "FACES"), help=argparse.SUPPRESS)
     args = ap.parse_args()
+    global DATA
+    DATA = args.data
     if args.one:
         return one(args.one[0], int(args.one[1]))
     if args.linalg:
         return linalg(args)
     print(f"benchmark of the default optimizer; {time.strftime('%Y-%m-%d %H:%M')}; "
           "timings on a shared machine are noisy")
+    if not args.scaling_only and not args.no_foldfree:
+        foldfree_table(args)
+    if args.foldfree_only:
+        return
     if not args.scaling_only:
         comparison(args)
     if not args.no_scaling:

@@ -1,6 +1,11 @@
 """``python -m fabricate`` is the ``fabricate`` command."""
 import sys
 
-from .cli import main
+try:
+    from .cli import main
 
-sys.exit(main())
+    code = main()
+except KeyboardInterrupt:  # Ctrl-C while the command line itself was still loading
+    print("interrupted", file=sys.stderr)
+    code = 130
+sys.exit(code)

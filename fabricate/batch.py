@@ -14,12 +14,15 @@ becomes a row with its status and message; the others carry on.
 from __future__ import annotations
 
 import concurrent.futures as cf
+import contextlib
 import csv
 import io
 import itertools
 import logging
 import multiprocessing
 import os
+import signal
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,10 +32,13 @@ from optimize.atomic import atomic_open
 from optimize.errors import ConfigError, ConicalFabError
 
 from .config import RunConfig, load_config, override_values
-from .pipeline import EXIT_CODES, RunSummary, run_pipeline
+from .pipeline import EXIT_CODES, RunSummary, run_pipeline, worst
 
 log = logging.getLogger(__name__)
 
+MAX_NAME = 200
+"""Longest job (folder) name in bytes: 255 less the room of ``.<name>.<random>.part`` and
+``<name>.failed-<time>-<k>``."""
 COLUMNS = ("name", "status", "faces", "planarity", "conical", "parts", "seconds", "message", "out_dir")
 
 
@@ -104,11 +110,17 @@ def expand_jobs(config_files: list[str | Path], sets: dict[str, list[Any]] | Non
             try:
                 cfg = load_config(path, overrides=overrides)
                 name = f"{cfg.name}__{suffix}" if suffix else cfg.name
+                if len(name.encode()) > MAX_NAME:
+                    raise ConfigError(f"{path}: job {name[:60]}...: its folder name would be {len(name.encode())} "
+                                      f"bytes, expected at most {MAX_NAME} (file systems allow 255 with the "
+                                      "temporary and .failed suffixes); sweep fewer keys or give shorter values")
                 cfg.name = name
                 jobs.append(Job(name, str(path), overrides, cfg))
             except ConicalFabError as exc:
                 base = Path(path).stem
-                jobs.append(Job(f"{base}__{suffix}" if suffix else base, str(path), overrides, error=str(exc)))
+                name = f"{base}__{suffix}" if suffix else base
+                jobs.append(Job(name if len(name.encode()) <= MAX_NAME else name[:MAX_NAME // 2] + "...",
+                                str(path), overrides, error=str(exc)))
     seen: dict[str, str] = {}
     for job in jobs:
         if job.name in seen and job.config is not None:
@@ -118,22 +130,26 @@ def expand_jobs(config_files: list[str | Path], sets: dict[str, list[Any]] | Non
     return jobs
 
 
-def run_job(job: Job, out_root: str) -> RunSummary:
-    """Run one job; never raises: every failure becomes a RunSummary with its status."""
+def run_job(job: Job, out_root: str, force: bool = False) -> RunSummary:
+    """Run one job; never raises (but KeyboardInterrupt): every failure becomes a RunSummary."""
     t0 = time.perf_counter()
     if job.config is None:
         return RunSummary(job.name, "bad_input", EXIT_CODES["bad_input"], config_file=job.config_file,
                           message=job.error or "invalid config")
     try:
-        return run_pipeline(job.config, out_root)
+        return run_pipeline(job.config, out_root, force=force)
     except ConicalFabError as exc:
         status = {2: "bad_input", 3: "tolerance_not_reached", 4: "export_failed"}.get(exc.exit_code, "error")
         return RunSummary(job.name, status, exc.exit_code, config_file=job.config_file,
                           seconds=time.perf_counter() - t0, message=str(exc))
     except Exception as exc:  # noqa: BLE001 - a bug in one job must not stop the batch
-        log.exception("%s failed", job.name)
-        return RunSummary(job.name, "error", 1, config_file=job.config_file, seconds=time.perf_counter() - t0,
-                          message=f"unexpected {type(exc).__name__}: {exc}")
+        from .cli.exits import classify
+
+        code, line = classify(exc)  # the CLI's table: a bad path is bad input, a bug an internal error
+        log.error("%s: %s", job.name, line)
+        status = {2: "bad_input", 4: "export_failed"}.get(code, "error")
+        return RunSummary(job.name, status, code, config_file=job.config_file, seconds=time.perf_counter() - t0,
+                          message=line.removeprefix("error: "))
 
 
 def make_executor(workers: int, scheduler: str | None = None, *,
@@ -153,22 +169,31 @@ def make_executor(workers: int, scheduler: str | None = None, *,
         executor = client.get_executor(pure=False)
         return executor, client.close
     executor = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                      initializer=_share_cores, initargs=(workers,))
+                                      initializer=_worker_init, initargs=(workers,))
     return executor, lambda: executor.shutdown(wait=True, cancel_futures=True)
 
 
-def _share_cores(workers: int) -> None:
+def _worker_init(workers: int) -> None:
     """In a worker process: let MKL (the optimizer's sparse Cholesky) use this worker's share of
-    the cores, so that ``workers`` processes do not each start a thread per core."""
+    the cores, so that ``workers`` processes do not each start a thread per core; leave Ctrl-C to
+    the batch (it stops the workers and removes what they left)."""
     share = max(1, (os.cpu_count() or 1) // max(1, workers))
     os.environ.setdefault("MKL_NUM_THREADS", str(share))
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def run_batch(jobs: list[Job], out_root: str | Path, *, workers: int | None = None, scheduler: str | None = None,
-              on_done: Callable[[RunSummary], None] | None = None) -> list[RunSummary]:
-    """Run ``jobs`` (results in job order); ``on_done`` is called as each finishes."""
+              on_done: Callable[[RunSummary], None] | None = None, force: bool = False) -> list[RunSummary]:
+    """Run ``jobs`` (results in job order); ``on_done`` is called as each finishes.
+
+    A job whose worker process dies (killed, out of memory, a crash in native code) is run once
+    more, alone in a fresh worker so that it cannot take healthy jobs down with it; lost twice, it
+    ends ``lost`` (exit 1).  Jobs that were only waiting or running beside it are run again
+    without counting as an attempt of theirs.  Temporary folders of dead workers are removed.
+    """
     out_root = str(Path(out_root).resolve())
     results: dict[int, RunSummary] = {}
+    lost: dict[int, list[str]] = {}
     todo = []
     for i, job in enumerate(jobs):
         if job.config is None:
@@ -177,28 +202,131 @@ def run_batch(jobs: list[Job], out_root: str | Path, *, workers: int | None = No
                 on_done(results[i])
         else:
             todo.append(i)
-    if todo:
-        n = workers or min(len(todo), os.cpu_count() or 1)
-        executor, close = make_executor(max(1, n), scheduler)
+    n = max(1, workers or min(len(todo), os.cpu_count() or 1))
+
+    def finish(i: int, fut: cf.Future) -> bool:
+        """Record a finished future; False when its worker was lost."""
         try:
-            futures = {executor.submit(run_job, jobs[i], out_root): i for i in todo}
-            for fut in cf.as_completed(futures):
-                i = futures[fut]
-                try:
-                    results[i] = fut.result()
-                except Exception as exc:  # noqa: BLE001 - a dead worker process, a lost Dask task
-                    results[i] = RunSummary(jobs[i].name, "error", 1, config_file=jobs[i].config_file,
-                                            message=f"worker failed: {type(exc).__name__}: {exc}")
-                if on_done:
-                    on_done(results[i])
-        finally:
-            close()
+            results[i] = fut.result()
+        except cf.CancelledError:
+            return False
+        except Exception as exc:  # noqa: BLE001 - a dead worker process, a lost Dask task
+            text = str(exc).split(". ")[0].split("\n")[0]
+            lost.setdefault(i, []).append(f"{type(exc).__name__}: {text}" if text else type(exc).__name__)
+            return False
+        if i in lost:
+            results[i].notes.append(f"its first attempt ended when a worker process died ({lost[i][0]}); "
+                                    "this result is from a second attempt, run on its own")
+        if on_done:
+            on_done(results[i])
+        return True
+
+    try:
+        if todo:
+            _round(todo, jobs, out_root, force, scheduler, n, finish)
+        again = [i for i in todo if i not in results]
+        if again:  # alone, in fresh workers, at most n at a time
+            for note in _sweep(out_root, jobs):
+                log.warning("%s", note)
+            for i in again:
+                log.warning("%s: its worker died (%s); running it again on its own", jobs[i].name,
+                            "; ".join(lost.get(i, ["pool broken"])))
+            _isolated(again, jobs, out_root, force, scheduler, n, finish)
+    except KeyboardInterrupt:
+        _stop_workers()
+        _sweep(out_root, jobs)
+        raise
+    for i in todo:
+        if i not in results:
+            why = "; ".join(lost.get(i, [])) or "its worker process died"
+            results[i] = RunSummary(jobs[i].name, "lost", EXIT_CODES["lost"], config_file=jobs[i].config_file,
+                                    message=f"lost: its worker process died twice ({why}); run it alone "
+                                            "(fabricate run) to see why")
+            if on_done:
+                on_done(results[i])
+    for note in _sweep(out_root, jobs):
+        log.warning("%s", note)
     return [results[i] for i in range(len(jobs))]
 
 
+def _round(indices, jobs, out_root, force, scheduler, n, finish) -> None:
+    """All ``indices`` on one executor of ``n`` workers (a broken pool fails what it still held)."""
+    executor, close = make_executor(n, scheduler)
+    try:
+        with _workers_ignore_sigint():
+            futures = {executor.submit(run_job, jobs[i], out_root, force): i for i in indices}
+        for fut in cf.as_completed(futures):
+            finish(futures[fut], fut)
+    except BaseException:
+        _stop_workers()  # before the executor's shutdown, which would wait for the running jobs
+        raise
+    finally:
+        close()
+
+
+def _isolated(indices, jobs, out_root, force, scheduler, n, finish) -> None:
+    """Each of ``indices`` on an executor of its own (one worker), at most ``n`` at a time."""
+    pending, running = list(indices), {}
+    try:
+        while pending or running:
+            while pending and len(running) < n:
+                i = pending.pop(0)
+                executor, close = make_executor(1, scheduler)
+                with _workers_ignore_sigint():
+                    running[executor.submit(run_job, jobs[i], out_root, force)] = (i, close)
+            done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
+            for fut in done:
+                i, close = running.pop(fut)
+                close()
+                finish(i, fut)
+    except BaseException:
+        _stop_workers()
+        raise
+    finally:
+        for _, close in running.values():
+            close()
+
+
+@contextlib.contextmanager
+def _workers_ignore_sigint():
+    """Worker processes start while SIGINT is ignored, so they ignore it from their first
+    instruction (an ignored signal stays ignored across exec; a handler would not): Ctrl-C is the
+    batch's to handle, never a traceback from a worker still importing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _stop_workers() -> None:
+    """Ctrl-C in a batch: end the worker processes at once (they ignore SIGINT)."""
+    children = multiprocessing.active_children()
+    for p in children:
+        p.terminate()
+    for p in children:
+        p.join(timeout=1.0)
+        if p.is_alive():
+            p.kill()
+
+
+def _sweep(out_root: str, jobs: list[Job]) -> list[str]:
+    """Remove the temporary folders dead workers left in ``out_root``; the notes saying so."""
+    from .runfolder import clean_stale_parts
+
+    notes = []
+    for name in sorted({j.name for j in jobs}):
+        notes += clean_stale_parts(Path(out_root), name)
+    return notes
+
+
 def exit_code(summaries: list[RunSummary]) -> int:
-    """0 when every job is ok, else the largest exit code of a job."""
-    return max((s.exit_code for s in summaries), default=0)
+    """0 when every job is ok, else the code of the worst job (:data:`fabricate.pipeline.PRECEDENCE`):
+    a lost or crashed job (1) first, then bad input (2), a failed export (4), a missed tolerance (3)."""
+    return EXIT_CODES[worst(s.status for s in summaries)] if summaries else 0
 
 
 def rows(summaries: list[RunSummary]) -> list[dict[str, Any]]:
@@ -237,3 +365,5 @@ def print_table(summaries: list[RunSummary], console=None) -> None:
     for s in summaries:
         if s.status != "ok":
             console.print(f"[bold]{s.name}[/bold]: {s.message}", highlight=False)
+        for note in s.notes:
+            console.print(f"[bold]{s.name}[/bold] note: {note}", highlight=False)

@@ -4,10 +4,18 @@ The bill of materials is the reference (ids, kinds, analytic volumes,
 neighbours).  Each file is read back by an independent reader and compared
 with it:
 
-- ``step``: OpenCASCADE reads ``model.step``; part count and names equal the
-  BOM's; every solid passes ``BRepCheck_Analyzer``; its volume equals the
-  analytic volume to ``1e-6`` relative; the file's unit is mm; every solid
-  has a colour, one per kind, different kinds different.
+- ``step``: an independent reader of the STEP text (:mod:`fabricate.export.step_text`,
+  neither the writer's code nor OpenCASCADE) reads ``model.step``; part count
+  and names equal the BOM's; every solid is a closed, consistently oriented
+  planar polyhedron (each edge used twice in opposite directions, Euler
+  characteristic 2, loops closed, simple and counter-clockwise about their
+  outward plane normals, vertices on their planes and lines within the
+  file's declared accuracy); its volume equals the analytic volume to
+  ``1e-6`` relative; the file's unit is mm; every solid has a colour, one
+  per kind, different kinds different.  With ``step_reader="occ"``
+  (``fabricate check --occ``) OpenCASCADE reads it back instead and every
+  solid passes ``BRepCheck_Analyzer`` (about 10 ms a part), and ezdxf
+  audits the DXF.
 - ``3mf``: one object per BOM row, same names; manifold3d (double precision)
   accepts each as a closed 2-manifold; volumes to ``1e-6``.
 - ``stl``: split into parts with the 3MF's triangle counts, welded per part;
@@ -21,17 +29,21 @@ with it:
 - ``flat``: every panel and beam rebuilt from ``flat.json`` alone (outline,
   bevels, thickness, transform) has the volume and, within 0.01 mm, the
   corners of its STEP solid (3MF mesh in the fast check).
-- ``dxf``: ezdxf audit clean, units mm, one CUT outline (id in XDATA) and
+- ``dxf``: read by an independent reader (:mod:`fabricate.export.dxf_text`: lint
+  of codes, sections, handles, closed outlines; ``--occ``: ezdxf loads and
+  audits the whole file), units mm, one CUT outline (id in XDATA) and
   one ETCH id per panel and beam, and each outline has the area (``1e-9``
   relative) and the edge lengths (``1e-6`` mm) of the flat data's outline
-  with the same id (without ``flat.json``: the BOM's area).
+  with the same id (without ``flat.json``: a face of the STEP solid).
 - ``svg``: parses, one group per panel and beam.
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
   element / object / file per BOM row with the same id; IFC schema-valid with ifcopenshell's
   volumes equal to the BOM's (not in the fast check: ``skip`` ``ifc_geometry``).
 
 A check whose file was not written is reported with ``pass: None`` and the
-reason, never silently left out.
+reason, never silently left out; a file the run wrote (listed in its
+``report.json``) that is gone fails, ``missing``.  Every failed check carries
+``why``: the plain reasons, from its figures.
 """
 from __future__ import annotations
 
@@ -48,12 +60,14 @@ log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
          "dxf": "outlines.dxf", "svg": "outlines.svg", "flat": "flat.json", "ifc": "model.ifc", "3dm": "model.3dm",
          "nc1": "nc1"}
+REPORT = "report.json"
 VOLUME_REL_TOL = 1e-6
 AREA_REL_TOL = 1e-9
 EDGE_TOL_MM = 1e-6
 
 
-def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset()) -> dict:
+def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset(),
+                  step_reader: str = "text") -> dict:
     """Run every check on ``outdir``; returns ``{"outdir", "pass", "checks": {name: {...}}, "seconds"}``.
 
     ``pass`` is False when any check failed (``pass: False``); skipped checks
@@ -62,7 +76,12 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
     ``skip`` names files (keys of ``FILES``, e.g. ``{"step"}``; ``ifc_geometry``: the IFC without
     its schema validation and volumes) not to read:
     their checks, and the checks that need them, carry ``pass: None``.
+    ``step_reader``: ``"text"`` (default: :mod:`fabricate.export.step_text`, an
+    independent parser of the planar B-rep, as fast as the export) or ``"occ"``
+    (OpenCASCADE reads the file back: BRepCheck per solid, about 10 ms a part).
     """
+    if step_reader not in ("text", "occ"):
+        raise ValueError(f"step_reader {step_reader!r}: expected 'text' or 'occ'")
     from .export import exchange_check
     from .export.bom import read_bom
 
@@ -74,16 +93,19 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
     if not paths["bom"].exists():
         raise ExportError(f"{paths['bom']}: missing; the checks compare every file with the bill of materials")
     bom = read_bom(paths["bom"])
+    written = written_files(out)
     checks: dict[str, dict] = {"bom": _check_bom(bom)}
     read: dict[str, object] = {}  # what one check read and the next ones use: STEP solids, 3MF meshes
     for name, key, needs, run in (
-            ("step", "step", None, lambda: _check_step(paths["step"], bom)),
+            ("step", "step", None, lambda: (_check_step if step_reader == "occ" else _check_step_text)(
+                paths["step"], bom)),
             ("3mf", "3mf", None, lambda: _check_3mf(paths["3mf"], bom)),
             ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
             ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
             ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
             ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
-            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"]), None)),
+            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"], *(
+                (None, None) if step_reader == "occ" else (_text_faces, "text"))), None)),
             ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
             ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
                                                                      full="ifc_geometry" not in skip), None)),
@@ -94,7 +116,12 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
             checks[name] = {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
             continue
         if not paths[key].exists():
-            checks[name] = {"pass": None, "skipped": f"{FILES[key]} was not written"}
+            if FILES[key] in written:
+                checks[name] = {"pass": False, "missing": FILES[key],
+                                "why": [f"{FILES[key]} is missing: the run wrote it "
+                                        f"({written[FILES[key]]} bytes, listed in {REPORT})"]}
+            else:
+                checks[name] = {"pass": None, "skipped": f"{FILES[key]} was not written"}
             continue
         if needs and read.get(needs) is None:
             checks[name] = {"pass": None, "skipped": f"needs a readable {FILES[needs]}"}
@@ -104,11 +131,73 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
         except ExportError as exc:
             result = {"pass": False, "error": str(exc)}
         result["seconds"] = round(time.perf_counter() - t1, 3)
+        if result.get("pass") is False:
+            result.setdefault("why", failure_reasons(result))
         checks[name] = result
         log.info("check %s: %s", name, {True: "ok", False: "FAILED"}.get(result.get("pass"), "skipped"))
     failed = [k for k, v in checks.items() if v.get("pass") is False]
     return {"outdir": str(out), "pass": not failed, "failed": failed, "checks": checks,
             "seconds": round(time.perf_counter() - t0, 3)}
+
+
+def written_files(outdir: Path) -> dict[str, int]:
+    """``{file: bytes}`` the run says it wrote (``report.json``'s ``files``); empty without a report
+    (the check inside a run, or exports written by the library): then a file not there was not written."""
+    import json
+
+    try:
+        report = json.loads((outdir / REPORT).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    files = report.get("files") if isinstance(report, dict) else None
+    return {str(k): (v or {}).get("bytes") for k, v in files.items()} if isinstance(files, dict) else {}
+
+
+REASONS = {"missing": "missing from the file", "unexpected": "not in the BOM", "invalid": "invalid solids",
+           "volume_failures": "volume off the BOM's", "not_manifold": "not closed 2-manifolds",
+           "not_one_piece": "not one piece (object index)", "uncoloured": "without a colour",
+           "nonpositive_volume": "volume not positive", "failures": "failed"}
+FLAGS = {"unit_mm": "the unit is not mm", "coloured_by_kind": "not one colour per kind",
+         "complete": "the file is incomplete (no END-ISO-10303-21;)"}
+
+
+def failure_reasons(r: dict) -> list[str]:
+    """Plain reasons of a failed check from its figures (the lists of ids, the false flags)."""
+    out = [f"{r['error']}"] if r.get("error") else []
+    for key, what in REASONS.items():
+        items = r.get(key)
+        if items:
+            count = r.get("failed") if key == "failures" and r.get("failed") else len(items)
+            shown = ", ".join(_name(x) for x in items[:5])
+            out.append(f"{count} {what}: {shown}{', ...' if count > 5 else ''}")
+    out += [what for key, what in FLAGS.items() if r.get(key) is False]
+    if r.get("duplicate_ids"):
+        out.append(f"{r['duplicate_ids']} duplicate ids")
+    for a, b, what in (("solids", "bom_rows", "solids for BOM rows"), ("components", "parts", "components for parts"),
+                       ("genus", "expected_genus", "genus, expected"), ("outlines", "expected", "outlines for parts"),
+                       ("groups", "expected", "groups for parts")):
+        if a in r and b in r and r[a] != r[b]:
+            out.append(f"{r[a]} {what} {r[b]}")
+    if r.get("status") not in (None, "NoError"):
+        out.append(f"manifold3d status {r['status']}")
+    if r.get("lint"):
+        out += [f"DXF: {x}" for x in r["lint"]]
+    elif r.get("audit_errors"):
+        out.append(f"{r['audit_errors']} DXF audit errors")
+    if "units" in r and r.get("units") != 4:
+        out.append(f"DXF units {r['units']}, expected 4 (mm)")
+    if "volume_error_mm3" in r and r["volume_error_mm3"] > r.get("float32_bound_mm3", float("inf")):
+        out.append(f"volume off by {r['volume_error_mm3']:.3g} mm3, above the float32 bound "
+                   f"{r['float32_bound_mm3']:.3g} mm3")
+    return out or ["see the JSON (--json) for the figures"]
+
+
+def _name(x) -> str:
+    if isinstance(x, dict):
+        who = x.get("id") or x.get("pair")
+        figs = ", ".join(f"{k} {v:.3g}" for k, v in x.items() if isinstance(v, float))
+        return f"{who} ({figs})" if figs else str(who)
+    return str(x)
 
 
 def _volumes(bom) -> dict[str, float]:
@@ -160,6 +249,61 @@ def _check_step(path, bom):
              "volume_failures": errors[:20], "unit_mm": unit_mm, "coloured_by_kind": coloured_by_kind,
              "colours": {k: [list(c) for c in v] for k, v in by_kind.items()}, "uncoloured": uncoloured[:20],
              **facts}, dict(solids))
+
+
+def _check_step_text(path, bom):
+    """The STEP file read by the independent text reader: names, validity of every solid as a closed
+    planar polyhedron (edges used twice in opposite directions, V - E + F = 2, loops closed and
+    counter-clockwise about their outward plane normals, simple, vertices on their planes and lines
+    within the file's declared uncertainty), volumes against the BOM, unit, colours per kind."""
+    from .export.step_text import read_step_text
+
+    solids, facts = read_step_text(path)
+    expected = _volumes(bom)
+    names = list(solids)
+    missing = sorted(set(expected) - set(names))
+    extra = sorted(set(names) - set(expected))
+    accuracy = facts["uncertainty_mm"] or 1e-6
+    invalid, worst, worst_id, errors, reasons = [], 0.0, None, [], {}
+    worst_plane = max((f["on_plane_mm"] for f in solids.values()), default=0.0)
+    worst_line = max((f["on_line_mm"] for f in solids.values()), default=0.0)
+    for name, f in solids.items():
+        bad = [k for k in ("closed", "loops_closed", "normals_agree", "simple") if not f[k]]
+        bad += ([f"euler {f['euler']}"] if f["euler"] != 2 else [])
+        bad += (["vertex off its plane"] if f["on_plane_mm"] > accuracy else [])
+        bad += (["vertex off its line"] if f["on_line_mm"] > accuracy else [])
+        bad += (["volume not positive"] if not f["volume_mm3"] > 0 else [])
+        if bad:
+            invalid.append(name)
+            reasons.setdefault(", ".join(bad), name)
+        if name in expected:
+            rel = abs(f["volume_mm3"] - expected[name]) / expected[name]
+            if rel > worst:
+                worst, worst_id = rel, name
+            if rel > VOLUME_REL_TOL:
+                errors.append(name)
+    kind_of = {r["id"]: r["kind"] for r in bom}
+    colours = {n: f["colour"] for n, f in solids.items() if f["colour"] is not None}
+    by_kind = {k: sorted({colours[n] for n in names if kind_of.get(n) == k and n in colours})
+               for k in set(kind_of.values())}
+    by_kind = {k: v for k, v in by_kind.items() if v or any(kind_of.get(n) == k for n in names)}
+    uncoloured = [n for n in names if n not in colours]
+    coloured_by_kind = (not uncoloured and all(len(c) == 1 for c in by_kind.values())
+                        and len({c[0] for c in by_kind.values()}) == len(by_kind))
+    ok = (not missing and not extra and not invalid and not errors and facts["unit_mm"] and facts["complete"]
+          and facts["solids"] == len(expected) and not facts["duplicate_names"] and coloured_by_kind)
+    return ({"pass": ok, "read_back": "text", "solids": facts["solids"], "bom_rows": len(expected),
+             "missing": missing[:20], "unexpected": extra[:20], "invalid": invalid[:20],
+             "n_invalid": len(invalid), "invalid_reasons": reasons, "volume_rel_error_max": worst,
+             "worst": worst_id, "volume_tolerance": VOLUME_REL_TOL, "volume_failures": errors[:20],
+             "max_off_plane_mm": worst_plane, "max_off_line_mm": worst_line, "accuracy_mm": accuracy,
+             "unit_mm": facts["unit_mm"], "complete": facts["complete"], "coloured_by_kind": coloured_by_kind,
+             "colours": {k: [list(c) for c in v] for k, v in by_kind.items()}, "uncoloured": uncoloured[:20],
+             "reader": facts["reader"]}, solids)
+
+
+def _text_faces(facts) -> list[np.ndarray]:
+    return facts["faces"]
 
 
 def _head(path, n: int) -> str:
@@ -275,23 +419,31 @@ def _check_flat(path, bom, read):
     return check_flat(path, bom, step_solids=read.get("step"), meshes=read.get("3mf"))
 
 
-def _check_dxf(path, bom, solids_step, flat_path=None):
+def _check_dxf(path, bom, solids_step, flat_path=None, faces_of=None, reader=None):
     """CUT outlines against the flat data's outlines (which the flat check holds to the STEP solids),
-    or, without flat.json, their areas against the BOM's."""
-    from .export.dxf import read_outlines
+    or, without flat.json, against a face of the STEP solid of the same name.
+
+    ``faces_of(solid)``: its face loops (default: OpenCASCADE's, for solids read by OCC);
+    ``reader``: ``"text"`` (the independent DXF reader, linted) or None (ezdxf loads and audits)."""
     from .export.verify import match_outline
 
-    if flat_path is None or not Path(flat_path).exists():
-        from .check_fast import dxf_against_bom
+    if reader == "text":
+        from .export.dxf_text import read_outlines_text as read_outlines
+    else:
+        from .export.dxf import read_outlines
 
-        return dxf_against_bom(path, bom)
+    if faces_of is None:
+        from .export.verify import face_polygons as faces_of
+
+    outline_of = None
+    if flat_path is not None and Path(flat_path).exists():
+        from .export.flatdata import read_flat
+
+        outline_of = {}
+        for g in read_flat(flat_path):
+            for pid, Q in zip(g["ids"], g["outline"]):
+                outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
     outlines, facts = read_outlines(path)
-    outline_of = {}
-    from .export.flatdata import read_flat
-
-    for g in read_flat(flat_path):
-        for pid, Q in zip(g["ids"], g["outline"]):
-            outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
     flat = [r["id"] for r in bom if r["kind"] in ("panel", "beam")]
     missing = sorted(set(flat) - set(outlines))
     worst_a, worst_e, worst_id, failures = 0.0, 0.0, None, []
@@ -300,10 +452,10 @@ def _check_dxf(path, bom, solids_step, flat_path=None):
         if shape is None:
             failures.append({"id": pid, "error": "no STEP solid of that name"})
             continue
-        if pid not in outline_of:
+        if outline_of is not None and pid not in outline_of:
             failures.append({"id": pid, "error": "not in flat.json"})
             continue
-        fi, rel, err = match_outline(Q, outline_of[pid])
+        fi, rel, err = match_outline(Q, outline_of[pid] if outline_of is not None else faces_of(shape))
         if err > worst_e:
             worst_e, worst_id = err, pid
         worst_a = max(worst_a, rel)
@@ -311,7 +463,8 @@ def _check_dxf(path, bom, solids_step, flat_path=None):
             failures.append({"id": pid, "face": fi, "area_rel_error": rel, "edge_error_mm": err})
     ok = (facts["audit_errors"] == 0 and facts["units"] == 4 and not missing and not failures
           and facts["texts"] >= len(flat))
-    return {"pass": ok, "outlines": len(outlines), "expected": len(flat), "missing": missing[:20],
+    return {"pass": ok, "against": "flat.json" if outline_of is not None else "step", "outlines": len(outlines),
+            "expected": len(flat), "missing": missing[:20],
             "area_rel_error_max": worst_a, "edge_error_mm_max": worst_e, "worst": worst_id,
             "tolerances": {"area_rel": AREA_REL_TOL, "edge_mm": EDGE_TOL_MM}, "failures": failures[:20],
             "failed": len(failures), **facts}

@@ -1,6 +1,8 @@
 """The output check in the mode a run asks for (``outputs.check``): full, fast or off.
 
-``full`` is :func:`fabricate.check.check_outputs` as it is.  ``fast`` runs the
+``full`` is :func:`fabricate.check.check_outputs` as it is (the STEP read by
+an independent text reader); ``occ`` the same with OpenCASCADE reading the
+STEP back (``fabricate check --occ``).  ``fast`` runs the
 same checks with ``skip={"step", "ifc_geometry"}`` (the STEP is not read back: OpenCASCADE
 reading the STEP back is nearly all of the time on big models: about 10 ms per
 part), then puts two light checks, from the files alone, in place of the two
@@ -8,9 +10,9 @@ that need the STEP read back:
 
 - ``step``: the STEP text is scanned: complete (``END-ISO-10303-21;``), unit
   mm, one ``MANIFOLD_SOLID_BREP`` per BOM row, product names equal the BOM ids;
-- ``dxf``: ezdxf audit clean, units mm, one CUT outline and one ETCH id per
-  panel and beam, each outline's area equal to the BOM's (to the BOM's
-  rounding, 1 mm2) instead of the STEP face's.
+- ``dxf``: the independent DXF reader's lint clean, units mm, one CUT outline
+  and one ETCH id per panel and beam, each outline's area equal to the BOM's
+  (to the BOM's rounding, 1 mm2) instead of the STEP face's.
 
 Every check dict says how it was made; the result carries ``mode``.
 ``fabricate check OUTDIR`` runs the full check on a finished run.
@@ -40,26 +42,32 @@ def run_check(outdir, mode: str, tol: Tolerances = DEFAULT) -> dict:
     ``failed``, ``checks``, ``seconds``) with ``mode`` added; for ``off``,
     ``pass`` is None with the reason in ``skipped``.
     """
-    from .check import check_outputs
+    from .check import check_outputs, failure_reasons, written_files
 
     out = Path(outdir)
     if mode == "off":
         return {"outdir": str(out), "mode": "off", "pass": None, "failed": [], "checks": {},
                 "skipped": "outputs.check: off", "seconds": 0.0}
-    if mode == "full":
-        return dict(check_outputs(out, tol=tol), mode="full")
+    if mode in ("full", "occ"):
+        return dict(check_outputs(out, tol=tol, step_reader="text" if mode == "full" else "occ"), mode=mode)
     if mode != "fast":
-        raise ValueError(f"check mode {mode!r}: expected 'full', 'fast' or 'off'")
+        raise ValueError(f"check mode {mode!r}: expected 'full', 'occ', 'fast' or 'off'")
     t0 = time.perf_counter()
     result = check_outputs(out, tol=tol, skip=frozenset({"step", "ifc_geometry"}))
     from .export.bom import read_bom
 
     bom = read_bom(out / "bom.csv")
     checks = dict(result["checks"])
+    written = written_files(out)
     for name, fname, light in (("step", STEP_FILE, scan_step), ("dxf", DXF_FILE, dxf_against_bom)):
         if (out / fname).exists():
             t1 = time.perf_counter()
             checks[name] = dict(light(out / fname, bom), seconds=round(time.perf_counter() - t1, 3))
+            if checks[name]["pass"] is False:
+                checks[name]["why"] = failure_reasons(checks[name])
+        elif fname in written:
+            checks[name] = {"pass": False, "missing": fname,
+                            "why": [f"{fname} is missing: the run wrote it ({written[fname]} bytes)"]}
     failed = [k for k, v in checks.items() if v.get("pass") is False]
     return {"outdir": str(out), "mode": "fast", "pass": not failed, "failed": failed, "checks": checks,
             "note": FAST_NOTE, "seconds": round(time.perf_counter() - t0, 3)}
@@ -83,7 +91,7 @@ def scan_step(path, bom: list[dict]) -> dict:
 
 def dxf_against_bom(path, bom: list[dict]) -> dict:
     """Flat outlines against the BOM: audit, units, one outline and one id per part, areas."""
-    from .export.dxf import read_outlines
+    from .export.dxf_text import read_outlines_text as read_outlines
     from .export.verify import polygon_measures
 
     outlines, facts = read_outlines(path)

@@ -45,6 +45,7 @@ from .config_design import MAX_FACES, DesignParamError, check_design, subdivided
 from .config_errors import format_errors
 from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
 from .config_yaml import MAX_DEPTH, read_config
+from .structure.options import StructureSection
 
 UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
@@ -160,6 +161,7 @@ class InputSection(Section):
     irregular: Literal["faces", "vertices", "nearest"] | None = None
     side: Literal["keep"] | tuple[float, float, float] | None = None
     radius: float | None = Field(default=None, gt=0, le=1e7)
+    remesh: Literal["auto", "always", "never"] = "never"
     layer: str | None = Field(default=None, min_length=1, max_length=500)
     object: str | None = Field(default=None, min_length=1, max_length=500)
 
@@ -191,6 +193,9 @@ class InputSection(Section):
             raise PydanticCustomError("irregular", "irregular applies only to a surface input")
         if self.surface is None and self.side is not None:
             raise PydanticCustomError("side", "side applies only to a surface input")
+        if self.mesh is None and self.remesh != "never":
+            raise PydanticCustomError("remesh", "remesh applies only to a mesh input (a surface input is "
+                                      "remeshed anyway)")
         rhino = self.mesh is not None and self.mesh.suffix.lower() == ".3dm"
         for key in ("layer", "object"):
             if getattr(self, key) is not None and not rhino:
@@ -227,6 +232,7 @@ class OptimizeSection(Section):
     max_iter: int = Field(default=200, ge=1, le=MAX_ITER)
     fixed: Literal["boundary", "corners"] | list[int] | None = None
     glide_boundary: bool = False
+    convex: bool = True
 
     @field_validator("fixed")
     @classmethod
@@ -285,6 +291,8 @@ class LimitsSection(Section):
     sheet_mm: tuple[float, float] = (6000.0, 3210.0)
     max_panel_kg: float = Field(default=250.0, gt=0, le=100000.0)
 
+    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+
 
 class PartsSection(Section):
     """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
@@ -309,6 +317,8 @@ class SheetSection(Section):
     margin_mm: float = Field(default=10.0, ge=0, le=1000.0)
     kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
     rotation: bool = True
+
+    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
 
 
 class NestingSection(Section):
@@ -356,6 +366,7 @@ class OutputsSection(Section):
     pictures: bool = True
     html: bool = True
     check: Literal["auto", "full", "fast", "off"] = "auto"
+    overwrite: bool = False  # replace an earlier finished run (as ``fabricate run --force``)
 
     def wanted(self, key: str) -> bool:
         """Whether the file of ``key`` is written: ``flat``, ``cut_files`` and ``layout_plan`` follow
@@ -384,6 +395,7 @@ class RunConfig(Section):
     offset: OffsetSection = Field(default_factory=OffsetSection)
     parts: PartsSection = Field(default_factory=PartsSection)
     outputs: OutputsSection = Field(default_factory=OutputsSection)
+    structure: StructureSection = Field(default_factory=StructureSection)
     units: Literal["mm", "cm", "m", "in", "ft"] = "mm"
     scale: float = Field(default=1.0, ge=1e-6, le=1e6)
 

@@ -1,30 +1,32 @@
 """The whole run: input -> optimize -> offset -> CAD -> exports -> report.
 
 :func:`run_pipeline` drives the stages of :mod:`fabricate.stages` in order and
-writes everything into ``<out_root>/<name>/`` through
-:func:`optimize.atomic.atomic_dir`: the files are built in a hidden temporary
-folder beside the target that is renamed into place only after the report is
-written, so a failed or interrupted run never leaves a folder that looks
-complete, and a rerun replaces the previous result only once it is complete.
+writes everything into ``<out_root>/<name>/``: the files are built in a hidden
+temporary folder beside the target that is renamed into place only after the
+report and the run marker are written, so a failed or interrupted run never
+leaves a folder that looks complete.  What a run may replace (only a finished
+run of this tool, only when asked, and a passing one never by a failing one)
+is :mod:`fabricate.runfolder`'s decision.
 
-Outcomes (``RunSummary.status`` -> exit code): ``ok`` 0; ``tolerance_not_reached``
+Outcomes (``RunSummary.status`` -> exit code), in this precedence when several
+apply: ``error`` 1 (a bug) > ``bad_input`` 2 > ``export_failed`` 4 (files written
+but ``check`` failed, marked with ``CHECK_FAILED.txt``) > ``tolerance_not_reached``
 3 (results written, marked in ``report.json``, ``report.html`` and a
-``TOLERANCE_NOT_REACHED.txt`` file); ``export_failed`` 4 (files written but
-``check`` failed, marked the same way).  Bad input (exit 2) and a failed export
-(exit 4) raise the package's errors and write nothing.
+``TOLERANCE_NOT_REACHED.txt`` file; also when the optimization stalled and no
+parts could be built from its mesh) > ``ok`` 0.  Bad input (exit 2) and an
+exporter that raises (exit 4) raise the package's errors and write nothing.
 """
 from __future__ import annotations
 
 import logging
-import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from optimize.atomic import atomic_dir
+from optimize.atomic import remove_part
 
-from . import stages
+from . import runfolder, stages
 from .config import RunConfig
 from .progress import NullProgress
 from .report.measures import collect_measures
@@ -32,15 +34,16 @@ from .requirements import apply_requirements, warnings
 
 log = logging.getLogger(__name__)
 
-STAGES = ("input", "optimize", "offset", "cad", "exports", "report")
-EXIT_CODES = {"ok": 0, "tolerance_not_reached": 3, "export_failed": 4, "bad_input": 2, "error": 1}
+STAGES = ("input", "optimize", "offset", "cad", "structure", "exports", "report")
+EXIT_CODES = {"ok": 0, "tolerance_not_reached": 3, "export_failed": 4, "bad_input": 2, "error": 1, "lost": 1}
 
 
 @dataclass
 class RunSummary:
     """How one run ended: one row of a batch table (picklable, JSON-ready via :meth:`as_dict`).
 
-    status : ``ok`` | ``tolerance_not_reached`` | ``export_failed`` | ``bad_input`` | ``error``.
+    status : ``ok`` | ``tolerance_not_reached`` | ``export_failed`` | ``bad_input`` | ``error`` |
+        ``lost`` (a batch job whose worker process died twice).
     planarity, conical : max defects of the result (relative, radians), None if not reached.
     """
 
@@ -58,6 +61,7 @@ class RunSummary:
     message: str = ""
     timings: dict[str, float] = field(default_factory=dict)
     failed: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -88,55 +92,59 @@ def run_folder(config: RunConfig, out_root: str | Path | None = None) -> Path:
     return root / config.name
 
 
-def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress=None) -> RunSummary:
+def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress=None, *,
+                 force: bool = False) -> RunSummary:
     """Run every stage for ``config`` and write ``<out_root>/<config.name>/``.
 
     out_root : parent folder of the run folder (default ``./outputs``).
     progress : a :class:`fabricate.progress.NullProgress`-like reporter (default: silent).
+    force : replace an earlier finished run there (also ``outputs.overwrite: true``); see
+        :mod:`fabricate.runfolder` for what a run may replace, and when it writes beside.
 
-    Returns the :class:`RunSummary` (exit code 0, 3 or 4).  Raises ConfigError /
-    MeshError (bad input, exit 2), ExportError (exit 4), ConvergenceError (exit 3);
-    on any exception nothing is left at the target and a previous result stays.
+    Returns the :class:`RunSummary` (exit code 0, 3 or 4; ``out_dir`` is where it was written).
+    Raises ConfigError / MeshError (bad input, exit 2: also a folder in the way or busy),
+    ExportError (exit 4), ConvergenceError (exit 3); on any exception nothing is left at the
+    target and a previous result stays.
     """
     progress = progress or NullProgress()
     target = run_folder(config, out_root)
+    force = bool(force or config.outputs.overwrite)
     t_start = time.perf_counter()
-    with atomic_dir(target) as tmp:
-        ctx = RunContext(config=config, workdir=Path(tmp), progress=progress)
-        for name in STAGES[:-1]:
-            _run_stage(ctx, name)
-        tol = config.tolerances
-        ctx.values["measures"] = apply_requirements(collect_measures(ctx), ctx.get("structure"), tol.requirements,
-                                                    ctx["plan"]["target"], tol.beam_twist_mm)
-        ctx.values["outcome"] = outcome(ctx)
-        ctx.timings["before_report"] = time.perf_counter() - t_start
-        _run_stage(ctx, "report")
-        _publishable(ctx.workdir)
+    runfolder.make_parent(target)
+    notes = runfolder.clean_stale_parts(target.parent, config.name)
+    for note in notes:
+        log.info("%s", note)
+    with runfolder.run_lock(target):
+        previous = runfolder.check_target(target, force)
+        tmp = runfolder.new_part(target)
+        try:
+            ctx = RunContext(config=config, workdir=tmp, progress=progress)
+            for name in STAGES[:-1]:
+                _run_stage(ctx, name)
+            tol = config.tolerances
+            measures = collect_measures(ctx)
+            measures.update(ctx.get("structure_measures") or {})
+            ctx.values["measures"] = apply_requirements(measures, ctx.get("structure"), tol.requirements,
+                                                        ctx["plan"]["target"], tol.beam_twist_mm)
+            ctx.values["outcome"] = outcome(ctx)
+            ctx.timings["before_report"] = time.perf_counter() - t_start
+            _run_stage(ctx, "report")
+            out = ctx["outcome"]
+            runfolder.write_marker(tmp, {"name": config.name, "status": out["status"],
+                                         "exit_code": out["exit_code"],
+                                         "config_sha256": runfolder.config_hash(config)})
+            previous = runfolder.check_target(target, force)  # again: a person may have changed it since
+            dest, beside = runfolder.publish_run(tmp, target, previous, out["exit_code"])
+        except BaseException:
+            remove_part(tmp)
+            raise
     ctx.timings["total"] = time.perf_counter() - t_start
-    summary = _summary(ctx, target, ctx.timings["total"])
-    log.info("%s: %s in %.1f s -> %s", config.name, summary.status, summary.seconds, target)
+    summary = _summary(ctx, dest, ctx.timings["total"])
+    summary.notes = notes + ([beside] if beside else [])
+    if beside:
+        summary.message += f"; {beside}"
+    log.info("%s: %s in %.1f s -> %s", config.name, summary.status, summary.seconds, dest)
     return summary
-
-
-def _publishable(folder: Path) -> None:
-    """Give the run folder and its files the usual modes (temporary files are created private)."""
-    umask = _umask()
-    os.chmod(folder, 0o777 & ~umask)
-    for path in folder.rglob("*"):
-        os.chmod(path, (0o777 if path.is_dir() else 0o666) & ~umask)
-
-
-def _umask() -> int:
-    """The process umask, read without changing it where possible (threads may be writing files)."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("Umask:"):
-                return int(line.split()[1], 8)
-    except OSError:
-        pass
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
 
 
 def _run_stage(ctx: RunContext, name: str) -> None:
@@ -148,28 +156,51 @@ def _run_stage(ctx: RunContext, name: str) -> None:
     ctx.progress.done(name, note)
 
 
+PRECEDENCE = ("lost", "error", "bad_input", "export_failed", "tolerance_not_reached", "ok")
+"""Statuses from the most to the least severe: a run (or a batch) reports the first that applies."""
+
+
+def worst(statuses) -> str:
+    """The status of :data:`PRECEDENCE` that comes first among ``statuses`` (``ok`` when none)."""
+    present = set(statuses)
+    return next((s for s in PRECEDENCE if s in present), "ok")
+
+
 def outcome(ctx: RunContext) -> dict[str, Any]:
-    """``{"status", "exit_code", "failed": [measure names], "message"}`` from the measures and checks."""
+    """``{"status", "exit_code", "failed": [measure names, "check:<name>", "parts"], "message"}``.
+
+    Every failure found is listed and named in the message; the status is the worst of them
+    (:data:`PRECEDENCE`): a failed file check (4) before a missed tolerance (3), because files
+    that fail their check must not go to a shop even for a trial.
+    """
     measures = ctx.get("measures", {})
-    failed = [k for k, m in measures.items() if m.get("enforced") and m.get("pass") is False]
+    tol_failed = [k for k, m in measures.items() if m.get("enforced") and m.get("pass") is False]
+    skipped = ctx.get("cad_skipped")
+    if skipped and not tol_failed:
+        tol_failed.append("parts")  # no panels or beams could be built: never a pass
     check = ctx.get("check") or {}
     check_failed = [k for k, v in check.get("checks", {}).items()
                     if isinstance(v, dict) and v.get("pass") is False]
+    found, parts = [], []
     if check_failed or check.get("pass") is False:
-        status = "export_failed"
-        message = "output check failed: " + (", ".join(check_failed) or "see report.json")
-        failed = failed + [f"check:{k}" for k in check_failed]
-    elif failed:
-        status = "tolerance_not_reached"
-        message = "tolerance not reached: " + ", ".join(
-            f"{k} {measures[k]['max']:.3g} > {measures[k]['tolerance']:.3g}" for k in failed)
-        if ctx.get("cad_skipped"):
-            message += "; " + ctx.get("cad_skipped")
+        found.append("export_failed")
+        parts.append("output check failed: " + (", ".join(check_failed) or "see report.json"))
+    if tol_failed:
+        found.append("tolerance_not_reached")
+        shown = [k for k in tol_failed if k in measures]
+        parts.append("tolerance not reached: " + (", ".join(
+            f"{k} {measures[k]['max']:.3g} > {measures[k]['tolerance']:.3g}" for k in shown) or "no parts built"))
+        if skipped:
+            parts.append(skipped)
+    status = worst(found)
+    if parts:
+        message = "; ".join(parts)
     else:
-        parts = ctx.get("parts")
-        warn = warnings(measures, parts.report.get("limits") if parts is not None else None)
-        status, message = "ok", "every requirement met" + (f"; {len(warn)} warning(s): " + "; ".join(warn)
-                                                           if warn else ", every tolerance reached")
+        built = ctx.get("parts")
+        warn = warnings(measures, built.report.get("limits") if built is not None else None)
+        message = "every requirement met" + (f"; {len(warn)} warning(s): " + "; ".join(warn)
+                                             if warn else ", every tolerance reached")
+    failed = tol_failed + [f"check:{k}" for k in check_failed]
     return {"status": status, "exit_code": EXIT_CODES[status], "failed": failed, "message": message}
 
 

@@ -31,7 +31,8 @@ def default_requirements(target: str) -> tuple[str, ...]:
 
 def apply_requirements(measures: dict, structure, requirements, target: str, beam_twist_mm: float) -> dict:
     """``measures`` with ``beam_twist`` added and ``enforced`` / ``role`` set from ``requirements``
-    (a list of names, or None for :func:`default_requirements`); returns the same dict."""
+    (a list of names, or None for :func:`default_requirements`); a measure that ``requirements``
+    cannot name keeps the ``enforced`` its stage gave it.  Returns the same dict."""
     from fabricate.report.measures import entry
 
     if structure is not None and len(getattr(structure, "beam_twist_mm", ())):
@@ -42,6 +43,10 @@ def apply_requirements(measures: dict, structure, requirements, target: str, bea
     wanted = set(default_requirements(target) if requirements is None else requirements)
     other_target = {"conical", "circular"} - {target}
     for name, m in measures.items():
+        if name not in MEASURES:  # a measure with its own rule (offset_turned_over; the structure
+            m["enforced"] = bool(m.get("enforced"))  # check, enforced by structure.check): kept
+            m["role"] = "requirement" if m["enforced"] else "information"
+            continue
         m["enforced"] = name in wanted
         m["role"] = ("requirement" if name in wanted else "reported" if name in other_target
                      else "information")

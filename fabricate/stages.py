@@ -9,6 +9,7 @@ input    -> values["input_mesh"] (mm), ["plan"] (levels, scheme, target, source 
 optimize -> ["mesh"] (final), ["result"] (OptimizeResult or None), ["levels"] (hierarchy facts)
 offset   -> ["structure"] (OffsetStructure)
 cad      -> ["parts"] (Parts)
+structure -> ["statics"] (StructureCheck or None), ["statics_report"], ["structure_measures"]
 exports  -> files in the work folder, ctx.files facts, ["check"] (with its "mode": full | fast | off)
 report   -> ["measures"], report.json, pictures, model.glb, report.html
 """
@@ -61,6 +62,10 @@ def stage_input(ctx) -> str:
         if value is not None:
             plan[key] = value
     plan.update(scale=cfg.scale, mm_per_unit=factor, faces=mesh.n_faces, vertices=mesh.n_vertices)
+    if plan["levels"] == 0 and kind != "surface":  # optimized as it is: quads, not triangles
+        from .quads import RUN_HINT, require_quads
+
+        require_quads(mesh, f"input.{kind} {plan['source']}", hint=RUN_HINT)
     if factor != 1.0:
         mesh = mesh.with_vertices(mesh.V * factor)
         if "surface" in ctx.values:
@@ -95,13 +100,22 @@ def stage_optimize(ctx) -> str:
                   max_iter=opt.max_iter, callback=callback)
     if opt.method == "default":
         kwargs.update(formulation=opt.formulation, linear_solver=opt.linear_solver,
-                      torsion_free_beams=opt.torsion_free_beams)
+                      torsion_free_beams=opt.torsion_free_beams, convex=opt.convex)
     hier = subdivide_and_perturb(mesh, levels, scheme=plan["scheme"], target=target,
                                  surface=ctx.values.get("surface"), **kwargs)
     ctx.values["levels"] = [_plain(_level_facts(lv)) for lv in hier.levels]
     ctx.values["level_results"] = [lv.result for lv in hier.levels]
     result = hier.levels[-1].result
     mesh = hier.mesh
+    if cfg.input.kind == "mesh" and cfg.input.remesh != "never" and levels == 0 and result is not None:
+        from optimize.routes import optimize_routes  # input.remesh: the remeshed route too
+
+        kwargs.pop("callback")
+        chosen, routes = optimize_routes(ctx["input_mesh"], target, remesh=cfg.input.remesh,
+                                         original=result, **kwargs)
+        plan["routes"] = _plain([r.as_dict() for r in routes])
+        ctx.notes.extend(r.line() for r in routes)
+        mesh, result = chosen.mesh, chosen.result
     ctx.values["mesh"] = mesh
     ctx.values["result"] = result
     if result is None:
@@ -166,7 +180,28 @@ def stage_cad(ctx) -> str:
         ctx.values["cad_skipped"] = msg
         ctx.notes.append(msg)
         return "skipped: folded panels"
-    parts = build_parts(ctx["structure"], spec)
+    turned = ctx["structure"].report.get("turned_over") or {"ok": True}
+    if not turned["ok"]:  # a layer past the focal distance: panels and beams would cross
+        from fabricate.offset.turnover import turnover_sentence
+
+        msg = "no panels or beams built: " + turnover_sentence(turned)
+        ctx.values["parts"] = None
+        ctx.values["cad_skipped"] = msg
+        ctx.notes.append(msg)
+        return "skipped: offset faces turn over"
+    try:
+        parts = build_parts(ctx["structure"], spec)
+    except (ConfigError, MeshError) as exc:
+        if result is None or result.success:
+            raise  # the design or the part settings: bad input
+        # the optimizer did not reach its target and no parts can be cut from its mesh: write what
+        # there is (mesh, layers, report) and end marked as a missed tolerance (exit 3)
+        msg = (f"no panels or beams built from the unconverged mesh (optimization {result.status}: "
+               f"{result.message}): {exc}")
+        ctx.values["parts"] = None
+        ctx.values["cad_skipped"] = msg
+        ctx.notes.append(msg)
+        return f"skipped: optimization {result.status}, parts cannot be built"
     ctx.values["parts"] = parts
     counts = {k: sum(len(g) for g in parts.of_kind(k)) for k in ("panel", "beam", "node")}
     return ", ".join(f"{n} {k}s" for k, n in counts.items())
@@ -174,6 +209,18 @@ def stage_cad(ctx) -> str:
 
 def count_parts(parts) -> int:
     return len(parts)
+
+
+# -- structure -----------------------------------------------------------------------
+def stage_structure(ctx) -> str:
+    """The structural check of the beam frame (``fabricate.structure.run.check_run``) when
+    ``structure.check`` is ``report`` or ``enforce``: values ["statics"], ["statics_report"],
+    ["structure_measures"]."""
+    if ctx.config.structure.check == "off":
+        return "off (structure.check: off)"
+    from fabricate.structure.run import check_run
+
+    return check_run(ctx)
 
 
 # -- exports -------------------------------------------------------------------------
@@ -228,6 +275,10 @@ def stage_exports(ctx) -> str:
         except Exception as exc:  # an exporter bug or an OCC failure: exit 4, with the file named
             raise ExportError(f"{fname}: export failed: {type(exc).__name__}: {exc}") from exc
         ctx.files[fname] = dict(facts or {})
+        if key == "bom" and ctx.get("statics") is not None:  # the structure's columns on the beam rows
+            from fabricate.structure.outputs import add_bom_columns
+
+            ctx.files[fname].update(add_bom_columns(out / fname, ctx["statics"]))
     if cfg.outputs.wanted("cut_files"):  # one nested DXF and SVG per material and thickness
         ctx.progress.advance("exports", 1, "nested cut files")
         ctx.files.update(export.write_cut_files(ctx["parts"], out, cfg.outputs.nesting.model_dump()))

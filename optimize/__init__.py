@@ -1,9 +1,17 @@
-"""Geometry core: polygon meshes, measures and the optimizers of conical meshes."""
-from .api import optimize_mesh
-from .errors import ConfigError, ConvergenceError, ExportError, MeshError
-from .mesh import Mesh
-from .result import OptimizeResult
-from .tolerances import Tolerances
+"""Geometry core: polygon meshes, measures and the optimizers of conical meshes.
 
-__all__ = ["ConfigError", "ConvergenceError", "ExportError", "Mesh", "MeshError", "OptimizeResult",
-           "Tolerances", "optimize_mesh"]
+Names are loaded on first use (PEP 562): ``import optimize.errors`` or
+``fabricate --help`` does not pay for SciPy and the solvers, and
+``from optimize import optimize_mesh`` works as before.
+"""
+from ._lazy import lazy_exports
+
+_EXPORTS = {
+    "optimize_mesh": ".api",
+    "ConfigError": ".errors", "ConvergenceError": ".errors", "ExportError": ".errors", "MeshError": ".errors",
+    "Mesh": ".mesh",
+    "OptimizeResult": ".result",
+    "Tolerances": ".tolerances",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

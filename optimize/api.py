@@ -18,16 +18,26 @@ from .constraints import fixed as fixed_mod
 from .constraints import glide as glide_mod
 from .errors import ConfigError
 from .formulation import TARGETS, UNKNOWNS, Formulation, fit_axes
-from .guided import Glide, solve
+from .conjugacy import record_net
+from .constraints import convexity
+from . import guided
+from .guided import Convex, Glide, solve
 from .linalg import BACKENDS
 from .mesh import Mesh
-from .result import OptimizeResult
+from .result import OptimizeResult, check_folds, record_shape
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
 
 METHODS = ("default", "penalty", "sqp", "hybrid")
 FORMULATIONS = ("auto",) + UNKNOWNS
+FOLD_ADVICE = ("the convexity rows should have prevented this: please report it; remeshing along "
+               "principal directions (input.remesh) gives a mesh a fold-free PQ mesh is near")
+NO_CONVEX_FOLD_ADVICE = ("run with convexity kept (drop --no-convex / convex=False): faces then stay convex "
+                         "and where that leaves them non-planar the run names them")
+
+HELD_ADVICE = ("what helps: remeshing along principal directions (--remesh auto, input.remesh: auto), "
+               "or the paper's penalty method (--method penalty), which sometimes finds one")
 GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
 
 
@@ -48,7 +58,8 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
                   reference: Mesh | None = None, fixed=None, glide_boundary: bool = False,
                   fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = Tolerances(),
                   max_iter: int = 200, callback=None, linear_solver: str = "auto",
-                  formulation: str = "auto", torsion_free_beams="auto", **options) -> OptimizeResult:
+                  formulation: str = "auto", torsion_free_beams="auto", convex: bool = True,
+                  **options) -> OptimizeResult:
     """Move the vertices of ``mesh`` so that it becomes ``target``; never mutates ``mesh``.
 
     mesh : Mesh, quads with n-gons and triangles allowed, boundary allowed.
@@ -66,7 +77,9 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         length (a one-sided row, :mod:`optimize.constraints.edgefloor`), so a
         vertex cannot slide onto its neighbour or into a corner.
     fairness, closeness : weights of the scale-free fairness and tangent-plane
-        closeness energies relative to the constraints (halved every iteration).
+        closeness energies relative to the constraints (halved every iteration; the
+        fairness weight also scaled by the worst defect over ``guided.FAR``, so a mesh
+        nearly there keeps its shape).
     tol : Tolerances; the run converges when every defect of the target is within it.
     max_iter : iteration budget.
     callback : ``callback(entry: dict)`` after each iteration.
@@ -81,6 +94,11 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         ``beam_axes`` for the offset stage.  ``"auto"``: when the
         mesh has interior vertices of valence other than 4 (where the paper's angle
         balance says nothing and beams would twist).
+    convex : keep every corner that is convex in the input convex (default method:
+        one-sided rows, ``constraints.convexity``, and no accepted step folds a face);
+        ``False`` is the earlier behaviour (planar, perhaps dented; then ``folded``).
+        Where no fold-free mesh is near, the run ends ``stalled`` / ``max_iter`` and
+        ``defects["convexity"]`` names the faces held at their convexity floor.
     options : extras of the paper's methods (``mu``, ``kkt_tol``, ...), passed on
         to ``optimize.paper.run_paper_method``; none for the default method.
 
@@ -119,6 +137,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     ref_norm = ref_mesh.with_vertices((ref_mesh.V - centre) / h) if reference is not None else norm
     ref = Reference(ref_norm)
     fixed_idx = fixed_mod.resolve(mesh, fixed)
+    _check_meetable(mesh, target, fixed, fixed_idx, tol)
     glide = None
     if glide_boundary:  # corners stay: a point cannot glide around a kink of the curve
         fixed_idx = np.union1d(fixed_idx, fixed_mod.corner_vertices(mesh))
@@ -137,10 +156,14 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
                   else bool(torsion_free_beams)))
     form = Formulation(norm, target, unknowns, beams=beams)
     x0 = form.start(norm.V)
+    keep = None
+    if convex:
+        corners, floor = convexity.floors(norm, norm.V)
+        keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0
     run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=fairness,
                 closeness=closeness, tol=tol, max_iter=int(max_iter), callback=callback,
-                backend=linear_solver)
+                backend=linear_solver, convex=keep, far=guided.FAR)
     L = form.layout
     Xn = L.view(run.x, "vertices")
     V = Xn * h + centre if run.nit else mesh.V.copy()  # no step taken: bit-exact input
@@ -157,22 +180,70 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         beam_axes[form.axis_vertices] = axes[form.axis_vertices]
     max_distance = float(ref.distance(Xn).max() / ref.bbox_diagonal)
     defects = measures.summary(out, tol)
-    status, message = run.status, run.message
-    folded = np.nonzero(measures.folded_faces(mesh, V))[0]
-    defects["folded"] = {"count": int(len(folded)), "faces": folded[:20].tolist()}
-    if len(folded) and status == "converged":
-        status = "folded"
-        message = (f"{run.message}, but {len(folded)} face(s) that were convex became dented or flipped "
-                   f"(first: {folded[:5].tolist()}); raise the fairness weight or fix the boundary")
     timings = dict(run.timings, setup=t_setup, report=time.perf_counter() - t1,
                    total=time.perf_counter() - t0)
-    success = status == "converged"
-    log.info("optimize_mesh(%s, %s): %s", mesh.name, target, message)
-    return OptimizeResult(mesh=out, success=success, status=status, message=message,
-                          nit=run.nit, history=run.history, defects=defects, max_distance=max_distance,
-                          normals=normals, axes=axes, cone_angles=cone_angles, beam_axes=beam_axes,
-                          timings=timings,
-                          method=method, target=target)
+    res = OptimizeResult(mesh=out, success=run.status == "converged", status=run.status,
+                         message=run.message, nit=run.nit, history=run.history, defects=defects,
+                         max_distance=max_distance, normals=normals, axes=axes, cone_angles=cone_angles,
+                         beam_axes=beam_axes, timings=timings, method=method, target=target)
+    record_shape(res, mesh, ref.distance(Xn) * h, ref.bbox_diagonal * h)
+    record_net(res, mesh, target)
+    if keep is not None:
+        _held(res, norm, Xn, keep, tol)
+    check_folds(res, mesh.V, FOLD_ADVICE if convex else NO_CONVEX_FOLD_ADVICE)
+    log.info("optimize_mesh(%s, %s): %s", mesh.name, target, res.message)
+    return res
+
+
+def _check_meetable(mesh: Mesh, target: str, fixed, fixed_idx: np.ndarray, tol: Tolerances) -> None:
+    """Refuse, before the first iteration, a fixed set no iteration can meet: a face whose
+    vertices are all fixed but that is not planar (for ``circular``: not circular) now.
+    Raises :class:`ConfigError` naming the faces."""
+    if not len(fixed_idx):
+        return
+    pinned = np.zeros(mesh.n_vertices, dtype=bool)
+    pinned[fixed_idx] = True
+    F = mesh.F
+    allfixed = np.where(F >= 0, pinned[np.maximum(F, 0)], True).all(axis=1)
+    if not allfixed.any():
+        return
+    bad = allfixed & (measures.planarity(mesh) > tol.planarity)
+    what = "planar"
+    if target == "circular" and not bad.any():
+        circ = np.zeros(mesh.n_faces)
+        circ[mesh.face_sizes == 4] = measures.circular_defect(mesh)
+        bad, what = allfixed & (circ > tol.circular), "circular"
+    faces = np.nonzero(bad)[0]
+    if len(faces):
+        name = fixed if isinstance(fixed, str) else f"{len(fixed_idx)} listed vertices"
+        worst = measures.planarity(mesh)[faces] if what == "planar" else None
+        detail = f" (planarity up to {worst.max():.3g}, tolerance {tol.planarity:g})" if worst is not None else ""
+        raise ConfigError(f"fixed: {name!r} fixes every vertex of {len(faces)} face(s) that are not "
+                          f"{what}{detail}: faces {faces[:10].tolist()}; no iteration can change them, "
+                          f"so {target} cannot be reached; fix fewer vertices (e.g. 'corners') or glide")
+
+
+def _held(res: OptimizeResult, norm: Mesh, Xn: np.ndarray, keep: Convex, tol: Tolerances) -> None:
+    """``defects["convexity"]``: the faces whose corners sit at their convexity floor while the
+    face is not yet planar (where no fold-free mesh is near); a run that missed its tolerance
+    says so, naming them."""
+    s = convexity.sines(norm, Xn, keep.corners)
+    at = s < keep.floor + 1e-3 * np.maximum(keep.floor, 1e-9) + 1e-9
+    faces = np.unique(norm.topology.corner_face[keep.corners[at]])
+    planar = measures.planarity(norm, Xn)
+    held = faces[planar[faces] > tol.planarity]
+    held = held[np.argsort(-planar[held])]
+    res.defects["convexity"] = {"at_floor": int(len(faces)), "held": int(len(held)),
+                                "faces": held[:20].tolist(), "sine_floor": convexity.SINE_FLOOR}
+    if res.status != "converged" and len(held):
+        bad = np.nonzero(planar > tol.planarity)[0]
+        bad = bad[np.argsort(-planar[bad])]
+        net = res.defects.get("net", {})
+        what = "PQ" if res.target == "pq" else res.target
+        res.message += (f"; the default solver found no fold-free {what} mesh near the input: {len(bad)} face(s) "
+                        f"stay non-planar (worst first: {bad[:6].tolist()}, up to {planar[bad[0]]:.2g}) where "
+                        f"planar faces would dent {len(held)} face(s) held at the convexity floor "
+                        f"({held[:6].tolist()}); {net.get('line', '')}; {HELD_ADVICE}")
 
 
 def _unit(U: np.ndarray) -> np.ndarray:

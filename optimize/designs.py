@@ -17,6 +17,7 @@ hypar_roof             hyperbolic paraboloid (parabola or ruling grid)     0 con
 dome                   spherical cap of revolution (PQ, conical, circular) 0 conical
 torus_patch            patch of a torus of revolution                      0 circular
 freeform_canopy        height field with seeded bumps                      2 catmull_clark conical
+tunnel                 tunnel forking in two (pair of pants), 784 quads    0 conical
 =====================  ==================================================  =====================
 """
 from __future__ import annotations
@@ -27,6 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .design_tunnel import tunnel
 from .errors import ConfigError
 from .mesh import Mesh
 from .shapes import dome_profile, grid, perturbed, revolution, translational
@@ -413,7 +415,7 @@ def freeform_canopy(*, length: float = 30000.0, width: float = 20000.0, height: 
 
 
 DESIGNS = {f.__name__: f for f in (railway_station, trefoil_band, developable_strips, hypar_roof, dome,
-                                   torus_patch, freeform_canopy)}
+                                   torus_patch, freeform_canopy, tunnel)}
 """Design name -> function(**params) -> Design."""
 
 

@@ -55,3 +55,16 @@ def fairness_energy(mesh: Mesh, V: np.ndarray | None = None) -> float:
     e = mesh.topology.edges
     h = np.linalg.norm(V[e[:, 1]] - V[e[:, 0]], axis=1).mean()
     return float(np.einsum("ij,ij->", d, d) / h ** 2)
+
+
+def roughness(mesh: Mesh, V: np.ndarray | None = None) -> float:
+    """Mean second difference ``|a - 2 v + b|`` along the mesh polylines over the mean edge
+    length (scale-free; 0 for straight, evenly spaced lines): the fairness figure of reports."""
+    V = mesh.V if V is None else V
+    T = mesh.topology.fair_triples
+    if not len(T):
+        return 0.0
+    d = V[T[:, 0]] - 2 * V[T[:, 1]] + V[T[:, 2]]
+    e = mesh.topology.edges
+    h = np.linalg.norm(V[e[:, 1]] - V[e[:, 0]], axis=1).mean()
+    return float(np.linalg.norm(d, axis=1).mean() / max(h, 1e-300))

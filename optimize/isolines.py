@@ -40,7 +40,6 @@ No T-junctions arise otherwise: every crossing of two lines is a node of both.
 from __future__ import annotations
 
 import numpy as np
-from matplotlib.path import Path
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
@@ -165,6 +164,8 @@ class _Boundary:
         self.prv = np.empty_like(self.nxt)
         self.prv[self.nxt] = k
         self.B, self.X = UV[idx], V[idx]
+        from matplotlib.path import Path  # point-in-polygon; imported here, not when the core loads
+
         self.paths = [Path(np.vstack([self.B[self.lab == i], self.B[self.lab == i][:1]]), closed=True)
                       for i in range(len(loops))]
 

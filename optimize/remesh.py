@@ -316,6 +316,8 @@ def _remesh_seamless(mesh, X1, edge_length, rep, t0, t1, name, with_report, irre
     t3 = time.perf_counter()
     out, corners = trace_quads(mesh, P["UVc"], P["rot"], P["shift"], name=name or f"{mesh.name}-quads")
     out, corners = snap_slivers(out, corners, edge_length)
+    out.notes.append(f"{out.name}: {int(np.sum(out.face_sizes == 4))} quads, {int(np.sum(out.face_sizes != 4))} "
+                     "other faces (boundary cells, singularities), as written")
     rep.corners = corners.tolist()
     rep.timings["extract"] = time.perf_counter() - t3
     holes = len(mesh.topology.boundary_loops) - 1

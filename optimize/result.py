@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import measures
 from .mesh import Mesh
 
 STATUSES = ("converged", "folded", "stalled", "max_iter", "diverged")
@@ -98,6 +99,37 @@ class OptimizeResult:
     def __repr__(self) -> str:
         return (f"OptimizeResult({self.method}/{self.target}: {self.status}, nit={self.nit}, "
                 f"success={self.success}, max_distance={self.max_distance:.3g}, {self.mesh!r})")
+
+
+def check_folds(result: OptimizeResult, V0: np.ndarray, advice: str = "") -> OptimizeResult:
+    """The one fold check of every method: record ``defects["folded"]`` (faces convex at
+    ``V0 (n, 3)``, the input positions, that are dented, flipped or collapsed in
+    ``result.mesh``: :func:`optimize.measures.folded_faces`) and turn a ``converged``
+    run with any of them into ``folded`` (not a success); ``advice`` ends the message.
+    Returns ``result`` (updated in place; calling it twice changes nothing more)."""
+    folded = np.nonzero(measures.folded_faces(result.mesh, result.mesh.V, V0))[0]
+    result.defects["folded"] = {"count": int(len(folded)), "faces": folded[:20].tolist()}
+    if len(folded) and result.status == "converged":
+        result.status, result.success = "folded", False
+        result.message = (f"{result.message}, but {len(folded)} face(s) that were convex became dented, "
+                          f"flipped or collapsed (first: {folded[:5].tolist()})" + (f"; {advice}" if advice else ""))
+    return result
+
+
+def record_shape(result: OptimizeResult, mesh0: Mesh, distance: np.ndarray, diagonal: float) -> None:
+    """``defects["distance"]``: max and mean distance of the result's vertices to the reference,
+    ``distance (n,)`` in the mesh's units, absolute and over the reference's bbox ``diagonal``;
+    ``defects["fairness"]``: the roughness (``fairness.roughness``) of ``mesh0`` (the input)
+    and of the result, and their ratio (above 1: the result is rougher)."""
+    from .fairness import roughness
+
+    d = np.asarray(distance, dtype=float)
+    result.defects["distance"] = {"max": float(d.max(initial=0.0)), "mean": float(d.mean()) if d.size else 0.0,
+                                  "max_relative": float(d.max(initial=0.0) / diagonal),
+                                  "mean_relative": float(d.mean() / diagonal) if d.size else 0.0}
+    before, after = roughness(mesh0), roughness(result.mesh)
+    result.defects["fairness"] = {"input": before, "result": after,
+                                  "ratio": float(after / before) if before > 0 else float("inf") if after > 0 else 1.0}
 
 
 def _plain(v):

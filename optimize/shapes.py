@@ -75,3 +75,27 @@ def perturbed(mesh: Mesh, amount: float, seed: int = 0, name: str | None = None)
     h = edge_lengths(mesh).mean()
     return mesh.with_vertices(mesh.V + amount * h * rng.standard_normal(mesh.V.shape),
                               name=name or f"{mesh.name}+noise")
+
+
+def capped_cylinder(radius: float = 1.0, length: float = 2.850626, n_around: int = 20, rings: int = 11,
+                    name: str = "cylinder") -> Mesh:
+    """A closed cylinder about the y axis: ``n_around x (rings - 1)`` quads and two ``n_around``-gon caps.
+
+    ``rings`` circles of ``n_around`` vertices from ``y = -length / 2`` to ``+length / 2``
+    (the defaults: 220 vertices, 200 quads and two 20-gons).  Planar (every quad a
+    rectangle, every cap a regular polygon), conical (the node axes are the
+    radial directions) and circular by construction; outward normals.
+    """
+    t = 2 * np.pi * np.arange(n_around) / n_around
+    y = np.linspace(-length / 2, length / 2, rings)
+    V = np.stack([np.broadcast_to(radius * np.cos(t), (rings, n_around)),
+                  np.broadcast_to(y[:, None], (rings, n_around)),
+                  np.broadcast_to(-radius * np.sin(t), (rings, n_around))], axis=2).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(rings - 1), np.arange(n_around), indexing="ij")
+    a = (i * n_around + j).ravel()
+    b = (i * n_around + (j + 1) % n_around).ravel()
+    quads = np.stack([a, b, b + n_around, a + n_around], axis=1)
+    start = np.arange(n_around)[::-1]  # the cap at -y, seen from outside (-y): clockwise in x, z
+    end = (rings - 1) * n_around + np.arange(n_around)
+    faces = [f.tolist() for f in quads] + [start.tolist(), end.tolist()]
+    return Mesh(V, faces, name=name)

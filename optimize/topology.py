@@ -32,8 +32,6 @@ from __future__ import annotations
 from functools import cached_property
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from .errors import MeshError
 
@@ -97,6 +95,9 @@ class Topology:
         self.flipped_faces = np.zeros(0, dtype=np.int64)
         if not same.any():
             return
+        import scipy.sparse as sp  # only for a mesh whose faces disagree on their orientation
+        from scipy.sparse.csgraph import breadth_first_order, connected_components
+
         f0, f1 = self.corner_face[c0], self.corner_face[c1]
         m = self.n_faces
         G = sp.coo_matrix((np.ones(len(f0)), (f0, f1)), shape=(m, m)).tocsr()
@@ -285,9 +286,9 @@ class Topology:
     @cached_property
     def component(self) -> np.ndarray:
         """(n,) int: connected component label of each vertex."""
-        n = self.n_vertices
-        A = sp.coo_matrix((np.ones(len(self.edges)), (self.edges[:, 0], self.edges[:, 1])), shape=(n, n))
-        return connected_components(A, directed=False)[1]
+        from .components import component_labels
+
+        return component_labels(self.n_vertices, self.edges)
 
     @property
     def n_components(self) -> int:

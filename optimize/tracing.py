@@ -197,8 +197,8 @@ def trace_quads(mesh: Mesh, UVc: np.ndarray, rot: np.ndarray, shift: np.ndarray,
     remap = np.full(len(X_all), -1, dtype=np.int64)
     remap[used] = np.arange(len(used))
     out = Mesh(X_all[used], np.where(Fq >= 0, remap[np.maximum(Fq, 0)], -1), name=name)
-    out.notes.append(f"{name}: {int(np.sum(out.face_sizes == 4))} quads, {int(np.sum(out.face_sizes != 4))} "
-                     f"other faces (boundary cells, singularities); {lost} trace(s) lost")
+    if lost:  # the face count is noted by the caller, after the boundary clean-up
+        out.notes.append(f"{name}: {lost} trace(s) lost")
     corners = remap[c_ids]
     return out, np.sort(corners[corners >= 0])
 

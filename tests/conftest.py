@@ -1,17 +1,22 @@
-"""Shared fixtures: tiny hand-made meshes and the real meshes in ``../shared/data``.
+"""Shared fixtures: tiny hand-made meshes and two meshes the repository makes itself.
 
 - ``quad``: one planar unit square (counter-clockwise seen from +z).
 - ``grid3x3``: 3 x 3 planar quads on 4 x 4 vertices (4 interior valence-4 vertices).
 - ``revolution``: a dome of revolution, meridians x parallels: planar, conical and
   circular by construction; ``perturbed_revolution``: the same with seeded noise.
-- ``halftunnel_path``, ``cylinder_path``: the shared real meshes (``shared/data``
-  beside the repository, or beside the one it was cloned from); a missing file
-  fails the test with the path it looked for (never a silent skip).
+- ``tunnel_path``: ``configs/meshes/tunnel.off``, the built-in design ``tunnel`` in
+  metres (784 quads, three boundary loops, 2 interior vertices of valence 3 and 6 of
+  valence 5, planarity 3e-5, far from conical), shipped for the example configs;
+  ``small_tunnel``: the same design after one Catmull-Clark round instead of two
+  (196 quads, the same irregular vertices and loops), in metres, for the slower tests.
+- ``cylinder_path``: ``shapes.capped_cylinder()`` written as OBJ (220 vertices, 200 quads
+  and two 20-gon caps, exactly planar and conical).
 - ``rotation``: ``rotation(seed)`` gives a seeded (3, 3) rotation matrix.
+
+Nothing here reads outside the repository.
 """
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -20,36 +25,7 @@ import pytest
 from optimize import Mesh, shapes
 
 REPO = Path(__file__).resolve().parents[1]
-
-
-def _shared_data() -> Path:
-    """``shared/data`` beside the repository (as CI lays it out) or, in a clone made
-    elsewhere (``git clone . $(mktemp -d)``), beside the repository it was cloned from."""
-    here = REPO.parent / "shared" / "data"
-    if here.is_dir():
-        return here
-    try:
-        origin = subprocess.run(["git", "-C", str(REPO), "config", "--get", "remote.origin.url"],
-                                capture_output=True, text=True, timeout=10).stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        origin = ""
-    if origin and Path(origin).is_dir():
-        there = Path(origin).resolve().parent / "shared" / "data"
-        if there.is_dir():
-            return there
-    return here  # missing: shared_file says where it looked
-
-
-SHARED_DATA = _shared_data()
-
-
-def shared_file(name: str) -> Path:
-    """Path of a file in ``../shared/data``; fails (not skips) when it is missing."""
-    path = SHARED_DATA / name
-    if not path.is_file():
-        pytest.fail(f"shared mesh {path} is missing: the repository's parent folder must hold "
-                    "shared/data/ (see shared/data/README.md)", pytrace=False)
-    return path
+TUNNEL = REPO / "configs" / "meshes" / "tunnel.off"
 
 
 @pytest.fixture
@@ -73,13 +49,25 @@ def perturbed_revolution(revolution) -> Mesh:
 
 
 @pytest.fixture
-def halftunnel_path() -> Path:
-    return shared_file("halftunnel.off")
+def tunnel_path() -> Path:
+    return TUNNEL
 
 
-@pytest.fixture
-def cylinder_path() -> Path:
-    return shared_file("cylinder.obj")
+@pytest.fixture(scope="session")
+def small_tunnel() -> Mesh:
+    from optimize.designs import DESIGNS
+
+    m = DESIGNS["tunnel"](subdivisions=1).mesh
+    return m.with_vertices(m.V / 1000.0, name="small_tunnel")
+
+
+@pytest.fixture(scope="session")
+def cylinder_path(tmp_path_factory) -> Path:
+    from optimize.io import write_mesh
+
+    path = tmp_path_factory.mktemp("meshes") / "cylinder.obj"
+    write_mesh(path, shapes.capped_cylinder())
+    return path
 
 
 @pytest.fixture

@@ -114,7 +114,7 @@ def test_worker_exception_is_one_row(tmp_path, monkeypatch):
     cfg = small_config(tmp_path, "fine")
     jobs = expand_jobs([cfg]) + [Job("ghost", "ghost.yaml", error="ghost.yaml: input: required key is missing")]
 
-    def boom(config, out_root):
+    def boom(config, out_root, **kwargs):
         raise RuntimeError("injected")
 
     monkeypatch.setattr(batch, "run_pipeline", boom)
@@ -140,3 +140,26 @@ def test_unreachable_scheduler_is_bad_input():
     pytest.importorskip("distributed", reason="dask[distributed] is not installed")
     with pytest.raises(ConfigError, match="cannot connect to the Dask scheduler"):
         make_executor(1, "tcp://127.0.0.1:9", timeout=1.0)
+
+
+def test_a_killed_worker_costs_one_retry_not_the_batch(tmp_path):
+    """Three jobs on two workers: a healthy one, one whose worker dies the first time
+    (``os._exit`` as it receives the job), one whose worker dies every time.  The pool breaks;
+    every job it held runs again on its own: two finish ok, the third is reported lost, the
+    batch exits 1 (a lost job comes before any other outcome) and no temporary folder is left."""
+    from _runsafe_jobs import dying
+
+    jobs = expand_jobs([small_config(tmp_path, n, "{rings: 3}") for n in ("healthy", "once", "always")])
+    jobs[1] = dying(jobs[1], str(tmp_path / "died-once"))
+    jobs[2] = dying(jobs[2])
+    seen = []
+    summaries = run_batch(jobs, tmp_path / "out", workers=2, on_done=lambda s: seen.append(s.name))
+    by = {s.name: s for s in summaries}
+    assert [s.name for s in summaries] == ["healthy", "once", "always"] and sorted(seen) == sorted(by)
+    assert by["healthy"].status in ("ok", "tolerance_not_reached"), by["healthy"].message
+    assert by["once"].status in ("ok", "tolerance_not_reached"), by["once"].message
+    assert any("second attempt" in n for n in by["once"].notes)
+    assert (by["always"].status, by["always"].exit_code) == ("lost", 1)
+    assert "died twice" in by["always"].message and "BrokenProcessPool" in by["always"].message
+    assert exit_code(summaries) == 1
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["healthy", "once"]

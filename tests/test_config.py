@@ -6,8 +6,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-from conftest import SHARED_DATA
-
 from fabricate.config import RunConfig, TolerancesSection, load_config, parse_config
 from optimize import shapes
 from optimize.errors import ConfigError
@@ -76,12 +74,13 @@ def test_every_example_config_is_valid():
     assert {"quickstart", "reference", "railway_station", "trefoil_band", "developable_strips", "dome",
             "freeform_canopy"} <= names, names
     for path in paths:
-        mesh = (yaml.safe_load(path.read_text()).get("input") or {}).get("mesh", "")
-        shared = "../../shared/data/"
-        # configs reading the shared meshes: point them at shared/data wherever this clone finds it
-        overrides = {"input.mesh": str(SHARED_DATA / mesh[len(shared):])} if mesh.startswith(shared) else None
-        cfg = load_config(path, overrides)
+        cfg = load_config(path)
         assert isinstance(cfg, RunConfig)
+        for key in ("mesh", "control", "surface"):  # every file a config reads is in the repository
+            file = getattr(cfg.input, key, None)
+            if file is not None:
+                assert Path(file).resolve().is_relative_to(REPO), (path.name, file)
+                assert Path(file).is_file(), (path.name, file)
 
 
 def test_reference_config_lists_every_key():

@@ -51,7 +51,7 @@ def test_a_written_run_passes_every_check(run_dir, parts):
 def test_cli_check_exit_codes(run_dir, tmp_path, capsys):
     assert main(["check", str(run_dir)]) == 0
     assert "all checks passed" in capsys.readouterr().out
-    assert main(["check", str(tmp_path / "nothing")]) == 4
+    assert main(["check", str(tmp_path / "nothing")]) == 2  # not a run folder: bad input (#15)
     assert main(["check", str(run_dir), "--fast", "--json"]) == 0
     fast = json.loads(capsys.readouterr().out)
     assert fast["mode"] == "fast" and fast["pass"] is True and "scanned" in json.dumps(fast["checks"]["step"])

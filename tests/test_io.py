@@ -59,8 +59,8 @@ def test_header_comments_are_written_and_read_past(tmp_path, revolution, ext, ho
 
 
 @pytest.mark.parametrize("ext,how", FORMATS, ids=FORMAT_IDS)
-def test_round_trip_of_shared_meshes(tmp_path, halftunnel_path, cylinder_path, ext, how):
-    for src in (halftunnel_path, cylinder_path):
+def test_round_trip_of_the_tunnel_and_the_capped_cylinder(tmp_path, tunnel_path, cylinder_path, ext, how):
+    for src in (tunnel_path, cylinder_path):
         mesh = read_mesh(src)
         path = tmp_path / f"{src.stem}.{ext}"
         _write(path, mesh, how)
@@ -106,19 +106,21 @@ def test_ply_writes_binary_little_endian_by_default(tmp_path, quad):
     assert body[:24] == struct.pack("<3d", 0.0, 0.0, 0.0) and len(body) == 4 * 24 + 1 + 16
 
 
-# -- the real meshes ----------------------------------------------------------------------
-def test_read_halftunnel(halftunnel_path):
-    m = read_mesh(halftunnel_path)
-    assert (m.n_vertices, m.n_faces) == (831, 784) and m.is_quad
-    assert m.V[0].tolist() == [-4.04079, -1.27381, -5.79865]  # first vertex line
-    assert m.F[-1].tolist() == [830, 781, 474, 776]  # last face line
+# -- the shipped and the built-in meshes ---------------------------------------------------
+def test_read_tunnel(tunnel_path):
+    m = read_mesh(tunnel_path)
+    assert (m.n_vertices, m.n_faces) == (807, 784) and m.is_quad
+    lines = [ln for ln in tunnel_path.read_text().splitlines() if ln and not ln.startswith("#")]
+    assert lines[0] == "OFF" and lines[1].split()[:2] == ["807", "784"]
+    assert m.V[0].tolist() == [float(x) for x in lines[2].split()]  # first vertex line
+    assert m.F[-1].tolist() == [int(x) for x in lines[-1].split()[1:]]  # last face line
 
 
 def test_read_cylinder(cylinder_path):
     m = read_mesh(cylinder_path)
     assert m.n_vertices == 220
     assert np.bincount(m.face_sizes).tolist()[4] == 200 and np.sum(m.face_sizes == 20) == 2
-    assert m.F[0, :4].tolist() == [0, 1, 21, 20]  # 'f 1/21/1 2/22/2 22/43/3 21/42/4'
+    assert m.F[0, :4].tolist() == [0, 1, 21, 20]  # 'f 1 2 22 21'
     assert m.topology.boundary_loops == [] and m.notes == []
 
 

@@ -1,6 +1,6 @@
 """Offset stage: exact constant-distance layers, conical offsets, planar beams, invariance.
 
-Meshes that are conical by construction (surfaces of revolution, the shared
+Meshes that are conical by construction (surfaces of revolution, the capped
 cylinder), conical meshes from the optimizer, and a translational surface
 (PQ, not conical).  Model units are mm (meshes a few metres across).
 """
@@ -117,9 +117,11 @@ def test_neighbouring_axes_are_coplanar_so_beams_are_planar(conical):
     assert fixed.sum() > 0
     assert beam_planarity(s.beam_quads[fixed]).max() <= REL
     assert quad_planarity(s.beam_quads[fixed]).max() <= REL  # the package's own measure
-    if conical.name == "optimized_dome":
-        # a closed boundary loop without symmetry: the free boundary axes have no exact
-        # planar-beam solution nearby; the compromise leaves a small twist, reported
+    if conical.name == "optimized_dome" and s.report["free_axes"]["regularization"] > 0:
+        # a closed boundary loop without symmetry: the free boundary axes may have no exact
+        # planar-beam solution nearby; the compromise leaves a small twist, reported.  (Since the
+        # optimizer's fairness weight falls with the defect, this dome's result has an exact one:
+        # boundary twist 3e-12 mm, checked below like the others.)
         info = s.report["free_axes"]
         assert info["regularization"] > 0 and info["residual_after"] < info["residual_before"] / 50
         bmax = s.report["beams"]["boundary_max_twist_mm"]

@@ -153,7 +153,10 @@ def test_methods_agree_on_both_paths(method, monkeypatch):
         mesh = m.with_vertices(m.V.copy())  # a fresh object: no problem kept from the other path
         runs[enabled] = run_paper_method(mesh, "strip", method)
     a, b = runs[True], runs[False]
-    assert a.success and b.success and a.nit == b.nit
+    # SQP on this band turns part of the strip over (faces flipped, corners 86 -> 2 deg): planar,
+    # but folded, and said so on both paths alike
+    ok = ("converged",) if method == "penalty" else ("converged", "folded")
+    assert a.status == b.status and a.status in ok and a.nit == b.nit, (a.message, b.message)
     assert np.allclose(a.mesh.V, b.mesh.V, atol=1e-6 * np.ptp(m.V))
 
 
@@ -161,7 +164,11 @@ def test_strip_converges_on_both_paths(path):
     m = trefoil_band(60, 0.3)
     for method in ("penalty", "sqp"):
         res = run_paper_method(m, "strip", method)
-        assert res.success, res.message
+        folded = measures.folded_faces(m, res.mesh.V)
+        if method == "sqp":  # the tolerances are met by turning part of the strip over: not a success
+            assert res.status == "folded" and folded.sum() == res.defects["folded"]["count"] > 0
+        else:
+            assert res.success and not folded.any(), res.message
         assert res.defects["planarity"]["max"] <= 1e-6 and res.defects["det"]["max"] <= 1e-6
 
 

@@ -90,7 +90,7 @@ def test_progress_reports_every_stage_in_order(tmp_path):
     assert [s for e, s, _ in rec.events if e == "done"] == list(STAGES)
     assert summary.status == "ok", summary.message
     assert sorted(p.name for p in (tmp_path / "out" / "tiny").iterdir()) == \
-        ["config.yaml", "layer_0.obj", "layer_1.obj", "mesh.obj", "report.json"]
+        [".conical-fab-run.json", "config.yaml", "layer_0.obj", "layer_1.obj", "mesh.obj", "report.json"]
 
 
 def test_tolerance_not_reached_is_written_and_marked(tmp_path):
@@ -147,7 +147,7 @@ def test_export_failure_raises_export_error_and_leaves_nothing(tmp_path, monkeyp
 def test_failed_output_check_is_exit_4_written_and_marked(tmp_path, monkeypatch):
     import fabricate.check as check
 
-    def failing_check(outdir, tol=None):
+    def failing_check(outdir, tol=None, **kwargs):
         return {"pass": False, "checks": {"bom": {"pass": True}, "stl": {"pass": False, "why": "injected"}}}
 
     monkeypatch.setattr(check, "check_outputs", failing_check)
@@ -183,10 +183,10 @@ def test_rerun_replaces_only_when_complete(tmp_path, monkeypatch):
     before = (out / "tiny" / "report.json").read_text()
     monkeypatch.setattr(stages, "stage_report", lambda ctx: (_ for _ in ()).throw(RuntimeError("late")))
     with pytest.raises(RuntimeError):
-        run_pipeline(tiny_config(tmp_path), out)
+        run_pipeline(tiny_config(tmp_path), out, force=True)
     assert (out / "tiny" / "report.json").read_text() == before  # the previous result is untouched
     monkeypatch.undo()
-    second = run_pipeline(tiny_config(tmp_path), out)
+    second = run_pipeline(tiny_config(tmp_path), out, force=True)
     assert second.status == first.status
     assert [p.name for p in out.iterdir()] == ["tiny"]  # no temporary or old folder left
     assert json.loads((out / "tiny" / "report.json").read_text())["created_utc"]
@@ -241,9 +241,10 @@ def test_folded_panels_write_no_cut_file_and_end_marked(tmp_path, capsys):
 
     mesh = shapes.perturbed(shapes.grid(8, 7, size=(7000.0, 6000.0),
                                         height=lambda x, y: 0.5e-3 * x * y), 50.0, seed=14)
-    assert optimize_mesh(mesh, "pq", fixed="boundary").status == "folded"
+    assert optimize_mesh(mesh, "pq", fixed="boundary", convex=False).status == "folded"
     write_mesh(tmp_path / "hypar.obj", mesh)
-    (tmp_path / "f.yaml").write_text("input: {mesh: hypar.obj}\noptimize: {target: pq, fixed: boundary}\n")
+    (tmp_path / "f.yaml").write_text("input: {mesh: hypar.obj}\noptimize: {target: pq, fixed: boundary, "
+                                     "convex: false}\n")
     code = main(["run", str(tmp_path / "f.yaml"), "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert code == 3 and "folded" in err and "no panels or beams built" in err
@@ -313,15 +314,14 @@ def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
 
 
 def test_a_tube_from_a_real_mesh_through_the_pipeline(tmp_path):
-    """cylinder.obj without its caps, in metres, as a surface with ``side: keep``: remeshed along its
+    """shapes.capped_cylinder() without its caps, in metres, as a surface with ``side: keep``: remeshed along its
     circles and rulings, conical, offset and built into panels and beams (exit 0)."""
     import numpy as np
 
-    from conftest import shared_file
-    from optimize import Mesh
+    from optimize import Mesh, shapes
     from optimize.io import write_mesh
 
-    m = read_mesh(shared_file("cylinder.obj"))
+    m = shapes.capped_cylinder()
     quads = m.F[m.face_sizes == 4][:, :4]
     used = np.unique(quads)
     remap = np.full(m.n_vertices, -1)
@@ -363,7 +363,7 @@ def test_fast_check_skips_the_step_read_back_and_still_catches_bad_files(tmp_pat
     assert check["checks"]["dxf"]["against"] == "bom" and check["checks"]["dxf"]["outlines"] > 0
     assert all(check["checks"][k]["pass"] for k in ("bom", "3mf", "stl", "intersections", "bearing", "svg"))
     full = run_check(out, "full")  # the full check of the same files agrees, reading the STEP back
-    assert full["mode"] == "full" and full["pass"] and "read_back" not in full["checks"]["step"]
+    assert full["mode"] == "full" and full["pass"] and full["checks"]["step"]["read_back"] == "text"
     step = (out / "model.step").read_text()
     (out / "model.step").write_text(step.replace("'P0001'", "'P9999'"))
     renamed = run_check(out, "fast")["checks"]["step"]

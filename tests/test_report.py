@@ -198,3 +198,78 @@ def test_report_json_and_html_content(finished_run):
         assert f'src="{name}"' in html and (out / name).is_file()
         _png_ok(out / name)
     assert "http://" not in html and "https://" not in html  # nothing from the network
+
+
+# -- the client's totals, masses, readable outline ids (issue 14) ----------------------------------
+def test_distinct_sizes_are_congruence_classes_within_a_mm():
+    from fabricate.report.totals import distinct_sizes
+
+    q = np.array([[0.0, 0.0], [1500.0, 0.0], [1400.0, 900.0], [100.0, 1000.0]])  # no symmetry
+    rot = np.array([[0.6, -0.8], [0.8, 0.6]])
+    same = [q, np.roll(q, 1, axis=0) @ rot.T + 300.0, q + [0.4, -0.3]]           # moved, relabelled, 0.5 mm
+    mirror = q * [-1.0, 1.0]
+    off = q + [[0, 0], [2.5, 0], [0, 0], [0, 0]]                                 # one corner 2.5 mm out
+    flat = np.stack(same + [mirror[::-1], off])                                  # the mirror kept ccw
+    labels = distinct_sizes(flat, np.full(len(flat), 10.0))
+    assert len(set(labels[:3])) == 1 and len(set(labels)) == 3
+    thick = distinct_sizes(np.stack([q, q]), np.array([10.0, 12.0]))
+    assert thick[0] != thick[1]
+
+
+def test_totals_of_a_dome_count_rings_of_congruent_panels():
+    from cad_fixtures import dome_structure
+
+    from fabricate.cad import PartSpec, build_parts
+    from fabricate.report.totals import client_totals, totals_lines
+
+    s = dome_structure(n_around=8, k=4)
+    parts = build_parts(s, PartSpec())
+    t = client_totals(parts)
+    rings = s.mesh.n_faces // 8
+    assert t["panels"] == s.mesh.n_faces and t["distinct_panel_sizes"] == rings  # one size per ring
+    assert t["most_panels_of_one_size"] == 8
+    mesh_area = float(measures.face_areas(s.mesh).sum()) * 1e-6
+    assert 0.8 * mesh_area < t["glass_area_m2"] < mesh_area  # inset by the joints
+    edges = s.mesh.V[s.mesh.topology.edges]
+    total_edges = float(np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1).sum()) * 1e-3
+    assert 0.8 * total_edges < t["steel_length_m"] <= 1.0001 * total_edges
+    steel = sum(float(g.volume_mm3.sum()) for k in ("beam", "node") for g in parts.of_kind(k))
+    assert t["steel_mass_kg"] == pytest.approx(steel * 1e-9 * parts.spec.density_steel)
+    assert t["steel_mass_t"] == pytest.approx(t["steel_mass_kg"] / 1000)
+    lines = totals_lines(t)
+    assert f"{rings} distinct sizes" in lines[0] and " t with the nodes" in lines[1]
+
+
+def test_masses_print_as_kilograms_not_exponents():
+    from fabricate.report.totals import kg
+
+    assert kg(2640.4) == "2,640 kg" and kg(12.46) == "12.5 kg" and "e+" not in kg(2.64e7)
+
+
+def test_outline_ids_fit_their_parts(tmp_path):
+    from fabricate.report.pictures import _id_patch, outline_label_sizes
+
+    w, h = np.array([600.0, 25.0, 300.0]), np.array([400.0, 30.0, 4.0])
+    ids = ["P0001", "B0002", "B0003"]
+    fs = outline_label_sizes(w, h, ids)
+    assert fs[0] == 9.0 and 3.0 <= fs[1] < 9.0 and fs[2] == 0.0  # the last is too thin: not drawn
+    for text, f, width, height in zip(ids, fs, w, h):
+        if f:
+            ext = _id_patch([(text, np.zeros(2), f)]).get_path().get_extents()
+            assert ext.width <= 0.9 * width and ext.height <= height  # drawn inside its part (pt = mm here)
+    parts = [(f"B{i:04d}", np.array([[0, 0], [1500, 0], [1500, 150], [0, 150]], dtype=float))
+             for i in range(600)] + [(f"P{i:04d}", np.array([[0, 0], [1500, 0], [1500, 1000], [0, 1000]],
+                                                              dtype=float)) for i in range(300)]
+    path = picture_outlines(parts, tmp_path / "outlines.png", title="t")
+    _png_ok(path)
+
+
+def test_report_has_the_clients_totals(finished_run):
+    report = json.loads((finished_run.out / "report.json").read_text())
+    t = report["totals"]
+    assert t["panels"] == report["parts"]["panels"]["count"] and t["distinct_panel_sizes"] >= 1
+    assert t["glass_area_m2"] > 0 and t["steel_length_m"] > 0 and t["steel_mass_t"] > 0
+    html = (finished_run.out / "report.html").read_text()
+    assert "distinct sizes" in html and "m2 in" in html
+    assert not re.search(r"\d\.\d+e\+\d\d", html.split("<h2>Timings")[0]), "a mass printed as an exponent"
+    assert "distinct sizes" in finished_run.stdout

@@ -9,8 +9,10 @@ def register(sub) -> None:
                     "--set parts.glass_thickness=8,10,12 makes three jobs per config), run in parallel "
                     "worker processes or on a Dask cluster (--scheduler). One failure does not stop the "
                     "others. Prints a summary table and writes it as CSV.",
-        epilog="Exit code: 0 when every job is ok, else the largest exit code of a job "
-               "(2 bad input, 3 tolerance not reached, 4 export failed, 1 unexpected error).")
+        epilog="Exit code: 0 when every job is ok, else the code of the worst job, in this order: "
+               "1 a job lost (its worker died twice) or crashed (internal error), 2 bad input, "
+               "4 export failed, 3 tolerance not reached. A job whose worker process dies is run once "
+               "more on its own. 130 interrupted (workers stopped, temporary folders removed).")
     p.add_argument("configs", nargs="+", metavar="CONFIG", help="YAML run configurations")
     p.add_argument("--set", metavar="KEY=V1[,V2...]", action="append", default=[], dest="sets",
                    help="override / sweep a config value (repeatable; the sweep is the product of all); a list "
@@ -22,6 +24,8 @@ def register(sub) -> None:
                    help="run on a Dask distributed cluster, e.g. tcp://host:8786 (needs dask[distributed]; "
                         "the workers must see the config and mesh files and the output folder)")
     p.add_argument("--out", metavar="DIR", default="outputs", help="parent folder of the run folders")
+    p.add_argument("--force", action="store_true",
+                   help="replace earlier finished runs in OUT/<name>/ (as fabricate run --force)")
     p.add_argument("--csv", metavar="PATH", default=None,
                    help="summary table as CSV (default: OUT/batch_summary.csv)")
     p.set_defaults(handler=run)
@@ -37,15 +41,22 @@ def run(args) -> int:
 
     if args.workers is not None and args.workers < 1:
         raise ConfigError(f"--workers {args.workers}: expected a positive number of worker processes")
+    from fabricate.runfolder import make_parent
+
+    csv_path = Path(args.csv) if args.csv else Path(args.out) / "batch_summary.csv"
+    make_parent(Path(args.out) / "x")
+    make_parent(csv_path, "--csv")
     jobs = expand_jobs(args.configs, parse_sets(args.sets))
     err = Console(stderr=True, highlight=False)
     err.print(f"batch: {len(jobs)} job(s)" + (f" on {args.scheduler}" if args.scheduler else ""))
 
     def done(s):
-        err.print(f"  {s.name}: {s.status} ({s.seconds:.1f} s)")
+        err.print(f"  {s.name}: {s.status} ({s.seconds:.1f} s)"
+                  + "".join(f"\n    note: {n}" for n in s.notes), highlight=False)
 
-    summaries = run_batch(jobs, args.out, workers=args.workers, scheduler=args.scheduler, on_done=done)
+    summaries = run_batch(jobs, args.out, workers=args.workers, scheduler=args.scheduler, on_done=done,
+                          force=args.force)
     print_table(summaries)
-    path = write_csv(summaries, Path(args.csv) if args.csv else Path(args.out) / "batch_summary.csv")
+    path = write_csv(summaries, csv_path)
     print(f"summary: {path}")
     return exit_code(summaries)

@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 import math
 
+from .units import add_units
+
 
 def register(sub) -> None:
     p = sub.add_parser("measure", help="print planarity, conical and circular defects and statistics",
@@ -11,15 +13,19 @@ def register(sub) -> None:
                                    "or as a readable table with --table.")
     p.add_argument("mesh", help="mesh file (.obj, .off, .ply)")
     p.add_argument("--table", action="store_true", help="a readable table instead of JSON")
+    add_units(p)
     p.set_defaults(handler=run)
 
 
 def run(args) -> int:
-    from optimize.io import read_mesh
     from optimize.measures import summary
 
-    mesh = read_mesh(args.mesh)
+    from .units import UNIT_TO_MM, read_mm
+
+    mesh = read_mm(args.mesh, args.units)
     s = summary(mesh)
+    s["units"] = {"file": args.units, "mm_per_unit": UNIT_TO_MM[args.units], "lengths": "mm",
+                  "areas": "mm2"}
     for note in mesh.notes:
         s.setdefault("notes", []).append(note)
     if not args.table:
@@ -41,7 +47,7 @@ def run(args) -> int:
         table.add_row(key, f"{r['max']:.3g}", f"{r['mean']:.3g}", str(r.get("tolerance", "")),
                       {True: "yes", False: "NO"}.get(r.get("ok"), ""), str(r["worst"]))
     Console().print(table)
-    print(f"vertex types: {s['vertex_types']}; edge length {s['edge_length']}; "
+    print(f"lengths in mm (file in {args.units}); vertex types: {s['vertex_types']}; edge length {s['edge_length']}; "
           f"angles (deg) {s['angle_deg']}")
     for note in s.get("notes", []):
         print(f"note: {note}")

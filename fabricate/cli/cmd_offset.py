@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+from .units import add_units
+
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -12,8 +14,10 @@ def register(sub) -> None:
                     "offset_report.json with every tolerance in mm and the worst elements named. "
                     "A mesh that is not PQ is refused (exit 2) unless --force (then exit 3: results "
                     "written and marked); a PQ mesh that is not conical is offset and the report "
-                    "says by how much faces miss their distance and beams twist.")
-    p.add_argument("mesh", help="mesh file (.obj, .off, .ply), units mm")
+                    "says by how much faces miss their distance and beams twist. A distance past the "
+                    "focal distance of a face (the offset face turns over) is reported with the faces "
+                    "named, and exits 3. The output files are in mm whatever --units says.")
+    p.add_argument("mesh", help="mesh file (.obj, .off, .ply), in --units (default mm)")
     p.add_argument("--distances", required=True, metavar="D1,D2,...",
                    help="comma-separated signed distances in mm, e.g. 0,20,120 (use --distances=-20,0 "
                         "for a leading minus); beams span the first and the last")
@@ -24,6 +28,7 @@ def register(sub) -> None:
     p.add_argument("--free-axes", choices=("planar_beams", "min_norm"), default="planar_beams",
                    help="axes the faces leave free (boundary, cylinder-like vertices): turned for planar "
                         "beams (default) or the bisector of the face normals")
+    add_units(p)
     p.set_defaults(handler=run)
 
 
@@ -64,15 +69,15 @@ def run(args) -> int:
 
     from optimize.atomic import atomic_dir
     from optimize.errors import MeshError
-    from optimize.io import read_mesh
     from optimize.tolerances import Tolerances
 
     from ..offset import offset_structure, require_pq, write_offset_files
+    from .units import UNIT_TO_MM, read_mm
 
     texts, values = parse_distances(args.distances)
     out = Path(args.output)
     _check_output(out)
-    mesh = read_mesh(args.mesh)
+    mesh = read_mm(args.mesh, args.units)
     tol = Tolerances()
     if not args.force:
         try:
@@ -80,13 +85,16 @@ def run(args) -> int:
         except MeshError as exc:
             raise MeshError(f"{exc}; or run with --force to offset it anyway and read the report") from None
     s = offset_structure(mesh, values, flip=args.flip, tol=tol, free_axes=args.free_axes)
-    extra = {"input": {"path": str(args.mesh), "forced": bool(args.force), "notes": list(mesh.notes)}}
+    extra = {"input": {"path": str(args.mesh), "forced": bool(args.force), "notes": list(mesh.notes),
+                       "units": args.units, "mm_per_unit": UNIT_TO_MM[args.units]}}
     with atomic_dir(out) as tmp:
         names = write_offset_files(s, tmp, texts, extra)
     r = s.report
-    print(f"{mesh.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces -> {out}/ "
-          f"({len(names)} files: {', '.join(names[:len(texts)])}, axes, beams, offset_report.json)")
+    print(f"{mesh.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces, bounding-box diagonal "
+          f"{mesh.bbox_diagonal():,.1f} mm (file in {args.units}) -> {out}/ "
+          f"({len(names)} files in mm: {', '.join(names[:len(texts)])}, axes, beams, offset_report.json)")
     print(f"status: {r['status']}" + (" (forced: the mesh is not PQ)" if not r["is_pq"] else ""))
     for line in r["summary"]:
         print(line)
-    return 3 if not r["is_pq"] else 0
+    turned = r["turned_over"]
+    return 3 if not r["is_pq"] or not turned["ok"] else 0

@@ -1,8 +1,8 @@
 """``fabricate run CONFIG``: the whole pipeline for one config into ``outputs/<name>/``."""
 from __future__ import annotations
 
-import signal
 import sys
+from pathlib import Path
 
 
 def register(sub) -> None:
@@ -10,21 +10,26 @@ def register(sub) -> None:
         "run", help="run the whole pipeline for one YAML config",
         description="Input -> subdivide/optimize -> offset -> CAD -> exports -> report, written "
                     "atomically into OUT/<name>/ (a failed or interrupted run leaves no folder that "
-                    "looks complete; rerunning replaces the previous result once the new one is done).",
-        epilog="Exit codes: 0 ok, 2 bad input, 3 tolerance not reached (results written, marked in "
-               "report.json, report.html and TOLERANCE_NOT_REACHED.txt), 4 export failed.")
+                    "looks complete). An existing OUT/<name>/ is replaced only when it is a finished "
+                    "run of this tool with no files added or changed, and only with --force (or "
+                    "outputs.overwrite: true); a run that misses a tolerance or fails its file check "
+                    "never replaces a passing result: it is written beside it as "
+                    "OUT/<name>.failed-<time>/.",
+        epilog="Exit codes: 0 ok, 2 bad input (also: OUT/<name> in the way or being written by another "
+               "run), 3 tolerance not reached (results written, marked in report.json, report.html and "
+               "TOLERANCE_NOT_REACHED.txt), 4 export failed (when both, 4), 1 internal error, "
+               "130 interrupted.")
     p.add_argument("config", help="YAML run configuration (see configs/reference.yaml)")
     p.add_argument("--out", metavar="DIR", default="outputs",
                    help="parent folder of the run folder (default: ./outputs)")
     p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], dest="sets",
                    help="override a config value, e.g. --set parts.glass_thickness=8 (repeatable); a list key "
                         "takes a comma list: --set offset.distances=0,-200")
+    p.add_argument("--force", action="store_true",
+                   help="replace an earlier finished run in OUT/<name>/ (never a folder this tool did "
+                        "not write, nor one with files added or changed since)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     p.set_defaults(handler=run)
-
-
-def _terminate(signum, frame):  # SIGTERM unwinds like Ctrl-C, so the temporary folder is removed
-    raise KeyboardInterrupt(f"signal {signum}")
 
 
 def run(args) -> int:
@@ -41,17 +46,35 @@ def run(args) -> int:
     if many:
         raise ConfigError(f"--set {many[0]}: fabricate run takes one value per key; use fabricate batch for sweeps")
     config = load_config(args.config, overrides={k: v[0] for k, v in sets.items()})
-    signal.signal(signal.SIGTERM, _terminate)
     err = Console(stderr=True, highlight=False)
     target = run_folder(config, args.out)
     progress = NullProgress() if args.quiet else RichProgress(STAGES, title=f"{config.name} -> {target}",
                                                               console=err)
     with progress:
-        summary = run_pipeline(config, args.out, progress=progress)
+        summary = run_pipeline(config, args.out, progress=progress, force=args.force)
+    for note in summary.notes:
+        print(f"note: {note}", file=sys.stderr)
+    target = summary.out_dir
     line = f"{summary.name}: {summary.status} ({summary.message}) in {summary.seconds:.1f} s -> {target}"
+    _print_totals(target)
     if summary.exit_code == 0:
         print(line)
-        print(f"open {target / 'report.html'}" if config.outputs.html else f"see {target / 'report.json'}")
+        print(f"open {Path(target) / 'report.html'}" if config.outputs.html
+              else f"see {Path(target) / 'report.json'}")
     else:
         print(f"warning: {line}; results written and marked", file=sys.stderr)
     return summary.exit_code
+
+
+def _print_totals(target) -> None:
+    """The client's totals (glass m2, sizes, steel m and t) from the run's report.json, if written."""
+    import json
+
+    from fabricate.report.totals import totals_lines
+
+    try:
+        totals = json.loads((target / "report.json").read_text(encoding="utf-8")).get("totals")
+    except (OSError, ValueError, AttributeError):
+        return
+    for text in totals_lines(totals):
+        print(text)

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import json
 
+from .units import add_units
+
 
 def register(sub) -> None:
     p = sub.add_parser("shapes", help="list the built-in designs, or write one's starting mesh",
@@ -17,6 +19,7 @@ def register(sub) -> None:
     p.add_argument("--refined", action="store_true",
                    help="write the mesh after the design's subdivision levels, not perturbed")
     p.add_argument("--json", action="store_true", help="list as JSON")
+    add_units(p, "the written mesh (the designs are in mm; with --units m the file is in metres)")
     p.set_defaults(handler=run)
 
 
@@ -52,7 +55,11 @@ def run(args) -> int:
         return 0
     from optimize.io import write_mesh
 
-    write_mesh(args.output, mesh)
+    from .units import UNIT_TO_MM, to_file_units
+
+    if design.units != "mm":  # designs say their unit; --units is the file's
+        mesh = mesh.with_vertices(mesh.V * UNIT_TO_MM[design.units])
+    write_mesh(args.output, to_file_units(mesh, args.units))
     if args.refined and design.levels:
         what = f"subdivided ({design.levels} level(s) of {design.scheme}, not perturbed)"
     elif design.levels:
@@ -60,7 +67,7 @@ def run(args) -> int:
     else:
         what = "starting"
     print(f"wrote {args.output}: {design.name} {what} mesh, {mesh.n_vertices} vertices, "
-          f"{mesh.n_faces} faces, units {design.units}; target {design.target}")
+          f"{mesh.n_faces} faces, units {args.units}; target {design.target}")
     return 0
 
 

@@ -1,19 +1,25 @@
 """Exporters: parts in, files out (STEP, STL, 3MF, DXF, SVG, bill of materials, IFC, .3dm); all atomic.
 
-IFC and .3dm load their libraries (ifcopenshell, rhino3dm) only when called."""
-from .bom import write_bom
-from .cutfiles import write_cut_files, write_layout_plan
-from .dxf import write_dxf
-from .flatdata import write_flat
-from .gltf import write_parts_gltf
-from .nc1 import write_nc1
-from .nesting import Layout, layout
-from .schedules import write_glass_schedule, write_node_schedule, write_steel_cut_list
-from .step import write_step
-from .stl import write_stl, write_stl_parts
-from .svg import write_svg
-from .threemf import write_3mf
+Names load on first use (PEP 562), so importing one exporter does not load the others;
+IFC and .3dm load their libraries (ifcopenshell, rhino3dm) only when called.
+"""
+from optimize._lazy import lazy_exports
 
+_EXPORTS = {
+    "write_bom": ".bom",
+    "write_cut_files": ".cutfiles", "write_layout_plan": ".cutfiles",
+    "write_dxf": ".dxf",
+    "write_flat": ".flatdata",
+    "write_glass_schedule": ".schedules", "write_node_schedule": ".schedules",
+    "write_steel_cut_list": ".schedules",
+    "write_parts_gltf": ".gltf",
+    "write_nc1": ".nc1",
+    "Layout": ".nesting", "layout": ".nesting",
+    "write_step": ".step",
+    "write_stl": ".stl", "write_stl_parts": ".stl",
+    "write_svg": ".svg",
+    "write_3mf": ".threemf",
+}
 
 def write_ifc(parts, path, **kwargs) -> dict:
     """IFC4 of every part (:func:`fabricate.export.ifc.write_ifc`)."""
@@ -29,6 +35,5 @@ def write_3dm(parts, path, **kwargs) -> dict:
     return write(parts, path, **kwargs)
 
 
-__all__ = ["Layout", "layout", "write_3dm", "write_3mf", "write_bom", "write_cut_files", "write_dxf", "write_flat",
-           "write_glass_schedule", "write_ifc", "write_layout_plan", "write_nc1", "write_node_schedule",
-           "write_parts_gltf", "write_steel_cut_list", "write_step", "write_stl", "write_stl_parts", "write_svg"]
+__all__ = sorted([*_EXPORTS, "write_ifc", "write_3dm"])
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

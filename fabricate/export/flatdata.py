@@ -88,7 +88,10 @@ def rebuild(g: dict) -> np.ndarray:
 
 
 def solid_corners(shape) -> np.ndarray:
-    """(m, 3) distinct vertex points of an OpenCASCADE shape."""
+    """(m, 3) distinct vertex points of an OpenCASCADE shape, or of a solid as the STEP text reader
+    gives it (a dict whose ``faces`` are (k, 3) loops)."""
+    if isinstance(shape, dict):
+        return np.unique(np.concatenate([np.asarray(f, dtype=float) for f in shape["faces"]]), axis=0)
     from OCP.BRep import BRep_Tool
     from OCP.TopAbs import TopAbs_VERTEX
     from OCP.TopExp import TopExp_Explorer

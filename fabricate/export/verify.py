@@ -37,9 +37,30 @@ def polygon_measures(P: np.ndarray) -> tuple[float, np.ndarray]:
     """Area and edge lengths ``(k,)`` of a planar polygon given in 2D ``(k, 2)`` or 3D ``(k, 3)``."""
     if P.shape[1] == 2:
         P = np.concatenate([P, np.zeros((len(P), 1))], axis=1)
+    nxt = _NEXT.get(len(P)) if len(P) in _NEXT else _next(len(P))
     Q = P - P[0]
-    area = 0.5 * float(np.linalg.norm(np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)))
-    return area, np.linalg.norm(np.roll(P, -1, axis=0) - P, axis=1)
+    area = 0.5 * float(np.sqrt((_cross(Q, Q[nxt]).sum(axis=0) ** 2).sum()))
+    D = P[nxt] - P
+    return area, np.sqrt((D * D).sum(axis=1))
+
+
+_NEXT: dict[int, np.ndarray] = {}
+_SHIFTS: dict[int, np.ndarray] = {}
+
+
+def _next(k: int) -> np.ndarray:
+    """(k,) index of the next corner (cached per k)."""
+    if k not in _NEXT:
+        _NEXT[k] = (np.arange(k) + 1) % k
+        _SHIFTS[k] = (np.arange(k)[None, :] - np.arange(k)[:, None]) % k   # row s: np.roll(x, s)
+    return _NEXT[k]
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross product of ``(..., 3)`` arrays (np.cross without its axis handling)."""
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1],
+                     a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
 
 
 def match_outline(outline: np.ndarray, faces: list[np.ndarray]) -> tuple[int, float, float]:
@@ -52,9 +73,11 @@ def match_outline(outline: np.ndarray, faces: list[np.ndarray]) -> tuple[int, fl
     idx = [i for i, F in enumerate(faces) if len(F) == k]
     if not idx:
         return -1, np.inf, np.inf
+    nxt = _next(k)
     P = np.stack([faces[i] for i in idx])                                # (c, k, 3)
-    E = np.linalg.norm(np.roll(P, -1, axis=1) - P, axis=2)               # (c, k)
-    shifts = np.stack([np.roll(e2, s) for s in range(k)])                # (k, k)
+    D = P[:, nxt] - P
+    E = np.sqrt((D * D).sum(axis=2))                                     # (c, k)
+    shifts = e2[_SHIFTS[k]]                                              # (k, k): row s = roll(e2, s)
     both = np.concatenate([E, E[:, ::-1]])                               # (2c, k)
     err = np.abs(both[:, None, :] - shifts[None, :, :]).max(axis=2).min(axis=1)
     best = int(np.argmin(err))
@@ -91,6 +114,7 @@ class Solid:
         self.tol = 1e-9 * max(size, 1.0)
         self.convex = bool((self.normals @ V.T - self.offsets[:, None]).max() <= self.tol)
         self._manifold = None
+        self._planes = None
 
     @property
     def manifold(self):
@@ -102,19 +126,34 @@ class Solid:
                 tri_verts=np.ascontiguousarray(self.T, dtype=np.uint64)))
         return self._manifold
 
+    @property
+    def support_planes(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(normals (q, 3), offsets (q,))`` of planes with the whole solid on their inner side: its
+        face planes when it is convex, else the faces of its convex hull (a notched beam's end cut)."""
+        if self._planes is None:
+            if self.convex:
+                self._planes = (self.normals, self.offsets)
+            else:
+                from scipy.spatial import ConvexHull
+
+                eq = ConvexHull(self.V).equations                 # n . x + c <= 0 inside, |n| = 1
+                self._planes = (eq[:, :3], -eq[:, 3])
+        return self._planes
+
     def separates(self, other: "Solid", tol: float) -> bool:
-        """True when one face plane of this convex solid has all of ``other`` outside (touching allowed)."""
-        if not self.convex:
-            return False
-        d = other.V @ self.normals.T - self.offsets[None, :]
+        """True when a supporting plane of this solid (a face plane, or a face of its convex hull) has
+        all of ``other`` outside (touching allowed): their interiors are then disjoint."""
+        n, c = self.support_planes
+        d = other.V @ n.T - c[None, :]
         return bool((d.min(axis=0) >= -tol).any())
 
 
 def intersections(solids: list[Solid], linear_tol: float) -> dict:
     """Overlap volumes of every pair of parts whose boxes overlap.
 
-    A pair is cleared by a separating face plane of a convex part (exact for
-    touching parts); otherwise manifold3d computes the intersection volume,
+    A pair is cleared by a separating supporting plane of either part (a face
+    plane of a convex part, a face of the convex hull of a non-convex one:
+    exact for touching parts); otherwise manifold3d computes the intersection volume,
     which must stay below ``linear_tol x`` the smaller surface area.
     """
     lo = np.array([s.V.min(axis=0) for s in solids]).reshape(-1, 3)

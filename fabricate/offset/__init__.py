@@ -1,19 +1,21 @@
-"""Offset stage (paper section 4): constant-distance layers, node axes, torsion-free beams."""
-from .axes import AXIS_RCOND, AxisFit, face_planes, fit_axes, given_axes
-from .beams import beam_normals, beam_planarity, beam_quads, beam_twist
-from .files import layer_filename, write_offset_files
-from .focal import (FocalMeshes, axis_line_intersections, edge_families, focal_meshes,
-                    quad_circular_defect, spherical_image, spherical_image_defect)
-from .layers import face_distance_errors, face_offset_heights, offset_layers
-from .report import offset_report
-from .straighten import coplanarity_residual, straighten_free_axes
-from .structure import OffsetStructure, offset_structure, require_pq
+"""Offset stage (paper section 4): constant-distance layers, node axes, torsion-free beams.
 
-__all__ = [
-    "AXIS_RCOND", "AxisFit", "FocalMeshes", "OffsetStructure", "axis_line_intersections",
-    "beam_normals", "beam_planarity", "beam_quads", "beam_twist", "coplanarity_residual",
-    "edge_families", "face_distance_errors", "face_offset_heights", "face_planes", "fit_axes",
-    "focal_meshes", "given_axes", "layer_filename", "offset_layers", "offset_report", "offset_structure",
-    "quad_circular_defect", "require_pq", "spherical_image", "spherical_image_defect",
-    "straighten_free_axes", "write_offset_files",
-]
+Names load on first use (PEP 562), so importing one stage does not load the others.
+"""
+from optimize._lazy import lazy_exports
+
+_EXPORTS = {
+    "AXIS_RCOND": ".axes", "AxisFit": ".axes", "face_planes": ".axes", "fit_axes": ".axes",
+    "given_axes": ".axes",
+    "beam_normals": ".beams", "beam_planarity": ".beams", "beam_quads": ".beams", "beam_twist": ".beams",
+    "layer_filename": ".files", "write_offset_files": ".files",
+    "FocalMeshes": ".focal", "axis_line_intersections": ".focal", "edge_families": ".focal",
+    "focal_meshes": ".focal", "quad_circular_defect": ".focal", "spherical_image": ".focal",
+    "spherical_image_defect": ".focal",
+    "face_distance_errors": ".layers", "face_offset_heights": ".layers", "offset_layers": ".layers",
+    "offset_report": ".report",
+    "coplanarity_residual": ".straighten", "straighten_free_axes": ".straighten",
+    "OffsetStructure": ".structure", "offset_structure": ".structure", "require_pq": ".structure",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -17,6 +17,7 @@ from optimize.tolerances import Tolerances
 
 from .beams import beam_planarity
 from .focal import axis_line_intersections, edge_families, spherical_image_defect
+from .turnover import turnover_report, turnover_sentence
 
 WORST = 5
 """How many worst elements each section names."""
@@ -47,7 +48,7 @@ def offset_report(mesh: Mesh, distances: tuple, span: tuple, a: dict, *, tol: To
 
     ``a`` holds ``normals (m,3), axes (n,3), cos_theta (n,), axis_defect (n,),
     edges (e,2), beam_quads (e,4,3), beam_twist_mm (e,), beam_twist_deg (e,),
-    face_distance_error (m,L), face_distance_spread (m,L), planarity (m,)``.
+    face_distance_error (m,L), face_distance_spread (m,L), planarity (m,), offset (n,3)``.
     """
     t = mesh.topology
     plan = a["planarity"]
@@ -116,12 +117,14 @@ def offset_report(mesh: Mesh, distances: tuple, span: tuple, a: dict, *, tol: To
         "beams": {"count": int(len(edges)), "span_mm": list(span),
                   "max_twist_mm": float(mm.max()), "mean_twist_mm": float(mm.mean()),
                   "max_twist_deg": float(np.abs(deg).max()), "max_planarity": float(bplan.max()),
+                  "steepest_edge": int(np.argmax(np.abs(deg))) if len(deg) else None,
                   "tolerance": tol.beam_planarity, "ok": bool(bplan.max() <= tol.beam_planarity),
                   "boundary_max_twist_mm": float(mm[boundary_edge].max(initial=0.0)),
                   "interior_max_twist_mm": float(mm[~boundary_edge].max(initial=0.0)),
                   "worst": [{"edge": int(e), "vertices": edges[e].tolist(), "twist_mm": float(mm[e]),
                              "twist_deg": float(deg[e]), "planarity": float(bplan[e])}
                             for e in _top(mm)]},
+        "turned_over": turnover_report(mesh, a["normals"], a["offset"], distances),
         "free_axes": straighten,
         "spherical_image": {"quads": int(sph.size), "degenerate": int(np.isnan(sph).sum()),
                             **_stats(sph), "tolerance": tol.circular,
@@ -137,6 +140,9 @@ def offset_report(mesh: Mesh, distances: tuple, span: tuple, a: dict, *, tol: To
 def _sentences(r: dict, mesh: Mesh) -> list[str]:
     """Plain statements for people (printed by ``fabricate offset``)."""
     out = []
+    turned = turnover_sentence(r["turned_over"])
+    if turned:
+        out.append(turned)
     fd, bm, ax, pl = r["face_distance"], r["beams"], r["axis_defect_rad"], r["planarity"]
     if not r["is_pq"]:
         w = pl["worst"][0]
@@ -161,8 +167,11 @@ def _sentences(r: dict, mesh: Mesh) -> list[str]:
                        f"{fd['max_spread_mm']:.3g} mm, relative {fd['max_relative']:.3g}).")
     we = bm["worst"][0] if bm["worst"] else None
     if we is not None and not bm["ok"]:
-        out.append(f"Beams twist up to {bm['max_twist_mm']:.3g} mm / {bm['max_twist_deg']:.3g} deg "
+        steep = bm.get("steepest_edge")
+        angle = (f"; the steepest twist {bm['max_twist_deg']:.3g} deg is at edge {steep}"
+                 if steep is not None and steep != we["edge"] else "")
+        out.append(f"Beams twist up to {bm['max_twist_mm']:.3g} mm "
                    f"(edge {we['edge']} {we['vertices']}: {we['twist_mm']:.3g} mm, "
-                   f"{we['twist_deg']:.3g} deg); "
+                   f"{we['twist_deg']:.3g} deg){angle}; "
                    f"beam planarity tolerance {bm['tolerance']:g}.")
     return out

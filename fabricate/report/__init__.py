@@ -1,13 +1,20 @@
-"""Reports of a run: report.json, pictures, a GLB model and report.html."""
-from .document import build_report, jsonable, versions, write_report_json
-from .glb import GlbMesh, glb_bytes, read_accessor, read_glb, write_glb
-from .html import render_html, write_html
-from .measures import collect_measures
-from .pictures import picture_defect, picture_history, picture_layers, picture_outlines
-from .scene import build_scene
-from .writer import MARKERS, write_report
+"""Reports of a run: report.json, pictures, a GLB model and report.html.
 
-__all__ = ["GlbMesh", "MARKERS", "build_report", "build_scene", "collect_measures", "glb_bytes", "jsonable",
-           "picture_defect", "picture_history", "picture_layers", "picture_outlines", "read_accessor",
-           "read_glb", "render_html", "versions", "write_glb", "write_html", "write_report",
-           "write_report_json"]
+Names load on first use (PEP 562), so importing one stage does not load the others.
+"""
+from optimize._lazy import lazy_exports
+
+_EXPORTS = {
+    "build_report": ".document", "jsonable": ".document", "versions": ".document",
+    "write_report_json": ".document",
+    "GlbMesh": ".glb", "glb_bytes": ".glb", "read_accessor": ".glb", "read_glb": ".glb",
+    "write_glb": ".glb",
+    "render_html": ".html", "write_html": ".html",
+    "collect_measures": ".measures",
+    "picture_defect": ".pictures", "picture_history": ".pictures", "picture_layers": ".pictures",
+    "picture_outlines": ".pictures",
+    "build_scene": ".scene",
+    "MARKERS": ".writer", "write_report": ".writer",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -14,6 +14,8 @@ import numpy as np
 
 from optimize.atomic import atomic_open
 
+from .totals import client_totals
+
 SCHEMA = "conical-fab/report/1"
 DISTRIBUTIONS = ("conical-fab", "numpy", "scipy", "pydantic", "PyYAML", "matplotlib", "rich",
                  "build123d", "cadquery-ocp", "manifold3d", "ezdxf", "cholespy")
@@ -101,7 +103,9 @@ def build_report(ctx, pictures: dict[str, str]) -> dict[str, Any]:
         "optimization": result.report() if result is not None else None,
         "levels": ctx.get("levels", []),
         "offset": getattr(structure, "report", None),
+        "totals": client_totals(ctx.get("parts")),
         "parts": parts_summary(ctx.get("parts")),
+        "structure": ctx.get("statics_report"),
         "check": ctx.get("check"),
         "files": files,
         "pictures": pictures,

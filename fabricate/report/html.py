@@ -15,6 +15,8 @@ from typing import Any
 
 from optimize.atomic import atomic_open, atomic_path
 
+from .totals import kg, totals_lines
+
 ASSETS = Path(__file__).resolve().parent.parent / "assets"
 VIEWER_FILES = ("three-viewer.min.js", "three.LICENSE")
 
@@ -114,6 +116,12 @@ def _measure_rows(measures: dict[str, dict]) -> list[list[Any]]:
     return rows
 
 
+def _structure_html(rep) -> str:
+    from fabricate.structure.outputs import html_section
+
+    return html_section(rep)
+
+
 def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: bool) -> str:
     """The page as a string (``pictures``: file name -> caption)."""
     name = escape(report["name"])
@@ -137,7 +145,8 @@ def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: boo
         ["bounding-box diagonal", f"{mesh.get('bbox_diagonal_mm', 0):.1f} mm"],
         ["parts", ", ".join(f"{parts[k]['count']} {k}" for k in ("panels", "beams", "nodes") if k in parts)
          or "none"],
-        ["mass", f"{parts.get('total', {}).get('mass_kg', 0):.1f} kg" if parts else ""],
+        *[[label, line] for label, line in zip(("glass", "steel"), totals_lines(report.get("totals")))],
+        ["mass", kg(parts.get('total', {}).get('mass_kg', 0)) if parts else ""],
         ["time", f"{report['timings_s'].get('before_report', 0):.2f} s (stages before the report)"]])
     measures = _table(["measure", "max", "unit", "in mm / deg", "tolerance", "result", "worst elements"],
                       _measure_rows(report.get("measures", {})), raw={0, 5})
@@ -156,7 +165,7 @@ def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: boo
     versions = _table(["package", "version"], [[k, v] for k, v in report["versions"].items()])
     notes = "".join(f"<li>{escape(n)}</li>" for n in report.get("notes", []))
     offset = "".join(f"<li>{escape(str(x))}</li>" for x in (report.get("offset") or {}).get("summary", []))
-    parts_rows = [[k, v["count"], v["volume_mm3"] * 1e-9, v["mass_kg"]] for k, v in parts.items()
+    parts_rows = [[k, v["count"], f"{v['volume_mm3'] * 1e-9:,.3f}", kg(v["mass_kg"])] for k, v in parts.items()
                   if k in ("panels", "beams", "nodes")]
     parts_html = _table(["parts", "count", "volume m3", "mass kg"], parts_rows) if parts_rows else ""
     view = ""
@@ -182,6 +191,7 @@ def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: boo
 <h2>Pictures</h2><div class="pics">{pics or '<p>Pictures were not requested.</p>'}</div>
 <h2>Optimization</h2>{opt_html}
 <h2>Offset and parts</h2>{f'<ul>{offset}</ul>' if offset else ''}{parts_html}
+{_structure_html(report.get("structure"))}
 <h2>Timings</h2>{timings}
 <h2>Files</h2>{files}
 <h2>Versions</h2>{versions}

@@ -7,7 +7,8 @@ worst elements with their index and value) and, where it means something,
 the same figures in mm or degrees (``max_mm``, ``max_deg``).
 
 Enforced: planarity always (glass panels are flat), and no folded panel (a
-face the optimizer dented or flipped, ``optimize.measures.folded_faces``); the conical defect and
+face the optimizer dented or flipped, ``optimize.measures.folded_faces``), and no offset face
+that turns over (a layer past the focal distance, ``fabricate.offset.turnover``); the conical defect and
 the planarity of the beams between interior nodes (torsion-free beams, the
 paper's Geometry Fact 2) for a conical target; the circular defect for a
 circular target.  Beams at boundary nodes are reported apart: there the faces
@@ -115,6 +116,22 @@ def _reference_diagonal(ctx) -> float:
     return (ref if ref is not None else ctx["mesh"]).bbox_diagonal()
 
 
+def _turned_entry(t: dict) -> dict:
+    """Faces of an offset layer that turn over (``fabricate.offset.turnover``): enforced, none allowed."""
+    worst = [{"face": f, "value": 1.0, "distance_mm": L["distance_mm"]}
+             for L in t["per_layer"] for f in L["faces"]][:N_WORST]
+    return {"what": "offset faces that turn over (a layer past the focal distance of its faces: "
+                    "panels and beams cross); safe range of distances " + _range(t["safe_range_mm"]),
+            "unit": "faces", "count": int(t["faces"]), "tolerance": 0, "enforced": True,
+            "max": float(t["count"]), "mean": None, "worst": worst, "per_layer": t["per_layer"],
+            "safe_range_mm": t["safe_range_mm"], "pass": bool(t["ok"])}
+
+
+def _range(r) -> str:
+    lo, hi = r
+    return f"{'-inf' if lo is None else f'{lo:.4g}'} .. {'+inf' if hi is None else f'{hi:+.4g}'} mm"
+
+
 def _offset_measures(ctx, tol, enforce: bool) -> dict[str, dict]:
     s = ctx.get("structure")
     if s is None:
@@ -143,6 +160,9 @@ def _offset_measures(ctx, tol, enforce: bool) -> dict[str, dict]:
             ids = np.nonzero(sel)[0]
             out[key] = entry(rel[ids], tol.beam_planarity, "relative", "beam", ids=ids, enforced=enforced,
                              extra={"twist_mm": twist[ids], "twist_deg": np.abs(deg[ids])}, what=what)
+    turned = (s.report or {}).get("turned_over")
+    if turned is not None:
+        out["offset_turned_over"] = _turned_entry(turned)
     axis = np.asarray(s.axis_defect, dtype=float)
     if axis.size:
         out["axis_defect"] = entry(axis, None, "rad", "vertex", extra={"deg": np.degrees(axis)},

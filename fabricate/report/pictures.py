@@ -191,14 +191,31 @@ def shelf_layout(sizes: np.ndarray, width: float, gap: float) -> np.ndarray:
     return out
 
 
-def picture_outlines(outlines: list[tuple[str, np.ndarray]], path: str | Path, *, title: str,
-                     max_labels: int = 400) -> Path:
-    """A sheet of flat outlines ``[(part id, (k, 2) polygon in mm), ...]`` packed in shelves."""
+LABEL_INCH = 0.55
+"""The outline sheet is drawn so that the median part is this wide (inches) on the PNG: ids fit."""
+MAX_SHEET_INCH = 48.0
+MIN_FONT_PT = 3.0
+THIN_FONT_PT = 5.5
+"""The id size (pt) the sheet is scaled for on its thinnest parts (the 5th percentile: beams)."""
+
+
+def outline_label_sizes(widths_pt: np.ndarray, heights_pt: np.ndarray, ids: list[str]) -> np.ndarray:
+    """(p,) font size (pt) that fits each id inside its part (``widths_pt, heights_pt (p,)``, the
+    part's drawn size in points), at most 9 pt; 0 where even ``MIN_FONT_PT`` does not fit."""
+    chars = np.array([max(len(i), 1) for i in ids], dtype=float)
+    fs = np.minimum.reduce([0.85 * widths_pt / (0.62 * chars), 0.7 * heights_pt, np.full(len(ids), 9.0)])
+    return np.where(fs >= MIN_FONT_PT, fs, 0.0)
+
+
+def picture_outlines(outlines: list[tuple[str, np.ndarray]], path: str | Path, *, title: str) -> Path:
+    """A sheet of flat outlines ``[(part id, (k, 2) polygon in mm), ...]`` packed in shelves, each
+    labelled with its id in a font sized to the part; the sheet grows with the number of parts so
+    that the median part is ``LABEL_INCH`` wide (up to ``MAX_SHEET_INCH``)."""
     from matplotlib.collections import PolyCollection
 
-    fig = _figure((8.0, 8.0))
-    ax = fig.add_subplot(111)
     if not outlines:
+        fig = _figure((8.0, 8.0))
+        ax = fig.add_subplot(111)
         ax.text(0.5, 0.5, "no outlines", ha="center", va="center", transform=ax.transAxes)
         return _save(fig, path)
     polys = [np.asarray(p, dtype=float) for _, p in outlines]
@@ -208,16 +225,61 @@ def picture_outlines(outlines: list[tuple[str, np.ndarray]], path: str | Path, *
     width = max(float(np.sqrt((sizes + gap).prod(axis=1).sum()) * 1.2), float(sizes[:, 0].max()))
     corners = shelf_layout(sizes, width, gap)
     placed = [p - l + c for p, l, c in zip(polys, lo, corners)]
-    ax.add_collection(PolyCollection(placed, facecolors=(0.8, 0.88, 0.95, 1.0), edgecolors="k", linewidths=0.4))
-    if len(outlines) <= max_labels:
-        fs = max(3.0, min(8.0, 400.0 / len(outlines)))
-        for (pid, _), p in zip(outlines, placed):
-            c = p.mean(axis=0)
-            ax.text(c[0], c[1], pid, ha="center", va="center", fontsize=fs)
     allp = np.concatenate(placed)
+    span = allp.max(axis=0) - allp.min(axis=0) + 2 * gap                     # mm
+    inch_per_mm = LABEL_INCH / max(float(np.median(sizes[:, 0])), 1e-9)
+    thin = float(np.percentile(sizes[:, 1], 5))  # thin parts (beams) still get a THIN_FONT_PT id
+    inch_per_mm = max(inch_per_mm, THIN_FONT_PT / (0.7 * 72.0 * max(thin, 1e-9)))
+    inch_per_mm = min(inch_per_mm, MAX_SHEET_INCH / float(span.max()))
+    inch_per_mm = max(inch_per_mm, 7.0 / float(span.max()))                   # never below 7 in
+    fig = _figure((float(span[0] * inch_per_mm) + 1.0, float(span[1] * inch_per_mm) + 1.0))
+    ax = fig.add_axes((0.5 / fig.get_figwidth(), 0.5 / fig.get_figheight(),
+                       1 - 1.0 / fig.get_figwidth(), 1 - 1.0 / fig.get_figheight()))
+    ax.add_collection(PolyCollection(placed, facecolors=(0.8, 0.88, 0.95, 1.0), edgecolors="k", linewidths=0.4))
+    ids = [pid for pid, _ in outlines]
+    pt = 72.0 * inch_per_mm
+    fs = outline_label_sizes(sizes[:, 0] * pt, sizes[:, 1] * pt, ids)
+    labels = [(pid, p.mean(axis=0), f / pt) for pid, p, f in zip(ids, placed, fs) if f > 0]
+    if labels:
+        ax.add_artist(_id_patch(labels))  # add_patch would trace every glyph for the data limits
+    missing = int(np.sum(fs == 0))
     ax.set_xlim(allp[:, 0].min() - gap, allp[:, 0].max() + gap)
     ax.set_ylim(allp[:, 1].min() - gap, allp[:, 1].max() + gap)
     ax.set_aspect("equal")
     ax.set_xlabel("mm")
-    ax.set_title(title, fontsize=10)
+    note = f" ({missing} parts too small to label here: see outlines.svg)" if missing else ""
+    ax.set_title(title + note, fontsize=10)
     return _save(fig, path)
+
+
+def _id_patch(labels: list[tuple[str, np.ndarray, float]]):
+    """One patch of every id as glyph outlines in data units (mm): ``[(text, centre (2,), height mm)]``.
+    Thousands of ``ax.text`` take seconds to lay out; glyphs are made once per character and one
+    compound path draws at once."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.patches import PathPatch
+    from matplotlib.path import Path as MPath
+    from matplotlib.textpath import TextPath, text_to_path
+
+    prop = FontProperties(size=1.0)
+    glyphs: dict[str, tuple[np.ndarray, np.ndarray, float]] = {}
+    verts, codes = [], []
+    for text, centre, size in labels:
+        x, parts = 0.0, []
+        for ch in text:
+            if ch not in glyphs:
+                tp = TextPath((0.0, 0.0), ch, prop=prop)
+                w = text_to_path.get_text_width_height_descent(ch, prop, ismath=False)[0]
+                glyphs[ch] = (np.asarray(tp.vertices, dtype=float), np.asarray(tp.codes), float(w))
+            V, C, w = glyphs[ch]
+            if len(V):
+                parts.append((V + (x, 0.0), C))
+            x += w
+        if not parts:
+            continue
+        V = np.concatenate([v for v, _ in parts])
+        mid = 0.5 * (V.min(axis=0) + V.max(axis=0))
+        verts.append((V - mid) * size + centre)
+        codes.append(np.concatenate([c for _, c in parts]))
+    path = MPath(np.concatenate(verts), np.concatenate(codes)) if verts else MPath(np.zeros((0, 2)))
+    return PathPatch(path, facecolor="k", edgecolor="none", lw=0)

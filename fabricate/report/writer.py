@@ -58,6 +58,10 @@ def write_pictures(ctx) -> dict[str, str]:
     picture_history(histories(ctx), out / "history.png", title=f"{name}: optimization history",
                     tolerances={"planarity": tol.planarity, "conical": tol.conical, "circular": tol.circular})
     pics["history.png"] = "max defects against iteration (log scale), tolerances dashed"
+    if ctx.get("statics") is not None:  # the structural check's frame pictures
+        from fabricate.structure.run import write_pictures
+
+        pics.update(write_pictures(ctx))
     outlines = part_outlines(ctx.get("parts"))
     if outlines:
         picture_outlines(outlines, out / "outlines.png", title=f"{name}: flat outlines ({len(outlines)} parts)")

@@ -4,7 +4,9 @@ Every module has ``terms(x, layout, ...) -> (r, J)``: the residual vector
 ``r (p,)`` (zero when the constraint holds) and its sparse Jacobian
 ``J (p, layout.size)`` at the unknown vector ``x``.  All residuals are at most
 quadratic in ``x``.  The solver, not the constraint, applies weights.
+The modules load when imported (``from optimize.constraints import conical``).
 """
-from . import anglebalance, angles, anglesum, circular, conical, fixed, glide, planarity, unit
+from .._lazy import lazy_exports
 
 __all__ = ["anglebalance", "angles", "anglesum", "circular", "conical", "fixed", "glide", "planarity", "unit"]
+__getattr__, __dir__ = lazy_exports(__name__, {}, globals())

@@ -3,17 +3,19 @@
 ``optimize_mesh`` is the name ``optimize.api`` dispatches to; it is
 :func:`run_paper_method`.  The per-method entry points live in the modules
 ``optimize.paper.penalty``, ``.sqp`` and ``.hybrid`` (functions of the same
-names), not re-exported here so that the module names stay importable.
+names), not re-exported here so that the module names stay importable; for
+the same reason ``angle_sum`` is ``optimize.paper.angle_sum.angle_sum``.
+Names load on first use (PEP 562).
 """
-from .angle_sum import angle_sum
-from .angles import corner_angle_terms
-from .balance import angle_balance
-from .circular import circular_angles
-from .det import det_constraints
-from .hybrid import METHODS, run_paper_method
-from .targets import TARGETS, check_strip, target_terms
+from .._lazy import lazy_exports
 
-optimize_mesh = run_paper_method
-
-__all__ = ["METHODS", "TARGETS", "angle_balance", "angle_sum", "check_strip", "circular_angles",
-           "corner_angle_terms", "det_constraints", "optimize_mesh", "run_paper_method", "target_terms"]
+_EXPORTS = {
+    "corner_angle_terms": ".angles",
+    "angle_balance": ".balance",
+    "circular_angles": ".circular",
+    "det_constraints": ".det",
+    "METHODS": ".hybrid", "run_paper_method": ".hybrid", "optimize_mesh": ".hybrid:run_paper_method",
+    "TARGETS": ".targets", "check_strip": ".targets", "target_terms": ".targets",
+}
+__all__ = sorted(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

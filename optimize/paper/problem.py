@@ -26,7 +26,8 @@ from ..closeness import Reference
 from ..constraints.fixed import resolve
 from ..fairness import fairness_matrix
 from ..mesh import Mesh
-from ..result import OptimizeResult
+from ..conjugacy import record_net
+from ..result import OptimizeResult, check_folds, record_shape
 from ..tolerances import DEFAULT, Tolerances
 from . import kernels
 from .angles import angle_values, corner_vertices
@@ -314,11 +315,19 @@ class Problem:
         axes = cones = None
         if self.target == "conical":
             axes, cones = node_axes(out)
-        return OptimizeResult(
+        res = OptimizeResult(
             mesh=out, success=success, status=status, message=message, nit=nit, history=history,
             defects=defects, max_distance=self.max_distance(V),
             normals=measures.face_normals(out), axes=axes, cone_angles=cones,
             multipliers=multipliers, timings=timings, method=method, target=self.target)
+        Y, _ = self.foot_search.closest(V)
+        record_shape(res, self.mesh, np.linalg.norm(V - Y, axis=1), self.ref.bbox_diagonal)
+        record_net(res, self.mesh, self.target)
+        return check_folds(res, self.mesh.V, PAPER_FOLD_ADVICE)
+
+
+PAPER_FOLD_ADVICE = ("the paper's methods do not keep faces convex; the default method does "
+                     "(method 'default', --method default)")
 
 
 def node_axes(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:

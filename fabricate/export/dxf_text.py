@@ -1,0 +1,124 @@
+"""An independent, fast reader of the flat outlines in an ASCII DXF file (for the full check).
+
+``read_outlines_text(path)`` splits the file into its (group code, value)
+pairs at once, finds the ENTITIES section, and reads every ``LWPOLYLINE``
+on layer ``CUT`` (vertices from codes 10/20, the part id from its
+``CONICAL_FAB`` XDATA, code 1000) and counts the ``TEXT`` ids on ``ETCH``,
+with numpy over all pairs instead of building a document.  It lints what a
+CAD program needs to open the file: every group code an integer, the file
+ends with ``EOF``, sections balanced, entity handles unique hexadecimal, each
+outline closed with as many vertices as its count (code 90) says, every
+coordinate a finite number, ``$INSUNITS`` read from the header.
+
+It shares no code with the writer (:mod:`fabricate.export.dxf`) nor with
+ezdxf; ``fabricate check --occ`` loads and audits the whole file with ezdxf
+instead.
+"""
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from optimize.errors import ExportError
+
+APPID = "CONICAL_FAB"
+
+
+def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
+    """``({part id: CUT outline (k, 2)}, facts)``; facts: ``lint`` (problems), ``audit_errors``
+    (their count), ``units`` ($INSUNITS), ``texts`` (TEXT entities on ETCH)."""
+    path = Path(path)
+    try:
+        text = path.read_bytes().decode("utf-8", errors="replace").replace("\r", "")
+    except OSError as exc:
+        raise ExportError(f"{path}: cannot read the DXF file ({exc.strerror or exc})") from None
+    lines = text.split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()
+    lint: list[str] = []
+    if len(lines) % 2:
+        lint.append(f"{len(lines)} lines: a group code without its value")
+        lines = lines[:-1]
+    raw = lines[0::2]
+    values = [v.strip() for v in lines[1::2]]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        codes = np.fromstring(" ".join(raw), dtype=np.int64, sep=" ")
+    if codes.size != len(raw):
+        raise ExportError(f"{path}: a group code is not an integer; not an ASCII DXF file")
+    V = np.array(values, dtype=object)
+    zero = np.nonzero(codes == 0)[0]
+    kinds = V[zero]
+    if not len(values) or values[-1] != "EOF":
+        lint.append("the file does not end with 0/EOF")
+    if int(np.sum(kinds == "SECTION")) != int(np.sum(kinds == "ENDSEC")):
+        lint.append("SECTION and ENDSEC do not pair up")
+    units = 0
+    hdr = np.nonzero((codes == 9) & (V == "$INSUNITS"))[0]
+    if hdr.size and hdr[0] + 1 < len(codes) and codes[hdr[0] + 1] == 70:
+        units = int(values[hdr[0] + 1])
+    sec = np.nonzero((codes == 2) & (V == "ENTITIES"))[0]
+    if not sec.size:
+        raise ExportError(f"{path}: no ENTITIES section")
+    a = int(sec[0]) + 1
+    ends = zero[(zero >= a) & (V[zero] == "ENDSEC")]
+    b = int(ends[0]) if ends.size else len(codes)
+    starts = zero[(zero >= a) & (zero < b)]                      # one 0/TYPE per entity
+    a = int(starts[0]) if len(starts) else b
+    ent = np.searchsorted(starts, np.arange(a, b), side="right") - 1      # >= 0: a is the first start
+    c, v = codes[a:b], V[a:b]
+    n = len(starts)
+    etype = V[starts]
+    layer = np.full(n, "", dtype=object)
+    on = c == 8
+    layer[ent[on]] = v[on]
+    handles = v[c == 5]
+    if len(set(handles.tolist())) != len(handles):
+        lint.append(f"{len(handles) - len(set(handles.tolist()))} duplicate entity handles")
+    try:
+        [int(h, 16) for h in handles.tolist()]
+    except ValueError:
+        lint.append("an entity handle is not hexadecimal")
+    cut = (etype == "LWPOLYLINE") & (layer == "CUT")
+    texts = int(np.sum((etype == "TEXT") & (layer == "ETCH")))
+    in_cut = cut[ent]
+    try:
+        xs = np.array(v[in_cut & (c == 10)].tolist(), dtype=float)
+        ys = np.array(v[in_cut & (c == 20)].tolist(), dtype=float)
+    except ValueError:
+        raise ExportError(f"{path}: an outline vertex is not a number") from None
+    if xs.size != ys.size or not (np.isfinite(xs).all() and np.isfinite(ys).all()):
+        lint.append("outline vertices without both coordinates, or not finite")
+        return {}, {"lint": lint, "audit_errors": len(lint), "units": units, "texts": texts,
+                    "reader": "independent DXF text reader"}
+    owner = ent[in_cut & (c == 10)]
+    cut_ids = np.nonzero(cut)[0]
+    count = np.bincount(owner, minlength=n)[cut_ids]
+    declared = np.zeros(n, dtype=np.int64)
+    decl = in_cut & (c == 90)
+    declared[ent[decl]] = np.array(v[decl].tolist(), dtype=np.int64)
+    flags = np.zeros(n, dtype=np.int64)
+    fl = in_cut & (c == 70)
+    flags[ent[fl]] = np.array(v[fl].tolist(), dtype=np.int64)
+    if np.any(declared[cut_ids] != count):
+        lint.append(f"{int(np.sum(declared[cut_ids] != count))} outlines with a vertex count (90) "
+                    "other than their vertices")
+    if np.any(flags[cut_ids] & 1 == 0):
+        lint.append(f"{int(np.sum(flags[cut_ids] & 1 == 0))} CUT outlines are not closed (70 & 1)")
+    pid = np.full(n, None, dtype=object)
+    xd = in_cut & (c == 1000)
+    app = in_cut & (c == 1001)
+    ok_app = np.zeros(n, dtype=bool)
+    ok_app[ent[app][v[app] == APPID]] = True
+    pid[ent[xd]] = v[xd]
+    order = np.argsort(owner, kind="stable")
+    P = np.stack([xs, ys], axis=1)[order]
+    bounds = np.concatenate([[0], np.cumsum(count)])
+    out = {}
+    for j, e in enumerate(cut_ids.tolist()):
+        if ok_app[e] and pid[e] is not None:
+            out[str(pid[e])] = P[bounds[j]:bounds[j + 1]]
+    return out, {"lint": lint, "audit_errors": len(lint), "units": units, "texts": texts,
+                 "reader": "independent DXF text reader"}

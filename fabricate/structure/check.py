@@ -1,0 +1,190 @@
+"""The structural check of a run: frame + loads -> OpenSees -> per beam results -> report.
+
+``check_structure(structure, options, spec)`` is the one entry point (the pipeline stage,
+``fabricate size`` and the benchmark call it): a pure function of the offset structure, the
+``structure`` config section and the part spec.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .engine import MechanismError, solve
+from .frame import Frame, frame_from_offset
+from .loads import basic_cases
+from .options import ALPHA, GRADES
+from .results import Results, evaluate, worst
+from .sections import SectionProperties, plate, slender_part
+
+UTILIZATION_NOTE = ("max of the elastic cross-section check |N|/Npl + |My|/Mel,y + |Mz|/Mel,z (EN 1993-1-1 "
+                    "6.2.1(7)) and the same with the compression over chi Npl (flexural buckling 6.3.1, "
+                    "interaction factors 1); shear, torsion, lateral-torsional buckling and connections "
+                    "are not checked")
+
+
+@dataclass(frozen=True, eq=False)
+class StructureCheck:
+    """A solved frame: ``frame``, ``cases`` (basic load cases), ``solution``, ``results``,
+    ``supports`` (k,) vertex indices, ``section`` (the configured one), ``seconds`` per step."""
+
+    frame: Frame
+    cases: dict
+    solution: object
+    results: Results
+    supports: np.ndarray
+    section: SectionProperties
+    options: object
+    seconds: dict = field(default_factory=dict)
+
+    @property
+    def max_utilization(self) -> float:
+        return float(self.results.utilization.max(initial=0.0))
+
+    def deflection_ratio(self) -> np.ndarray:
+        """(e,) float beam deflection / its limit."""
+        return self.results.deflection_mm / self.results.deflection_limit_mm
+
+    def slender(self) -> list[str]:
+        """The sections in use with a class 4 part (local buckling is not checked: they fail)."""
+        fy = GRADES[self.options.grade]
+        used = sorted(set(np.unique(self.frame.section_of).tolist()))
+        return [m for m in (slender_part(self.frame.sections[i], fy) for i in used) if m]
+
+    def passes(self) -> bool:
+        r = self.results
+        return bool(self.max_utilization <= 1.0 and (self.deflection_ratio() <= 1.0).all()
+                    and r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm and not self.slender())
+
+
+def configured_section(options, spec, structure) -> SectionProperties:
+    """``structure.section`` or, when null, the parts' plate: ``beam_width`` x the layer span."""
+    if options.section is not None:
+        return options.section.properties("structure.section")
+    d0, d1 = structure.beam_span
+    return plate(spec.beam_width, abs(d1 - d0), "parts")
+
+
+def default_span(V: np.ndarray, up) -> float:
+    """The shorter side (mm) of the plan bounding box (the plane normal to ``up``)."""
+    u = np.asarray(up, dtype=float) / np.linalg.norm(up)
+    a = np.cross(u, [1.0, 0.0, 0.0] if abs(u[0]) < 0.9 else [0.0, 1.0, 0.0])
+    a /= np.linalg.norm(a)
+    b = np.cross(u, a)
+    P = V @ np.stack([a, b], axis=1)
+    ext = P.max(axis=0) - P.min(axis=0)
+    return float(max(ext.min(), 1e-9))
+
+
+def build(structure, options, spec, section: SectionProperties | None = None):
+    """``(frame, supports, cases)`` for a structure with one section everywhere."""
+    section = section or configured_section(options, spec, structure)
+    frame, supports = frame_from_offset(
+        structure, section, E=options.elastic_modulus, G=options.shear_modulus, supports=options.supports,
+        support_tolerance=options.support_tolerance, support_kind=options.support_kind,
+        pinned=options.connections == "pinned", up=options.up)
+    cases = basic_cases(structure, frame, options.loads, spec.glass_thickness, options.up)
+    return frame, supports, cases
+
+
+def solve_frame(frame, cases, options, structure) -> tuple:
+    """``(solution, results)`` of ``frame`` under ``cases`` with the config's combinations."""
+    try:
+        solution = solve(frame, cases)
+    except MechanismError as exc:
+        raise MechanismError(f"structure.supports = {options.supports!r} ({int(frame.fixed.any(axis=1).sum())} "
+                             f"{options.support_kind} supports), structure.connections = {options.connections!r}: "
+                             f"{exc}") from None
+    span = options.span or default_span(np.asarray(structure.mesh.V), options.up)
+    results = evaluate(frame, cases, solution, options.combination_list(), fy=options.fy,
+                       deflection_limit=options.deflection_limit, span_mm=span, alpha=ALPHA[options.buckling_curve],
+                       buckling_length_factor=options.buckling_length_factor)
+    return solution, results
+
+
+def check_structure(structure, options, spec, *, section_of=None, sections=None) -> StructureCheck:
+    """Build, load, solve and evaluate the beam frame of ``structure`` (an OffsetStructure).
+
+    options : the config's StructureSection; spec : the PartSpec (glass thickness, beam width).
+    section_of, sections : optional per beam sections (sizing); default the configured one.
+    """
+    t0 = time.perf_counter()
+    section = configured_section(options, spec, structure)
+    frame, supports, cases = build(structure, options, spec, section)
+    if sections is not None:
+        frame = frame.with_sections(sections, section_of)
+        cases = basic_cases(structure, frame, options.loads, spec.glass_thickness, options.up)
+    t1 = time.perf_counter()
+    solution, results = solve_frame(frame, cases, options, structure)
+    t2 = time.perf_counter()
+    seconds = {"model": round(t1 - t0, 4), "solve": round(t2 - t1 - solution.seconds.get("ours", 0.0), 4)}
+    seconds.update({f"opensees_{k}": v for k, v in solution.seconds.items() if k not in ("opensees", "ours")})
+    seconds["opensees"] = solution.seconds.get("opensees", 0.0)
+    seconds["total"] = round(time.perf_counter() - t0, 4)
+    seconds["ours"] = round(seconds["total"] - seconds["opensees"], 4)
+    return StructureCheck(frame, cases, solution, results, supports, section, options, seconds)
+
+
+def report(check: StructureCheck) -> dict:
+    """JSON-ready summary: section, loads, combinations, worst elements, equilibrium, timings."""
+    r, fr, opt = check.results, check.frame, check.options
+    ids = fr.ids
+    ratio = check.deflection_ratio()
+    gov_names = np.array(r.uls, dtype=object)[r.governing] if r.uls else np.array([""] * fr.n_elements)
+    worst_u = worst(r.utilization, ids, combination=gov_names, N_kN=r.N_kN, M_strong_kNm=r.M_strong_kNm,
+                    M_weak_kNm=r.M_weak_kNm)
+    i_max = int(np.argmax(r.utilization)) if fr.n_elements else 0
+    L = fr.lengths()
+    totals = {k: (c.total_force(L) * 1e-3).round(3).tolist() for k, c in check.cases.items()}
+    sections = sorted({s.name for s in fr.sections})
+    out = {
+        "check": opt.check,
+        "engine": f"OpenSees (openseespy {check.solution.version})",
+        "elements": fr.n_elements, "nodes": fr.n_nodes,
+        "supports": {"selection": opt.supports if isinstance(opt.supports, str) else list(opt.supports),
+                     "kind": opt.support_kind, "count": int(len(check.supports)),
+                     "vertices": check.supports[:50].tolist()},
+        "connections": opt.connections,
+        "section": check.section.as_dict(), "sections": sections,
+        "grade": opt.grade, "fy_mpa": opt.fy, "buckling_curve": opt.buckling_curve,
+        "buckling_length_factor": opt.buckling_length_factor,
+        "min_buckling_factor": float(r.chi.min(initial=1.0)) if r.chi is not None else None,
+        "steel_mass_kg": round(fr.steel_mass_kg(), 1),
+        "loads_kN": {"characteristic_totals": totals, "input": opt.loads.model_dump()},
+        "combinations": [{"name": n, "kind": k, "factors": f} for n, k, f in opt.combination_list()],
+        "governing_combination": r.uls[int(r.governing[i_max])] if r.uls else None,
+        "governing_sls": r.governing_sls,
+        "utilization": {"max": float(r.utilization.max(initial=0.0)), "mean": float(r.utilization.mean()),
+                        "limit": 1.0, "pass": bool(r.utilization.max(initial=0.0) <= 1.0),
+                        "over_1": int((r.utilization > 1.0).sum()), "worst": worst_u, "method": UTILIZATION_NOTE},
+        "deflection": {"max_mm": float(r.deflection_mm.max(initial=0.0)), "limit": f"L/{opt.deflection_limit:g}",
+                       "max_ratio": float(ratio.max(initial=0.0)), "pass": bool((ratio <= 1.0).all()),
+                       "worst": worst(ratio, ids, deflection_mm=r.deflection_mm, limit_mm=r.deflection_limit_mm,
+                                      length_mm=L)},
+        "displacement": {"max_mm": float(r.displacement_mm.max(initial=0.0)), "span_mm": r.span_mm,
+                         "limit_mm": r.displacement_limit_mm,
+                         "pass": bool(r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm),
+                         "combination": r.governing_sls},
+        "equilibrium": {"relative_residual": r.equilibrium, "max": max(r.equilibrium.values(), default=0.0)},
+        "class_4": check.slender(),
+        "pass": check.passes(),
+        "seconds": check.seconds,
+    }
+    return out
+
+
+def beam_table(check: StructureCheck) -> list[dict]:
+    """One row per beam: id, section, N, moments, utilization, governing combination, deflection."""
+    r, fr = check.results, check.frame
+    names = [s.name for s in fr.sections]
+    out = []
+    L = fr.lengths()
+    for i in range(fr.n_elements):
+        out.append({"id": fr.ids[i], "section": names[fr.section_of[i]], "length_mm": round(float(L[i]), 1),
+                    "N_kN": round(float(r.N_kN[i]), 3), "M_strong_kNm": round(float(r.M_strong_kNm[i]), 4),
+                    "M_weak_kNm": round(float(r.M_weak_kNm[i]), 4), "utilization": round(float(r.utilization[i]), 4),
+                    "combination": r.uls[int(r.governing[i])] if r.uls else "",
+                    "deflection_mm": round(float(r.deflection_mm[i]), 3),
+                    "deflection_limit_mm": round(float(r.deflection_limit_mm[i]), 2)})
+    return out

@@ -1,0 +1,168 @@
+"""The ``structure`` section of a run config: the frame, its loads and the check (one place for every default).
+
+Units: section dimensions and lengths in mm, area loads in kN/m2, unit weights in kN/m3,
+moduli in MPa (N/mm2).  Load case names follow EN 1991 (self-weight and permanent loads
+1991-1-1, snow 1991-1-3, wind 1991-1-4); the default combinations are EN 1990 eq. 6.10 with
+the recommended factors (gamma_G 1.35 / 1.0, gamma_Q 1.5, psi_0 snow 0.5, wind 0.6) and the
+characteristic ones for the deflections.
+"""
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic_core import PydanticCustomError
+
+from .sections import SectionProperties, section
+
+CASES = ("self_weight", "glass", "finishes", "snow", "wind_pressure", "wind_suction")
+"""The basic load cases (EN 1991-style names); permanent: self_weight, glass, finishes."""
+ALPHA = {"a0": 0.13, "a": 0.21, "b": 0.34, "c": 0.49, "d": 0.76}
+"""Imperfection factor of each flexural buckling curve (EN 1993-1-1 Table 6.1)."""
+GRADES = {"S235": 235.0, "S275": 275.0, "S355": 355.0, "S460": 460.0}
+"""Yield strength f_y (MPa) of the structural steel grades (EN 10025-2, t <= 40 mm)."""
+
+
+class Section(BaseModel):
+    """A config section (as :class:`fabricate.config.Section`, kept here so config.py can import this module)."""
+
+    model_config = ConfigDict(extra="forbid", validate_default=True, populate_by_name=True)
+
+    @classmethod
+    def allowed_keys(cls) -> list[str]:
+        return [f.alias or name for name, f in cls.model_fields.items()]
+
+
+class SectionOption(Section):
+    """A beam section (mm): ``plate`` width x depth, ``rhs`` depth x width x web (wall),
+    ``tee`` / ``i`` depth x width (flange) x web x flange thickness."""
+
+    shape: Literal["plate", "rhs", "tee", "i"] = "plate"
+    depth: float = Field(gt=0)
+    width: float = Field(gt=0)
+    web: float | None = Field(default=None, gt=0)
+    flange: float | None = Field(default=None, gt=0)
+
+    @model_validator(mode="after")
+    def _valid(self) -> "SectionOption":
+        from optimize.errors import ConfigError
+
+        try:
+            self.properties()
+        except ConfigError as exc:
+            raise PydanticCustomError("section", "{err}", {"err": str(exc)}) from None
+        return self
+
+    def properties(self, key: str = "section") -> SectionProperties:
+        return section(self.shape, depth=self.depth, width=self.width, web=self.web, flange=self.flange, key=key)
+
+
+class LoadsOption(Section):
+    """Characteristic loads: unit weights kN/m3, area loads kN/m2 (>= 0; wind signs are in the case)."""
+
+    steel_unit_weight: float = Field(default=78.5, gt=0)   # EN 1991-1-1 Table A.4
+    glass_unit_weight: float = Field(default=25.0, gt=0)   # EN 1991-1-1 Table A.4 (glass in sheets)
+    finishes: float = Field(default=0.0, ge=0)             # permanent, per m2 of glass (fixings, gaskets)
+    snow: float = Field(default=0.8, ge=0)                 # s = mu_i C_e C_t s_k, per m2 of plan
+    wind_pressure: float = Field(default=0.5, ge=0)        # w_e toward the structure, normal to the panels
+    wind_suction: float = Field(default=0.5, ge=0)         # w_e away from the structure (uplift)
+
+
+class CombinationOption(Section):
+    """One combination: ``name``, ``kind`` (``uls`` strength, ``sls`` deflection), factors per case."""
+
+    name: str = Field(min_length=1, max_length=60)
+    kind: Literal["uls", "sls"]
+    factors: dict[Literal["self_weight", "glass", "finishes", "snow", "wind_pressure", "wind_suction"], float]
+
+    @field_validator("factors")
+    @classmethod
+    def _factors(cls, v):
+        bad = {k: f for k, f in v.items() if not (f >= 0)}
+        if bad:
+            k, f = next(iter(bad.items()))
+            raise PydanticCustomError("factor", "factor {k} = {f}: expected a number >= 0 (a partial factor times "
+                                      "a combination factor)", {"k": k, "f": f})
+        if not v:
+            raise PydanticCustomError("factor", "no factors, expected at least one load case")
+        return v
+
+
+def _perm(g: float) -> dict[str, float]:
+    return {"self_weight": g, "glass": g, "finishes": g}
+
+
+DEFAULT_COMBINATIONS = (
+    ("ULS 1.35G", "uls", _perm(1.35)),
+    ("ULS 1.35G + 1.5S + 0.9W", "uls", dict(_perm(1.35), snow=1.5, wind_pressure=0.9)),
+    ("ULS 1.35G + 1.5W + 0.75S", "uls", dict(_perm(1.35), wind_pressure=1.5, snow=0.75)),
+    ("ULS 1.0G + 1.5W uplift", "uls", dict(_perm(1.0), wind_suction=1.5)),
+    ("SLS G + S + 0.6W", "sls", dict(_perm(1.0), snow=1.0, wind_pressure=0.6)),
+    ("SLS G + W + 0.5S", "sls", dict(_perm(1.0), wind_pressure=1.0, snow=0.5)),
+    ("SLS G + W uplift", "sls", dict(_perm(1.0), wind_suction=1.0)),
+)
+
+
+class SizingOption(Section):
+    """``fabricate size``: candidate sections (lightest passing one per group) and the grouping."""
+
+    sections: list[SectionOption] = Field(default_factory=list)
+    group_by: Literal["all", "boundary"] = "boundary"
+    max_rounds: int = Field(default=6, ge=1, le=50)
+
+
+class StructureSection(Section):
+    """The structural check of the beam frame (``fabricate.structure``); ``check: off`` skips it."""
+
+    check: Literal["off", "report", "enforce"] = "off"
+    grade: Literal["S235", "S275", "S355", "S460"] = "S355"
+    gamma_m0: float = Field(default=1.0, ge=1.0)
+    buckling_curve: Literal["a0", "a", "b", "c", "d"] = "c"   # EN 1993-1-1 Table 6.1 (c: tees, plates, cold-formed RHS)
+    buckling_length_factor: float = Field(default=1.0, gt=0)  # buckling length / beam length
+    elastic_modulus: float = Field(default=210000.0, gt=0)   # MPa
+    shear_modulus: float = Field(default=81000.0, gt=0)      # MPa
+    section: SectionOption | None = None   # null: the parts' plate, parts.beam_width x the layer span
+    connections: Literal["rigid", "pinned"] = "rigid"
+    supports: Literal["lowest", "boundary", "outline"] | list[int] = "lowest"
+    support_tolerance: float | None = Field(default=None, ge=0)  # mm above the lowest ('lowest'); null: 5% of the height
+    support_kind: Literal["pinned", "fixed"] = "pinned"
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    deflection_limit: float = Field(default=200.0, gt=0)   # span / n, beams and whole structure
+    span: float | None = Field(default=None, gt=0)         # mm; null: the shorter side of the plan
+    loads: LoadsOption = Field(default_factory=LoadsOption)
+    combinations: list[CombinationOption] | None = None   # null: DEFAULT_COMBINATIONS
+    sizing: SizingOption = Field(default_factory=SizingOption)
+
+    @field_validator("check", mode="before")
+    @classmethod
+    def _yaml_off(cls, v):
+        return "off" if v is False else v  # YAML 1.1 reads a bare `off` as false
+
+    @field_validator("supports")
+    @classmethod
+    def _supports(cls, v):
+        if isinstance(v, list):
+            if not v:
+                raise PydanticCustomError("supports", "an empty list supports nothing; expected vertex indices, "
+                                          "'lowest', 'boundary' or 'outline'")
+            if any(i < 0 for i in v):
+                raise PydanticCustomError("supports", "vertex indices must be >= 0")
+        return v
+
+    @field_validator("up")
+    @classmethod
+    def _up(cls, v):
+        if sum(c * c for c in v) <= 0:
+            raise PydanticCustomError("up", "up {v} is not a nonzero vector, expected [x, y, z]", {"v": list(v)})
+        return v
+
+    @property
+    def fy(self) -> float:
+        """Design yield strength f_y / gamma_M0 (MPa)."""
+        return GRADES[self.grade] / self.gamma_m0
+
+    def combination_list(self) -> list[tuple[str, str, dict[str, float]]]:
+        """``[(name, kind, {case: factor})]``: the configured combinations or the EN 1990 defaults."""
+        if self.combinations is None:
+            return [(n, k, dict(f)) for n, k, f in DEFAULT_COMBINATIONS]
+        return [(c.name, c.kind, dict(c.factors)) for c in self.combinations]

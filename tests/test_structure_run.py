@@ -1,0 +1,193 @@
+"""The structural check on a real offset structure, in a run and on the command line.
+
+A dome of revolution (10 m, 16 x 7 quads: conical by construction) offset 200 mm: every solved
+model balances, loads scale results linearly, the panel loads arrive whole on the beams, sizing
+returns a lighter section that passes (by a full solve), and bad input is exit 2 naming the key.
+"""
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from _pipeline_fixtures import NO_FILES, REPO, tiny_config
+from fabricate.cad import PartSpec
+from fabricate.config import parse_config
+from fabricate.offset import offset_structure
+from fabricate.structure.check import check_structure, report
+from fabricate.structure.loads import panel_area_vectors
+from fabricate.structure.sizing import size_sections
+from optimize import shapes
+
+
+@pytest.fixture(scope="module")
+def dome():
+    mesh = shapes.revolution(shapes.dome_profile(radius=10.0, rise=4.0, k=7), 16, name="dome")
+    return offset_structure(mesh.with_vertices(mesh.V * 1000.0), [0.0, -200.0])
+
+
+def options(**structure):
+    data = {"input": {"shape": {"name": "dome"}}, "structure": dict({"check": "report"}, **structure)}
+    return parse_config(data, source=Path("t.yaml")).structure
+
+
+SPEC = PartSpec(glass_thickness=10.0, beam_width=60.0, beam_depth=200.0)
+
+
+def test_every_case_balances_and_the_panel_loads_arrive_whole(dome):
+    chk = check_structure(dome, options(), SPEC)
+    eq = chk.results.equilibrium
+    assert set(eq) >= {"self_weight", "glass", "snow", "wind_pressure", "wind_suction"}
+    assert max(eq.values()) < 1e-6
+    area = np.linalg.norm(panel_area_vectors(dome.mesh), axis=1).sum()  # mm2
+    glass = chk.cases["glass"].total_force(chk.frame.lengths())
+    assert -glass[2] == pytest.approx(25.0e-6 * 10.0 * area, rel=1e-9)   # 25 kN/m3 x 10 mm x area
+    snow = chk.cases["snow"].total_force(chk.frame.lengths())
+    plan = np.abs(panel_area_vectors(dome.mesh)[:, 2]).sum()
+    assert -snow[2] == pytest.approx(0.8e-3 * plan, rel=1e-9)
+    steel = chk.cases["self_weight"].total_force(chk.frame.lengths())
+    assert -steel[2] == pytest.approx(78.5e-6 * 60 * 200 * chk.frame.lengths().sum(), rel=1e-9)
+    rep = report(chk)
+    assert rep["equilibrium"]["max"] < 1e-6
+    assert rep["governing_combination"] in rep["utilization"]["worst"][0]["combination"]
+    assert rep["supports"]["count"] == 16  # the lowest ring
+
+
+def test_loads_that_scale_linearly_scale_utilization_and_deflection_linearly(dome):
+    base = dict(steel_unit_weight=78.5, glass_unit_weight=25.0, finishes=0.2, snow=0.8, wind_pressure=0.5,
+                wind_suction=0.4)
+    one = check_structure(dome, options(loads=base), SPEC)
+    two = check_structure(dome, options(loads={k: 2 * v for k, v in base.items()}), SPEC)
+    np.testing.assert_allclose(two.results.utilization, 2 * one.results.utilization, rtol=1e-7)
+    np.testing.assert_allclose(two.results.deflection_mm, 2 * one.results.deflection_mm, rtol=1e-7, atol=1e-12)
+    np.testing.assert_allclose(two.results.displacement_mm, 2 * one.results.displacement_mm, rtol=1e-7)
+    assert max(two.results.equilibrium.values()) < 1e-6
+
+
+def test_sizing_picks_a_lighter_section_that_passes_by_a_full_solve(dome):
+    cands = [{"shape": "plate", "depth": 200, "width": 1}, {"shape": "plate", "depth": 200, "width": 8},
+             {"shape": "rhs", "depth": 200, "width": 60, "web": 4}, {"shape": "plate", "depth": 200, "width": 30}]
+    opt = options(sizing={"sections": cands, "group_by": "boundary"})
+    sz = size_sections(dome, opt, SPEC)
+    assert sz.passes and sz.check.passes()
+    assert sz.sized_mass_kg < sz.configured_mass_kg and sz.saved_kg > 0
+    assert "plate 1x200" not in sz.chosen.values()  # far too weak: never chosen
+    final = check_structure(dome, opt, SPEC, sections=sz.check.frame.sections, section_of=sz.check.frame.section_of)
+    assert final.max_utilization == pytest.approx(sz.check.max_utilization, rel=1e-9)
+
+
+def test_a_support_that_does_not_exist_names_the_key(dome):
+    from optimize.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"structure\.supports: vertex 100000 does not exist"):
+        check_structure(dome, options(supports=[3, 100000]), SPEC)
+
+
+def test_a_frame_on_pinned_joints_is_a_mechanism_naming_the_key(dome):
+    from fabricate.structure.engine import MechanismError
+
+    with pytest.raises(MechanismError, match=r"structure\.connections = 'pinned'"):
+        check_structure(dome, options(connections="pinned"), SPEC)
+
+
+def test_a_run_writes_the_structure_table_columns_and_pictures(tmp_path):
+    from fabricate.pipeline import run_pipeline
+
+    outs = dict(NO_FILES, bom=True, pictures=True)
+    cfg = tiny_config(tmp_path, "st", outputs=outs, structure={"check": "report"})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    assert summary.exit_code == 0, summary.message
+    out = tmp_path / "out" / "st"
+    import json
+
+    rep = json.loads((out / "report.json").read_text())
+    s = rep["structure"]
+    assert s["equilibrium"]["max"] < 1e-6 and len(s["beams"]) == s["elements"]
+    assert rep["measures"]["structure_utilization"]["max"] == pytest.approx(s["utilization"]["max"])
+    assert (out / "structure_utilization.png").stat().st_size > 1000
+    assert "structure_deflection.png" in rep["pictures"]
+    rows = list(csv.DictReader((out / "bom.csv").open()))
+    beams = [r for r in rows if r["kind"] == "beam"]
+    assert beams and all(r["utilization"] and r["section"] for r in beams)
+    assert all(r["utilization"] == "" for r in rows if r["kind"] != "beam")
+    assert max(float(r["utilization"]) for r in beams) == pytest.approx(s["utilization"]["max"], abs=1e-4)
+
+
+def test_enforce_with_a_section_far_too_small_is_exit_3(tmp_path):
+    from fabricate.pipeline import run_pipeline
+
+    cfg = tiny_config(tmp_path, "weak", structure={"check": "enforce",
+                                                   "section": {"shape": "plate", "depth": 200, "width": 0.5}})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    assert summary.exit_code == 3 and "structure_utilization" in summary.failed
+
+
+def _cli(tmp_path, *sets):
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("input:\n  shape:\n    name: dome\n    params: {radius: 5000, rise: 2000, meridians: 6, rings: 3}\n"
+                   "outputs: {step: false, stl: false, 3mf: false, dxf: false, svg: false, bom: false, "
+                   "pictures: false, html: false}\nstructure:\n  check: report\n")
+    args = [sys.executable, "-m", "fabricate", "run", str(cfg), "--out", str(tmp_path / "o"), "-q"]
+    for s in sets:
+        args += ["--set", s]
+    return subprocess.run(args, cwd=REPO, capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.parametrize("setting, key", [
+    ("structure.loads.snow=-0.5", "structure.loads.snow"),
+    ("structure.supports=[]", "structure.supports"),
+    ("structure.connections=pinned", "structure.connections"),
+])
+def test_bad_structure_input_is_exit_2_with_one_line_naming_the_key(tmp_path, setting, key):
+    proc = _cli(tmp_path, setting)
+    assert proc.returncode == 2, proc.stderr
+    lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]
+    assert len(lines) == 1 and key in lines[0] and "Traceback" not in proc.stderr
+    assert not (tmp_path / "o" / "c").exists()
+
+
+def test_reference_config_lists_every_structure_key():
+    import yaml
+
+    from fabricate.structure.options import LoadsOption, SizingOption, StructureSection
+
+    data = yaml.safe_load((REPO / "configs" / "reference.yaml").read_text())["structure"]
+    assert set(data) == set(StructureSection.allowed_keys())
+    assert set(data["loads"]) == set(LoadsOption.allowed_keys())
+    assert set(data["sizing"]) == set(SizingOption.allowed_keys())
+    from fabricate.config import load_config
+
+    assert load_config(REPO / "configs" / "reference.yaml").structure.check == "off"  # YAML's bare off
+
+
+def test_supports_outline_is_the_longest_boundary_loop_and_a_closed_mesh_has_none():
+    from fabricate.structure.frame import support_vertices
+    from optimize.errors import ConfigError
+
+    ring = shapes.grid(6, 6, size=(5.0, 5.0))  # one boundary loop of 20 vertices
+    t = ring.topology
+    sel = support_vertices(ring.V, t.is_boundary_vertex, "outline", None, (0, 0, 1), loops=t.boundary_loops)
+    assert sorted(sel.tolist()) == sorted(np.nonzero(t.is_boundary_vertex)[0].tolist())
+    with pytest.raises(ConfigError, match="structure.supports = 'outline'"):
+        support_vertices(ring.V, np.zeros(len(ring.V), bool), "outline", None, (0, 0, 1), loops=[])
+
+
+def test_fabricate_size_reports_the_lightest_passing_section_and_the_steel_saved(tmp_path):
+    cfg = tmp_path / "s.yaml"
+    cfg.write_text("input:\n  shape:\n    name: dome\n    params: {radius: 5000, rise: 2000, meridians: 6, rings: 3}\n"
+                   "structure:\n  sizing:\n    group_by: all\n    sections:\n"
+                   "      - {shape: plate, depth: 200, width: 1}\n      - {shape: rhs, depth: 200, width: 60, web: 4}\n"
+                   "      - {shape: plate, depth: 200, width: 60}\n")
+    proc = subprocess.run([sys.executable, "-m", "fabricate", "size", str(cfg), "--json", str(tmp_path / "s.json")],
+                          cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    import json
+
+    d = json.loads((tmp_path / "s.json").read_text())
+    assert d["chosen"] == {"all": "rhs 200x60x4"} and d["passes"]
+    assert d["configured_section"] == "plate 60x200" and d["saved_kg"] > 0
+    assert "rhs 200x60x4" in proc.stdout and "saved" in proc.stdout
