@@ -1,7 +1,7 @@
 """Benchmark of the default optimizer against libigl and mpfp, measured in the same run.
 
     python benchmarks/bench_optimize.py              # table + PQ scaling curve to 30k faces
-    python benchmarks/bench_optimize.py --foldfree-only --data ../shared/data   # folds, old vs new
+    python benchmarks/bench_optimize.py --foldfree-only --data DIR   # folds, old vs new; DIR: extra meshes
     python benchmarks/bench_optimize.py --large      # scaling curve up to 100k faces
     python benchmarks/bench_optimize.py --linalg     # the sparse solver backends on one system
     python benchmarks/bench_optimize.py --no-peers   # ours only
@@ -25,7 +25,7 @@ method's status then says ``folded``), and the ratio to each peer.
 
 The fold-free table (first; ``--foldfree-only``) runs, on wave900, hypar900,
 conjugate900+noise, a skew torus and a blob (closed, their mesh lines not
-conjugate) and the shared meshes (``--data DIR``): the new default
+conjugate) and extra real meshes (``--data DIR``): the new default
 (``ours``: convexity rows, fairness weight falling with the defect), the old
 one (``ours-old``: ``convex=False`` and the fairness weight in full), the
 remeshed route (``ours+rm``: ``optimize.routes``, remeshed along principal
@@ -55,7 +55,7 @@ from optimize import Mesh, measures, optimize_mesh, shapes  # noqa: E402
 from optimize.closeness import Reference  # noqa: E402
 
 TUNNEL = ROOT / "configs" / "meshes" / "tunnel.off"  # the built-in design tunnel, in metres
-DATA = None  # --data PATH: a folder with halftunnel.off and cylinder.obj (the shared meshes), else skipped
+DATA = None  # --data PATH: a folder with halftunnel.off and cylinder.obj (libigl tutorial meshes), else skipped
 
 
 # -- meshes -------------------------------------------------------------------
@@ -97,7 +97,7 @@ def real_mesh(path=None):
 
 
 def halftunnel():
-    """The shared halftunnel.off (``--data DIR``)."""
+    """halftunnel.off from ``--data DIR``."""
     from optimize.io import read_mesh
 
     return read_mesh(Path(DATA) / "halftunnel.off")
@@ -482,7 +482,7 @@ def main():
                     help="seconds libigl may take to reach planarity 1e-3 on meshes up to 3k faces "
                          "(the issue's 100x goal is against that time; 0 to skip)")
     ap.add_argument("--data", metavar="DIR", help="folder with halftunnel.off and cylinder.obj "
-                                                 "(the shared meshes): their rows too")
+                                                 "(e.g. from the libigl tutorial data): their rows too")
     ap.add_argument("--foldfree-only", action="store_true", help="only the fold-free table")
     ap.add_argument("--no-foldfree", action="store_true", help="skip the fold-free table")
     ap.add_argument("--paper-methods", nargs="*", default=["penalty", "sqp", "hybrid"],

@@ -73,7 +73,7 @@ def _print_totals(target) -> None:
     from fabricate.report.totals import totals_lines
 
     try:
-        totals = json.loads((target / "report.json").read_text(encoding="utf-8")).get("totals")
+        totals = json.loads((Path(target) / "report.json").read_text(encoding="utf-8")).get("totals")
     except (OSError, ValueError, AttributeError):
         return
     for text in totals_lines(totals):

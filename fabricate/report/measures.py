@@ -129,7 +129,10 @@ def _turned_entry(t: dict) -> dict:
 
 def _range(r) -> str:
     lo, hi = r
-    return f"{'-inf' if lo is None else f'{lo:.4g}'} .. {'+inf' if hi is None else f'{hi:+.4g}'} mm"
+    def mm(x, sign=""):  # millimetres as a shop reads them: 85,320 mm, 0.24 mm, never 8.532e+04
+        return f"{x:{sign},.0f}" if abs(x) >= 100 else f"{x:{sign}.3g}"
+
+    return f"{'-inf' if lo is None else mm(lo)} .. {'+inf' if hi is None else mm(hi, '+')} mm"
 
 
 def _offset_measures(ctx, tol, enforce: bool) -> dict[str, dict]:

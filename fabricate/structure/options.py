@@ -116,19 +116,19 @@ class StructureSection(Section):
 
     check: Literal["off", "report", "enforce"] = "off"
     grade: Literal["S235", "S275", "S355", "S460"] = "S355"
-    gamma_m0: float = Field(default=1.0, ge=1.0)
+    gamma_m0: float = Field(default=1.0, ge=1.0, le=2.0)
     buckling_curve: Literal["a0", "a", "b", "c", "d"] = "c"   # EN 1993-1-1 Table 6.1 (c: tees, plates, cold-formed RHS)
-    buckling_length_factor: float = Field(default=1.0, gt=0)  # buckling length / beam length
-    elastic_modulus: float = Field(default=210000.0, gt=0)   # MPa
-    shear_modulus: float = Field(default=81000.0, gt=0)      # MPa
+    buckling_length_factor: float = Field(default=1.0, gt=0, le=10.0)  # buckling length / beam length
+    elastic_modulus: float = Field(default=210000.0, gt=0, le=1e6)   # MPa
+    shear_modulus: float = Field(default=81000.0, gt=0, le=1e6)      # MPa
     section: SectionOption | None = None   # null: the parts' plate, parts.beam_width x the layer span
     connections: Literal["rigid", "pinned"] = "rigid"
     supports: Literal["lowest", "boundary", "outline"] | list[int] = "lowest"
-    support_tolerance: float | None = Field(default=None, ge=0)  # mm above the lowest ('lowest'); null: 5% of the height
+    support_tolerance: float | None = Field(default=None, ge=0, le=1e6)  # mm above the lowest ('lowest'); null: 5% of the height
     support_kind: Literal["pinned", "fixed"] = "pinned"
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    deflection_limit: float = Field(default=200.0, gt=0)   # span / n, beams and whole structure
-    span: float | None = Field(default=None, gt=0)         # mm; null: the shorter side of the plan
+    deflection_limit: float = Field(default=200.0, gt=0, le=10000.0)   # span / n, beams and whole structure
+    span: float | None = Field(default=None, gt=0, le=1e7)         # mm; null: the shorter side of the plan
     loads: LoadsOption = Field(default_factory=LoadsOption)
     combinations: list[CombinationOption] | None = None   # null: DEFAULT_COMBINATIONS
     sizing: SizingOption = Field(default_factory=SizingOption)
