@@ -232,35 +232,35 @@ def test_nc1_per_beam_reads_back_to_the_dxf_contour_and_the_bom(parts, bom, tmp_
         assert h["web_thickness"] == pytest.approx(float(row["thickness_mm"]), abs=1e-3)
         assert h["weight_per_m"] * h["length"] * 1e-3 == pytest.approx(float(row["weight_kg"]), rel=1e-3)
         for key in ("web_start_cut", "web_end_cut", "flange_start_cut", "flange_end_cut"):
-            assert 0.0 <= h[key] < 90.0
+            assert -90.0 < h[key] < 90.0
 
 
-def test_nc1_cut_angles_of_a_known_plate():
-    """A plate 1000 x 200 x 20 whose end faces lean 30 deg in its plane at the start and are bevelled
-    45 deg across the thickness at the end: the header says so."""
-    from types import SimpleNamespace
+def test_nc1_length_and_angles_equal_the_steel_cut_list(parts, tmp_path):
+    """Every NC1 header against the steel cut list written from the same parts: grade, blank length
+    and width, both end cuts (mitre in the plate plane, bevel across it)."""
+    import csv
 
-    from fabricate.export.nc1 import _bevels, _end_angles, contour
+    from fabricate.export import write_steel_cut_list
+    from fabricate.export.nc1_read import read_nc1
 
-    t30 = 200.0 * np.tan(np.radians(30.0))
-    Q = np.array([[0.0, 0.0], [1000.0, 0.0], [1000.0, 200.0], [t30, 200.0]])
-    assert _end_angles(Q) == pytest.approx((30.0, 0.0), abs=1e-9)
-    # the same plate in space: front face z = 0 (outline), back face z = -20; end at x = 1000 bevelled 45 deg
-    front = np.column_stack([Q, np.zeros(4)])
-    back = front + [0.0, 0.0, -20.0]
-    back[1:3, 0] -= 20.0  # the end face leans 45 deg across the thickness
-    V = np.vstack([front, back])
-    faces = ((3, 2, 1, 0), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6), (3, 0, 4, 7))
-    normals = []
-    for f in faces:
-        P = V[list(f)]
-        n = np.cross(P[1] - P[0], P[2] - P[0])
-        normals.append(n / np.linalg.norm(n))
-    g = SimpleNamespace(vertices=V[None], normals=np.array(normals)[None], faces=faces, outline_face=0,
-                        bevel_face=1, flat=Q[None])
-    start, end = _bevels(g, 0)
-    assert start == pytest.approx(0.0, abs=1e-9) and end == pytest.approx(45.0, abs=1e-9)
-    np.testing.assert_allclose(contour(g, 0), Q)
+    write_nc1(parts, tmp_path / "nc1")
+    write_steel_cut_list(parts, tmp_path / "steel.csv")
+    rows = list(csv.DictReader(open(tmp_path / "steel.csv", newline="")))
+    assert len(rows) == len(parts.beams)
+
+    def larger(text):
+        values = [float(v) for v in text.split()]
+        return max(values, key=abs)
+
+    for row in rows:
+        h = read_nc1(tmp_path / "nc1" / f"{row['id']}.nc1")["header"]
+        assert h["grade"] == row["grade"] == parts.spec.steel_grade
+        assert h["length"] == pytest.approx(float(row["blank_w_mm"]), abs=0.06)
+        assert h["height"] == pytest.approx(float(row["blank_h_mm"]), abs=0.06)
+        assert h["web_start_cut"] == pytest.approx(float(row["end_a_mitre_deg"]), abs=0.006)
+        assert h["web_end_cut"] == pytest.approx(float(row["end_b_mitre_deg"]), abs=0.006)
+        assert h["flange_start_cut"] == pytest.approx(larger(row["end_a_bevel_deg"]), abs=0.006)
+        assert h["flange_end_cut"] == pytest.approx(larger(row["end_b_bevel_deg"]), abs=0.006)
 
 
 @pytest.mark.parametrize("engine", ["direct", "occ"])

@@ -122,12 +122,13 @@ def _density(w: _Writer, material, density: float) -> None:
     f.createIfcMaterialProperties("Pset_MaterialCommon", None, [prop], material)
 
 
-def write_ifc(parts, path, *, grade: str = "S355", project: str = "conical-fab") -> dict:
+def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-fab") -> dict:
     """Write ``parts`` as IFC4 (atomic).  Returns facts: ``file, bytes, elements`` per kind, ``seconds``.
 
-    grade : steel grade written as the beams' and nodes' material name.
+    grade : steel grade written as the beams' and nodes' material name (default: the parts' steel_grade).
     """
     t0 = time.perf_counter()
+    grade = grade or getattr(parts.spec, "steel_grade", "S355")
     path = Path(path)
     try:
         w = _Writer(project)

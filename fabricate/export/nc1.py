@@ -39,49 +39,6 @@ from optimize.errors import ExportError
 NUM = "{:10.3f}"
 
 
-def _end_angles(Q: np.ndarray) -> tuple[float, float]:
-    """Deviation from square (deg) of the start (x = min) and end (x = max) cuts of contour ``Q (k, 2)``.
-
-    At each end the cut is the chord between the contour's extreme points in y among the vertices
-    on that end's half; square = perpendicular to the length (the x axis).
-    """
-    mid = 0.5 * (Q[:, 0].min() + Q[:, 0].max())
-    out = []
-    for side in (Q[:, 0] <= mid, Q[:, 0] > mid):
-        P = Q[side]
-        a, b = P[np.argmin(P[:, 1])], P[np.argmax(P[:, 1])]
-        out.append(float(np.degrees(np.arctan2(abs(b[0] - a[0]), max(abs(b[1] - a[1]), 1e-300)))))
-    return out[0], out[1]
-
-
-def _bevels(group, i: int) -> tuple[float, float]:
-    """Largest bevel (deg from square) of the end faces at the start and at the end of beam ``i``.
-
-    End faces: neither the plate face nor its opposite, their normals more along the beam than across
-    it; start or end by the side of the beam's middle their centre lies on.  Bevel = angle between an
-    end face and the plate normal (0 when the end face is perpendicular to the plate).
-    """
-    V, n = group.vertices[i], group.normals[i]
-    plate = n[group.outline_face]
-    axis = _length_axis(V[list(group.faces[group.outline_face])])
-    s = V @ axis
-    mid = 0.5 * (s.min() + s.max())
-    out = [0.0, 0.0]
-    for j, face in enumerate(group.faces):
-        if j in (group.outline_face, group.bevel_face) or abs(n[j] @ axis) < 0.3:
-            continue
-        end = int(s[list(face)].mean() > mid)
-        out[end] = max(out[end], float(np.degrees(np.arcsin(min(1.0, abs(n[j] @ plate))))))
-    return out[0], out[1]
-
-
-def _length_axis(P: np.ndarray) -> np.ndarray:
-    """Unit direction of the longest vertex pair of ``P (k, 3)`` (a beam's plate face: its length)."""
-    d = P[:, None, :] - P[None, :, :]
-    a, b = np.unravel_index(np.argmax((d ** 2).sum(axis=2)), d.shape[:2])
-    return d[a, b] / np.linalg.norm(d[a, b])
-
-
 def contour(group, i: int) -> np.ndarray:
     """(k, 2) the flat outline of part ``i`` with its lower-left corner at the origin, x along the length."""
     Q = np.asarray(group.flat[i], dtype=float)
@@ -90,16 +47,23 @@ def contour(group, i: int) -> np.ndarray:
     return Q - Q.min(axis=0)
 
 
-def nc1_text(group, i: int, *, order: str, grade: str, density: float) -> str:
-    """The NC1 file of plate ``i`` of ``group`` (a beam group)."""
+def _signed_max(pair) -> float:
+    """The value of larger magnitude of a pair (an end's bevel on its two sides), with its sign."""
+    pair = np.asarray(pair, dtype=float)
+    return float(pair[np.argmax(np.abs(pair))])
+
+
+def nc1_text(group, i: int, *, order: str, grade: str, density: float, angles: dict) -> str:
+    """The NC1 file of plate ``i`` of ``group`` (a beam group); ``angles``: the group's
+    :func:`fabricate.export.schedules.beam_angles` (the steel cut list's end cuts)."""
     Q = contour(group, i)
     length, height = float(Q[:, 0].max()), float(Q[:, 1].max())
     t = float(group.thickness_mm[i])
     weight = float(group.volume_mm3[i]) * density * 1e-9
     perimeter = float(np.linalg.norm(np.roll(Q, -1, axis=0) - Q, axis=1).sum())
     paint = (2.0 * float(group.area_mm2[i]) + perimeter * t) * 1e-6 / (length * 1e-3)
-    web = _end_angles(Q)
-    bevel = _bevels(group, i)
+    web = angles["mitre"][i]
+    bevel = (_signed_max(angles["end_bevel"][i, 0]), _signed_max(angles["end_bevel"][i, 1]))
     pid = group.ids[i]
     head = [order, "conical-fab", "1", pid, grade, "1", f"PL{t:g}", "B"]
     numbers = [length, height, 0.0, 0.0, t, 0.0, weight / (length * 1e-3), paint, web[0], web[1],
@@ -116,18 +80,22 @@ def nc1_text(group, i: int, *, order: str, grade: str, density: float) -> str:
     return "\n".join(lines)
 
 
-def write_nc1(parts, folder, *, order: str = "roof", grade: str = "S355") -> dict:
-    """One NC1 file per beam in ``folder`` (created; each file atomic).  Returns facts:
-    ``folder, files, bytes, seconds``."""
+def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -> dict:
+    """One NC1 file per beam in ``folder`` (created; each file atomic).  ``grade``: default the parts'
+    ``steel_grade``.  Returns facts: ``folder, files, bytes, seconds``."""
+    from .schedules import beam_angles
+
     t0 = time.perf_counter()
+    grade = grade or getattr(parts.spec, "steel_grade", "S355")
     folder = Path(folder)
     files, size = 0, 0
     try:
         folder.mkdir(parents=True, exist_ok=True)
         for g in parts.of_kind("beam"):
             density = parts.spec.density(g.kind)
+            angles = beam_angles(g)
             for i, pid in enumerate(g.ids):
-                text = nc1_text(g, i, order=order, grade=grade, density=density)
+                text = nc1_text(g, i, order=order, grade=grade, density=density, angles=angles)
                 with atomic_open(folder / f"{pid}.nc1", "w", encoding="ascii", newline="\r\n") as fh:
                     fh.write(text)
                 files += 1
