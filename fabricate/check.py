@@ -37,8 +37,9 @@ with it:
   with the same id (without ``flat.json``: a face of the STEP solid).
 - ``svg``: parses, one group per panel and beam.
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
-  element / object / file per BOM row with the same id; IFC schema-valid with ifcopenshell's
-  volumes equal to the BOM's (not in the fast check: ``skip`` ``ifc_geometry``).
+  element / object / file per BOM row with the same id; IFC schema-valid with the volume of
+  every element's face set, as ifcopenshell reads it, equal to the BOM's (with ``--occ``: from
+  ifcopenshell's geometry kernel; not in the fast check: ``skip`` ``ifc_geometry``).
 
 A check whose file was not written is reported with ``pass: None`` and the
 reason, never silently left out; a file the run wrote (listed in its
@@ -108,7 +109,8 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
                 (None, None) if step_reader == "occ" else (_text_faces, "text"))), None)),
             ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
             ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
-                                                                     full="ifc_geometry" not in skip), None)),
+                                                                     full="ifc_geometry" not in skip,
+                                                                     kernel=step_reader == "occ"), None)),
             ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
             ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None))):
         t1 = time.perf_counter()

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 VOLUME_REL_TOL = 1e-6
 KIND_LAYER = {"panel": "glass", "beam": "steel", "node": "nodes"}
 
@@ -24,7 +26,32 @@ def _ids_result(expected: set, found: set, extra: dict) -> dict:
             "elements": len(found), "missing": missing[:20], "unknown": unknown[:20], **extra}
 
 
-def check_ifc(path: Path, bom, *, full: bool = True) -> dict:
+def face_set_volumes(f) -> dict[str, float]:
+    """Element name -> volume (mm3) of its closed ``IfcPolygonalFaceSet`` s, from the coordinates and
+    face indices as ifcopenshell parses them from the file (divergence theorem over fan triangles):
+    the file's content, without the writer's arrays and without a geometry kernel."""
+    out: dict[str, float] = {}
+    for el in f.by_type("IfcElement"):
+        if el.is_a("IfcCurtainWall") or el.Representation is None:
+            continue
+        total = 0.0
+        for rep in el.Representation.Representations:
+            for item in rep.Items:
+                if not item.is_a("IfcPolygonalFaceSet"):
+                    continue
+                P = np.asarray(item.Coordinates.CoordList, dtype=float)
+                tri = [(f_[0], f_[j], f_[j + 1]) for face in item.Faces
+                       for f_ in [[i - 1 for i in face.CoordIndex]] for j in range(1, len(f_) - 1)]
+                T = np.asarray(tri, dtype=np.int64)
+                a, b, c = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
+                total += float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0
+        out[el.Name] = total
+    return out
+
+
+def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False) -> dict:
+    """``full``: schema validation and volumes (``kernel``: ifcopenshell's geometry kernel, else the
+    face sets' own coordinates as parsed, about 20x faster)."""
     import ifcopenshell
 
     f = ifcopenshell.open(str(path))
@@ -40,9 +67,10 @@ def check_ifc(path: Path, bom, *, full: bool = True) -> dict:
         log = ifcopenshell.validate.json_logger()
         ifcopenshell.validate.validate(f, log)
         extra["bad_schema"] = [str(s.get("message", s))[:200] for s in log.statements[:10]]
-        volumes = read_ifc(path)
-        errors = {pid: abs(item["volume_mm3"] / float(rows[pid]["volume_mm3"]) - 1.0)
-                  for pid, item in volumes.items() if pid in rows}
+        volumes = ({pid: item["volume_mm3"] for pid, item in read_ifc(path).items()} if kernel
+                   else face_set_volumes(f))
+        errors = {pid: abs(v / float(rows[pid]["volume_mm3"]) - 1.0) for pid, v in volumes.items() if pid in rows}
+        extra["volumes_from"] = "ifcopenshell geometry kernel" if kernel else "face sets as parsed"
         extra["volume_rel_error_max"] = max(errors.values(), default=0.0)
         # no shape (NaN) is as bad as a wrong volume
         extra["bad_volume"] = sorted(pid for pid, e in errors.items() if not e <= VOLUME_REL_TOL)[:20]
