@@ -105,8 +105,8 @@ def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = f
             ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
             ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
             ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
-            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"], *(
-                (None, None) if step_reader == "occ" else (_text_faces, "text"))), None)),
+            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"],
+                                                       None if step_reader == "occ" else "text"), None)),
             ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
             ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
                                                                      full="ifc_geometry" not in skip,
@@ -304,10 +304,6 @@ def _check_step_text(path, bom):
              "reader": facts["reader"]}, solids)
 
 
-def _text_faces(facts) -> list[np.ndarray]:
-    return facts["faces"]
-
-
 def _head(path, n: int) -> str:
     with open(path, "rb") as fh:
         return fh.read(n).decode("ascii", errors="replace")
@@ -421,11 +417,11 @@ def _check_flat(path, bom, read):
     return check_flat(path, bom, step_solids=read.get("step"), meshes=read.get("3mf"))
 
 
-def _check_dxf(path, bom, solids_step, flat_path=None, faces_of=None, reader=None):
+def _check_dxf(path, bom, solids_step, flat_path=None, reader=None):
     """CUT outlines against the flat data's outlines (which the flat check holds to the STEP solids),
-    or, without flat.json, against a face of the STEP solid of the same name.
+    or, without flat.json, their areas against the BOM's (a beam's true outline, V ends and ridge
+    included, is not a face of its solid).
 
-    ``faces_of(solid)``: its face loops (default: OpenCASCADE's, for solids read by OCC);
     ``reader``: ``"text"`` (the independent DXF reader, linted) or None (ezdxf loads and audits)."""
     from .export.verify import match_outline
 
@@ -434,17 +430,16 @@ def _check_dxf(path, bom, solids_step, flat_path=None, faces_of=None, reader=Non
     else:
         from .export.dxf import read_outlines
 
-    if faces_of is None:
-        from .export.verify import face_polygons as faces_of
+    if flat_path is None or not Path(flat_path).exists():  # a beam's true outline is no face of its solid
+        from .check_fast import dxf_against_bom
 
-    outline_of = None
-    if flat_path is not None and Path(flat_path).exists():
-        from .export.flatdata import read_flat
+        return dict(dxf_against_bom(path, bom), note="without flat.json: CUT outlines against the BOM areas")
+    from .export.flatdata import read_flat
 
-        outline_of = {}
-        for g in read_flat(flat_path):
-            for pid, Q in zip(g["ids"], g["outline"]):
-                outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
+    outline_of = {}
+    for g in read_flat(flat_path):
+        for pid, Q in zip(g["ids"], g["outline"]):
+            outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
     outlines, facts = read_outlines(path)
     flat = [r["id"] for r in bom if r["kind"] in ("panel", "beam")]
     missing = sorted(set(flat) - set(outlines))
@@ -454,10 +449,10 @@ def _check_dxf(path, bom, solids_step, flat_path=None, faces_of=None, reader=Non
         if shape is None:
             failures.append({"id": pid, "error": "no STEP solid of that name"})
             continue
-        if outline_of is not None and pid not in outline_of:
+        if pid not in outline_of:
             failures.append({"id": pid, "error": "not in flat.json"})
             continue
-        fi, rel, err = match_outline(Q, outline_of[pid] if outline_of is not None else faces_of(shape))
+        fi, rel, err = match_outline(Q, outline_of[pid])
         if err > worst_e:
             worst_e, worst_id = err, pid
         worst_a = max(worst_a, rel)
@@ -465,7 +460,7 @@ def _check_dxf(path, bom, solids_step, flat_path=None, faces_of=None, reader=Non
             failures.append({"id": pid, "face": fi, "area_rel_error": rel, "edge_error_mm": err})
     ok = (facts["audit_errors"] == 0 and facts["units"] == 4 and not missing and not failures
           and facts["texts"] >= len(flat))
-    return {"pass": ok, "against": "flat.json" if outline_of is not None else "step", "outlines": len(outlines),
+    return {"pass": ok, "against": "flat.json", "outlines": len(outlines),
             "expected": len(flat), "missing": missing[:20],
             "area_rel_error_max": worst_a, "edge_error_mm_max": worst_e, "worst": worst_id,
             "tolerances": {"area_rel": AREA_REL_TOL, "edge_mm": EDGE_TOL_MM}, "failures": failures[:20],

@@ -104,3 +104,17 @@ def test_ngon_and_quad_panels_together_pass_the_checks(tmp_path):
     result = check_outputs(_write(parts, tmp_path / "capped"))
     assert result["pass"], {k: v for k, v in result["checks"].items() if v.get("pass") is False}
     assert not mesh.notes  # the cap was oriented like its neighbours
+
+
+def test_without_flat_json_the_dxf_is_checked_against_the_bom(run_dir, tmp_path):
+    """A beam's true outline (V ends, ridge) is no face of its solid: without flat.json the CUT
+    outlines are held to the BOM's areas, and still pass."""
+    import shutil
+
+    copy = tmp_path / "out"
+    shutil.copytree(run_dir, copy)
+    (copy / "flat.json").unlink()
+    result = check_outputs(copy)
+    dxf = result["checks"]["dxf"]
+    assert dxf["pass"] and dxf["against"] == "bom" and "flat.json" in dxf["note"]
+    assert result["checks"]["flat"]["pass"] is None
