@@ -215,6 +215,31 @@ def _check_bom(bom) -> dict:
             "nonpositive_volume": bad[:20], **kinds}
 
 
+def _volume_errors(volumes: dict[str, float], expected: dict[str, float]):
+    """``(worst relative error, its id, ids beyond VOLUME_REL_TOL)`` of solid volumes against the BOM's."""
+    worst, worst_id, errors = 0.0, None, []
+    for name, v in volumes.items():
+        if name in expected:
+            rel = abs(v - expected[name]) / expected[name]
+            if rel > worst:
+                worst, worst_id = rel, name
+            if rel > VOLUME_REL_TOL:
+                errors.append(name)
+    return worst, worst_id, errors
+
+
+def _colours_by_kind(names, colours: dict, bom):
+    """``(colours per kind, uncoloured ids, one colour per kind and kinds apart)`` of the STEP solids."""
+    kind_of = {r["id"]: r["kind"] for r in bom}
+    by_kind = {k: sorted({colours[n] for n in names if kind_of.get(n) == k and n in colours})
+               for k in set(kind_of.values())}
+    by_kind = {k: v for k, v in by_kind.items() if v or any(kind_of.get(n) == k for n in names)}
+    uncoloured = [n for n in names if n not in colours]
+    ok = (not uncoloured and all(len(c) == 1 for c in by_kind.values())
+          and len({c[0] for c in by_kind.values()}) == len(by_kind))
+    return by_kind, uncoloured, ok
+
+
 def _check_step(path, bom):
     from .export.brep import solid_facts
     from .export.step_read import read_step
@@ -224,25 +249,16 @@ def _check_step(path, bom):
     expected = _volumes(bom)
     missing = sorted(set(expected) - set(names))
     extra = sorted(set(names) - set(expected))
-    invalid, worst, worst_id, errors = [], 0.0, None, []
+    invalid, volumes = [], {}
     for name, shape in solids:  # BRepCheck per solid
         f = solid_facts(shape)
         if not f["valid"] or f["solids"] != 1:
             invalid.append(name)
-        if name in expected:
-            rel = abs(f["volume_mm3"] - expected[name]) / expected[name]
-            if rel > worst:
-                worst, worst_id = rel, name
-            if rel > VOLUME_REL_TOL:
-                errors.append(name)
+        volumes[name] = f["volume_mm3"]
+    worst, worst_id, errors = _volume_errors(volumes, expected)
     unit_mm = "SI_UNIT(.MILLI.,.METRE.)" in _head(path, 1 << 16).replace(" ", "")
     colours = facts.pop("colours", {})
-    kind_of = {r["id"]: r["kind"] for r in bom}
-    by_kind = {k: sorted({colours[n] for n in names if kind_of.get(n) == k and n in colours})
-               for k in set(kind_of.values())}
-    uncoloured = [n for n in names if n not in colours]
-    coloured_by_kind = (not uncoloured and all(len(c) == 1 for c in by_kind.values())
-                        and len({c[0] for c in by_kind.values()}) == len(by_kind))
+    by_kind, uncoloured, coloured_by_kind = _colours_by_kind(names, colours, bom)
     ok = (not missing and not extra and not invalid and not errors and unit_mm and len(names) == len(expected)
           and coloured_by_kind)
     return ({"pass": ok, "solids": len(names), "bom_rows": len(expected), "missing": missing[:20],
@@ -266,7 +282,7 @@ def _check_step_text(path, bom):
     missing = sorted(set(expected) - set(names))
     extra = sorted(set(names) - set(expected))
     accuracy = facts["uncertainty_mm"] or 1e-6
-    invalid, worst, worst_id, errors, reasons = [], 0.0, None, [], {}
+    invalid, reasons = [], {}
     worst_plane = max((f["on_plane_mm"] for f in solids.values()), default=0.0)
     worst_line = max((f["on_line_mm"] for f in solids.values()), default=0.0)
     for name, f in solids.items():
@@ -278,20 +294,9 @@ def _check_step_text(path, bom):
         if bad:
             invalid.append(name)
             reasons.setdefault(", ".join(bad), name)
-        if name in expected:
-            rel = abs(f["volume_mm3"] - expected[name]) / expected[name]
-            if rel > worst:
-                worst, worst_id = rel, name
-            if rel > VOLUME_REL_TOL:
-                errors.append(name)
-    kind_of = {r["id"]: r["kind"] for r in bom}
+    worst, worst_id, errors = _volume_errors({n: f["volume_mm3"] for n, f in solids.items()}, expected)
     colours = {n: f["colour"] for n, f in solids.items() if f["colour"] is not None}
-    by_kind = {k: sorted({colours[n] for n in names if kind_of.get(n) == k and n in colours})
-               for k in set(kind_of.values())}
-    by_kind = {k: v for k, v in by_kind.items() if v or any(kind_of.get(n) == k for n in names)}
-    uncoloured = [n for n in names if n not in colours]
-    coloured_by_kind = (not uncoloured and all(len(c) == 1 for c in by_kind.values())
-                        and len({c[0] for c in by_kind.values()}) == len(by_kind))
+    by_kind, uncoloured, coloured_by_kind = _colours_by_kind(names, colours, bom)
     ok = (not missing and not extra and not invalid and not errors and facts["unit_mm"] and facts["complete"]
           and facts["solids"] == len(expected) and not facts["duplicate_names"] and coloured_by_kind)
     return ({"pass": ok, "read_back": "text", "solids": facts["solids"], "bom_rows": len(expected),
