@@ -32,9 +32,9 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any, Literal, get_args, get_origin
+from typing import Annotated, Any, Literal
 
-from pydantic import (BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, ValidationInfo,
+from pydantic import (Field, PrivateAttr, ValidationError, ValidationInfo,
                       field_validator, model_validator)
 from pydantic_core import PydanticCustomError
 
@@ -43,6 +43,8 @@ from optimize.tolerances import Tolerances
 
 from .config_design import MAX_FACES, DesignParamError, check_design, subdivided_faces
 from .config_errors import format_errors
+from .config_parts import LimitsSection, NestingSection, PartsSection, SheetSection  # noqa: F401 - re-exported
+from .config_section import MAX_MM, Section
 from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
 from .config_yaml import MAX_DEPTH, read_config
 from .structure.options import StructureSection
@@ -51,52 +53,8 @@ UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
 
 
-MAX_MM = 10_000.0
-"""Largest |layer distance| and beam depth (mm): 10 m."""
 MAX_ITER = 10_000
 """Largest ``optimize.max_iter``."""
-
-
-class Section(BaseModel):
-    """A config section: unknown keys are errors (named with a did-you-mean by :func:`format_errors`),
-    types are strict and numbers finite (see the module docstring)."""
-
-    model_config = ConfigDict(extra="forbid", validate_default=True, populate_by_name=True, strict=True,
-                              allow_inf_nan=False)
-
-    @classmethod
-    def allowed_keys(cls) -> list[str]:
-        return [f.alias or name for name, f in cls.model_fields.items()]
-
-    @field_validator("*", mode="before")
-    @classmethod
-    def _yaml_words(cls, value: Any, info: ValidationInfo) -> Any:
-        """YAML's ``off`` / ``no`` (false) and ``on`` / ``yes`` (true) as the word, for a key that
-        allows the word and not a boolean."""
-        if isinstance(value, bool):
-            words = _bool_words(cls.model_fields[info.field_name].annotation)
-            if words is not None:
-                return words[value] if words[value] is not None else value
-        return value
-
-
-_FALSE, _TRUE = ("off", "no", "false"), ("on", "yes", "true")
-
-
-def _bool_words(annotation) -> dict[bool, str | None] | None:
-    """``{False: "off", True: None}`` for a Literal annotation allowing those words and no bool."""
-    words: list[str] = []
-    stack = [annotation]
-    while stack:
-        a = stack.pop()
-        if a is bool:
-            return None
-        if get_origin(a) is Literal:
-            words += [w for w in get_args(a) if isinstance(w, str)]
-        else:
-            stack.extend(get_args(a))
-    pick = {False: next((w for w in _FALSE if w in words), None), True: next((w for w in _TRUE if w in words), None)}
-    return pick if any(pick.values()) else None
 
 
 def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
@@ -281,54 +239,6 @@ class OffsetSection(Section):
         if v is not None and len(set(v)) != len(v):
             raise PydanticCustomError("distances", "layer distances must be distinct")
         return v
-
-
-class LimitsSection(Section):
-    """What the shops can make; parts beyond it are flagged by id (see ``fabricate.cad.spec.Limits``)."""
-
-    min_corner_deg: float = Field(default=30.0, ge=0, lt=180)
-    min_edge_mm: float = Field(default=50.0, ge=0, le=10000.0)
-    sheet_mm: tuple[float, float] = (6000.0, 3210.0)
-    max_panel_kg: float = Field(default=250.0, gt=0, le=100000.0)
-
-    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
-
-
-class PartsSection(Section):
-    """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
-
-    glass_thickness: float = Field(default=10.0, gt=0, le=200.0)
-    joint_gap: float = Field(default=10.0, ge=0, le=1000.0)
-    edge: Literal["auto", "axis", "perpendicular"] = "auto"
-    beam_width: float = Field(default=60.0, gt=0, le=2000.0)
-    beam_depth: float = Field(default=200.0, gt=0, le=MAX_MM)
-    node_radius: float = Field(default=0.0, ge=0, le=5000.0)
-    density_glass: float = Field(default=2500.0, gt=0, le=25000.0)
-    density_steel: float = Field(default=7850.0, gt=0, le=25000.0)
-    node_sides: int = Field(default=24, ge=6, le=256)
-    steel_grade: str = Field(default="S355", min_length=1, max_length=40)
-    limits: LimitsSection = Field(default_factory=LimitsSection)
-
-
-class SheetSection(Section):
-    """Stock sheets of one material for the nested cut files (mm)."""
-
-    sheet_mm: tuple[float, float]
-    margin_mm: float = Field(default=10.0, ge=0, le=1000.0)
-    kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
-    rotation: bool = True
-
-    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
-
-
-class NestingSection(Section):
-    """Stock sheets per material: glass (jumbo 6000 x 3210, trimmed edges, room to grind between parts)
-    and steel plate (12000 x 2500, plasma or laser kerf)."""
-
-    glass: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(6000.0, 3210.0), margin_mm=20.0,
-                                                                     kerf_mm=10.0))
-    steel: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(12000.0, 2500.0), margin_mm=10.0,
-                                                                     kerf_mm=3.0))
 
 
 CHECK_AUTO_MAX_PARTS = 3000

@@ -1,0 +1,56 @@
+"""Config sections of the parts: dimensions, shop limits, stock sheets for the nested cut files."""
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field, field_validator
+
+from .config_section import MAX_MM, Section
+
+
+class LimitsSection(Section):
+    """What the shops can make; parts beyond it are flagged by id (see ``fabricate.cad.spec.Limits``)."""
+
+    min_corner_deg: float = Field(default=30.0, ge=0, lt=180)
+    min_edge_mm: float = Field(default=50.0, ge=0, le=10000.0)
+    sheet_mm: tuple[float, float] = (6000.0, 3210.0)
+    max_panel_kg: float = Field(default=250.0, gt=0, le=100000.0)
+
+    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+
+
+class PartsSection(Section):
+    """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
+
+    glass_thickness: float = Field(default=10.0, gt=0, le=200.0)
+    joint_gap: float = Field(default=10.0, ge=0, le=1000.0)
+    edge: Literal["auto", "axis", "perpendicular"] = "auto"
+    beam_width: float = Field(default=60.0, gt=0, le=2000.0)
+    beam_depth: float = Field(default=200.0, gt=0, le=MAX_MM)
+    node_radius: float = Field(default=0.0, ge=0, le=5000.0)
+    density_glass: float = Field(default=2500.0, gt=0, le=25000.0)
+    density_steel: float = Field(default=7850.0, gt=0, le=25000.0)
+    node_sides: int = Field(default=24, ge=6, le=256)
+    steel_grade: str = Field(default="S355", min_length=1, max_length=40)
+    limits: LimitsSection = Field(default_factory=LimitsSection)
+
+
+class SheetSection(Section):
+    """Stock sheets of one material for the nested cut files (mm)."""
+
+    sheet_mm: tuple[float, float]
+    margin_mm: float = Field(default=10.0, ge=0, le=1000.0)
+    kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
+    rotation: bool = True
+
+    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+
+
+class NestingSection(Section):
+    """Stock sheets per material: glass (jumbo 6000 x 3210, trimmed edges, room to grind between parts)
+    and steel plate (12000 x 2500, plasma or laser kerf)."""
+
+    glass: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(6000.0, 3210.0), margin_mm=20.0,
+                                                                     kerf_mm=10.0))
+    steel: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(12000.0, 2500.0), margin_mm=10.0,
+                                                                     kerf_mm=3.0))
