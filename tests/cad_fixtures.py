@@ -22,6 +22,14 @@ def dome_structure(n_around: int = 8, k: int = 4, depth: float = 200.0, flip: bo
     return offset_structure(dome_mesh(n_around, k, sweep=sweep), (0.0, -depth), flip=flip)
 
 
+@functools.lru_cache(maxsize=None)
+def dome_parts(n_around: int = 6, k: int = 3, node_radius: float = 40.0):
+    """The parts of :func:`dome_structure` with hubs: panels, beams and nodes (parts are frozen data)."""
+    from fabricate.cad import PartSpec, build_parts
+
+    return build_parts(dome_structure(n_around=n_around, k=k), PartSpec(node_radius=node_radius))
+
+
 def rigid(V: np.ndarray, seed: int = 3) -> np.ndarray:
     """``V (n, 3)`` after a seeded random rotation and translation."""
     rng = np.random.default_rng(seed)

@@ -3,9 +3,8 @@
 Runs where cadquery is installed (the extra, tested by .ci/run in its own virtual environment);
 elsewhere it says why it skips."""
 import pytest
-from cad_fixtures import dome_structure
+from cad_fixtures import dome_parts
 
-from fabricate.cad import PartSpec, build_parts
 
 cq = pytest.importorskip("cadquery", reason="the optional cadquery extra is not installed in this environment "
                                             "(.ci/run tests it in a virtual environment of its own)")
@@ -14,7 +13,7 @@ cq = pytest.importorskip("cadquery", reason="the optional cadquery extra is not 
 def test_to_cadquery_names_every_part_with_its_volume():
     from fabricate.export.cadquery_assembly import to_cadquery
 
-    parts = build_parts(dome_structure(n_around=6, k=3), PartSpec(node_radius=40.0))
+    parts = dome_parts(6, 3)
     assy = to_cadquery(parts)
     children = {c.name: c for c in assy.children}
     assert sorted(children) == sorted(p.id for p in parts)

@@ -4,9 +4,8 @@ import shutil
 
 import numpy as np
 import pytest
-from cad_fixtures import dome_structure
+from cad_fixtures import dome_parts
 
-from fabricate.cad import PartSpec, build_parts
 from fabricate.check import check_outputs
 from fabricate.export import write_bom, write_step
 from fabricate.export.step_text import read_step_text
@@ -15,7 +14,7 @@ from optimize.errors import ExportError
 
 @pytest.fixture(scope="module")
 def run_dir(tmp_path_factory):
-    parts = build_parts(dome_structure(n_around=6, k=3), PartSpec(node_radius=40.0))
+    parts = dome_parts(6, 3)
     folder = tmp_path_factory.mktemp("steptext")
     write_step(parts, folder / "model.step")
     write_bom(parts, folder / "bom.csv")

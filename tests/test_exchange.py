@@ -2,28 +2,27 @@
 Rhino .3dm written and read back by rhino3dm, a .3dm quad mesh as input."""
 import numpy as np
 import pytest
-from cad_fixtures import dome_structure
+from cad_fixtures import dome_parts, dome_structure
 
-from fabricate.cad import PartSpec, build_parts
 from fabricate.export import write_3dm, write_bom, write_ifc
 from fabricate.export.nc1 import write_nc1
 from fabricate.export.bom import read_bom
 from optimize.errors import MeshError
 from optimize.io import read_mesh
 
-ifcopenshell = pytest.importorskip("ifcopenshell", reason="ifcopenshell is a declared dependency")
-rhino3dm = pytest.importorskip("rhino3dm", reason="rhino3dm is a declared dependency")
+import ifcopenshell  # noqa: E402 - declared dependencies: a missing one fails, never skips
+import rhino3dm  # noqa: E402
 
 
 @pytest.fixture(scope="module")
 def parts():
-    return build_parts(dome_structure(n_around=6, k=3), PartSpec(node_radius=40.0))
+    return dome_parts(6, 3)
 
 
 @pytest.fixture(scope="module")
 def small_parts():
     """A few parts of every kind, for the checks that cost seconds per hundred parts."""
-    return build_parts(dome_structure(n_around=4, k=2), PartSpec(node_radius=40.0))
+    return dome_parts(4, 2)
 
 
 @pytest.fixture(scope="module")

@@ -3,7 +3,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 import pytest
-from cad_fixtures import dome_mesh, dome_structure
+from cad_fixtures import dome_mesh, dome_parts
 
 from fabricate.cad import COLOURS, PartSpec, build_parts
 from fabricate.export import layout, write_3mf, write_bom, write_dxf, write_step, write_stl, write_svg
@@ -20,7 +20,7 @@ from optimize.errors import ConfigError
 
 @pytest.fixture(scope="module")
 def parts():
-    return build_parts(dome_structure(n_around=6, k=3), PartSpec(node_radius=40.0))
+    return dome_parts(6, 3)
 
 
 @pytest.fixture(scope="module")

@@ -4,7 +4,7 @@ import json
 import shutil
 
 import pytest
-from cad_fixtures import dome_structure
+from cad_fixtures import dome_parts
 
 from fabricate.cad import PartSpec, build_parts
 from fabricate.check import check_outputs
@@ -25,7 +25,7 @@ def _write(parts, folder):
 
 @pytest.fixture(scope="module")
 def parts():
-    return build_parts(dome_structure(n_around=6, k=3), PartSpec(node_radius=40.0))
+    return dome_parts(6, 3)
 
 
 @pytest.fixture(scope="module")
