@@ -205,12 +205,18 @@ sys.exit(main())
 """
 
 
-def test_sigint_inside_native_code_ends_in_two_seconds_with_130(tmp_path):
+def _start_stuck_run(tmp_path):
+    """A run of a small dome whose CAD stage hangs in native code: (config path, out root, process)."""
     cfg = tmp_path / "slow.yaml"
     cfg.write_text("name: slow\ninput:\n  shape: {name: dome, params: {meridians: 6, rings: 3}}\n")
     out = tmp_path / "out"
     proc = subprocess.Popen(PY + ["-c", STUCK_IN_NATIVE_CODE, str(cfg), str(out)], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, env=ENV)
+    return cfg, out, proc
+
+
+def test_sigint_inside_native_code_ends_in_two_seconds_with_130(tmp_path):
+    cfg, out, proc = _start_stuck_run(tmp_path)
     try:
         assert proc.stdout.readline().strip() == "IN CAD"
         assert sorted(p.name[:6] for p in out.iterdir()) == [".slow.", ".slow."], list(out.iterdir())
@@ -340,11 +346,7 @@ def test_sigint_during_a_batch_stops_the_workers_and_leaves_nothing(tmp_path):
 def test_killing_the_command_kills_its_work_too(tmp_path):
     """``kill -9`` of ``fabricate`` (a CI timeout, a process-group kill) takes the working child
     with it: nothing goes on writing unwatched; the next run removes what it left."""
-    cfg = tmp_path / "slow.yaml"
-    cfg.write_text("name: slow\ninput:\n  shape: {name: dome, params: {meridians: 6, rings: 3}}\n")
-    out = tmp_path / "out"
-    proc = subprocess.Popen(PY + ["-c", STUCK_IN_NATIVE_CODE, str(cfg), str(out)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=ENV)
+    cfg, out, proc = _start_stuck_run(tmp_path)
     try:
         assert proc.stdout.readline().strip() == "IN CAD"
         part = next(p for p in out.iterdir() if p.suffix == ".part")
