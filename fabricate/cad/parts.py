@@ -30,6 +30,11 @@ def part_ids(kind: str, element: np.ndarray) -> tuple[str, ...]:
     return tuple(f"{PREFIX[kind]}{int(i) + 1:0{width}d}" for i in element)
 
 
+def unit_id(part_id: str) -> str:
+    """The unit a solid belongs to: ``P0001.2`` -> ``P0001``; a one-solid part is its own unit."""
+    return part_id.split(".", 1)[0]
+
+
 @dataclass(frozen=True, eq=False)
 class PartGroup:
     """``p`` planar-faced solids of one kind and one combinatorial type.
@@ -74,6 +79,11 @@ class PartGroup:
         its faces after construction (round-off; what OpenCASCADE sees).
     neighbours : (p,) tuple of id tuples: parts in contact (panel: its beams
         and nodes; beam: its panels, the beams it meets at its nodes, nodes).
+    member : ``""`` for a part that is one solid.  A part built of several solids
+        (a laminated or insulated glass unit, a beam welded from plates) is
+        several groups, one per member, each naming what it is in the unit
+        (``"ply 1"``, ``"web"``, ``"top flange +"``); their ids are
+        ``<unit id>.<k>`` (``P0001.1``, ``B0012.3``, k from 1), see :func:`unit_id`.
     """
 
     kind: str
@@ -101,6 +111,7 @@ class PartGroup:
     planarity_mm: np.ndarray
     residual_mm: np.ndarray
     neighbours: tuple[tuple[str, ...], ...]
+    member: str = ""
 
     def __len__(self) -> int:
         return len(self.ids)
