@@ -34,36 +34,16 @@ import numpy as np
 
 from optimize.errors import ExportError
 
-_S = rb"\s*"
+from .step_tokens import Records, compact
+
 _STR = rb"'(?:[^']|'')*'"
-_REFS = rb"(#\d+(?:\s*,\s*#\d+)*)"          # a fixed run of references, parsed at once
-_LIST = rb"\(\s*(#\d+(?:\s*,\s*#\d+)*)\s*\)"  # a list of references
-_NUMS = rb"\(([^()]*)\)"                    # a list of numbers
-_BOOL = rb"\.([TF])\."
 
 
 def _rx(kind: bytes, *args: bytes) -> re.Pattern:
     """A pattern that starts with the literal ``=KIND(`` (found fast), its arguments as groups."""
-    body = (_S + rb"," + _S).join(args)
-    return re.compile(rb"=" + kind + rb"\(" + _S + body + _S + rb"\)" + _S + rb";")
+    return re.compile(rb"=" + kind + rb"\(" + rb",".join(args) + rb"\);")
 
 
-RX = {
-    "point": _rx(b"CARTESIAN_POINT", _STR, _NUMS),
-    "direction": _rx(b"DIRECTION", _STR, _NUMS),
-    "vertex": _rx(b"VERTEX_POINT", _STR, _REFS),
-    "vector": _rx(b"VECTOR", _STR, _REFS, rb"[-+0-9.EeDd]+"),
-    "line": _rx(b"LINE", _STR, _REFS),
-    "edge": _rx(b"EDGE_CURVE", _STR, _REFS, _BOOL),
-    "oriented": _rx(b"ORIENTED_EDGE", _STR, rb"\*", rb"\*", _REFS, _BOOL),
-    "loop": _rx(b"EDGE_LOOP", _STR, _LIST),
-    "bound": _rx(b"FACE_OUTER_BOUND", _STR, _REFS, _BOOL),
-    "axis": _rx(b"AXIS2_PLACEMENT_3D", _STR, _REFS, rb"(?:#\d+|\$)"),
-    "plane": _rx(b"PLANE", _STR, _REFS),
-    "face": _rx(b"ADVANCED_FACE", _STR, _LIST, _REFS, _BOOL),
-    "shell": _rx(b"CLOSED_SHELL", _STR, _LIST),
-    "solid": _rx(b"MANIFOLD_SOLID_BREP", rb"'((?:[^']|'')*)'", _REFS),
-}
 SMALL = {  # few entities (a few per part): their groups are read in Python
     "product": _rx(b"PRODUCT", rb"'((?:[^']|'')*)'", rb"[^;]*?"),
     "formation": _rx(b"PRODUCT_DEFINITION_FORMATION", _STR, _STR, rb"#(\d+)"),
@@ -80,68 +60,26 @@ SMALL = {  # few entities (a few per part): their groups are read in Python
     "fasc": _rx(b"FILL_AREA_STYLE_COLOUR", _STR, rb"#(\d+)"),
     "rgb": _rx(b"COLOUR_RGB", _STR, rb"([-+0-9.EeDd]+)", rb"([-+0-9.EeDd]+)", rb"([-+0-9.EeDd]+)"),
 }
+BIG = {  # the planar B-rep: kind -> entity name (read with numpy, :mod:`step_tokens`)
+    "point": b"CARTESIAN_POINT", "direction": b"DIRECTION", "vertex": b"VERTEX_POINT", "vector": b"VECTOR",
+    "line": b"LINE", "edge": b"EDGE_CURVE", "oriented": b"ORIENTED_EDGE", "loop": b"EDGE_LOOP",
+    "bound": b"FACE_OUTER_BOUND", "axis": b"AXIS2_PLACEMENT_3D", "plane": b"PLANE", "face": b"ADVANCED_FACE",
+    "shell": b"CLOSED_SHELL", "solid": b"MANIFOLD_SOLID_BREP"}
 UNSUPPORTED = (b"B_SPLINE", b"CYLINDRICAL_SURFACE", b"CONICAL_SURFACE", b"SPHERICAL_SURFACE",
-               b"TOROIDAL_SURFACE", b"=CIRCLE(", b"=ELLIPSE(", b"=FACE_BOUND(", b"=FACE_SURFACE(")
+               b"TOROIDAL_SURFACE", b"SURFACE_OF_", b"OFFSET_SURFACE")
+UNSUPPORTED_NAMES = (b"CIRCLE", b"ELLIPSE", b"FACE_BOUND", b"FACE_SURFACE")
+MAX_SPARSE = 4           # ids up to 4 x the record count (+ 10^6) are looked up in a dense array
 
 
 def _refs(text: bytes) -> list[int]:
     return [int(x) for x in re.findall(rb"#(\d+)", text)]
 
 
-def _numbers(parts: list[bytes], what: str, path, ints: bool = False) -> np.ndarray:
-    """All numbers (or ``#`` references) of ``parts`` joined, parsed in C (``np.fromstring``)."""
-    text = b",".join(parts)
-    if ints:
-        text = text.replace(b"#", b"")
-    else:
-        text = text.replace(b"D", b"E").replace(b"d", b"e")
-    if not text.strip():
-        return np.zeros(0, dtype=np.int64 if ints else np.float64)
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        A = np.fromstring(text, dtype=np.float64, sep=",")
-    expected = text.count(b",") + 1
-    if A.size != expected or not np.all(np.isfinite(A)):
-        raise ExportError(f"{path}: a {what} has an item that is not a number")
-    return A.astype(np.int64) if ints else A
-
-
-def _by_kind(data: bytes) -> dict[bytes, bytes]:
-    """The DATA section's records grouped by entity name: ``{b"CARTESIAN_POINT": b"#1=...;\\n#7=...;"}``,
-    so that each kind's pattern runs over its own records only."""
-    from operator import itemgetter
-
-    a, b = data.find(b"DATA;"), data.rfind(b"ENDSEC;")
-    body = data[a + 5:b].replace(b"\r", b"").strip()
-    recs = body.split(b";\n")
-    split = body.count(b"\n") < len(recs)
-    if not split:  # records broken over lines, or several on one line
-        recs = [b" ".join(x.split()) for x in re.split(rb";\s*(?=#\d+\s*=)", body)]
-    recs[-1] = recs[-1].rstrip().rstrip(b";")
-    joined = b";\n" + (body if split else b";\n".join(recs))
-    names = re.findall(rb";\n#\d+\s*=\s*([A-Z0-9_]*)", joined)
-    del joined
-    if len(names) != len(recs):
-        names = [r[r.find(b"=") + 1:r.find(b"(")].strip() for r in recs]
-    code: dict[bytes, int] = {}
-    kinds = np.array([code.setdefault(n, len(code)) for n in names])
-    order = np.argsort(kinds, kind="stable")
-    bounds = np.concatenate([[0], np.cumsum(np.bincount(kinds, minlength=len(code)))])
-    out = {}
-    for name, c in code.items():
-        idx = order[bounds[c]:bounds[c + 1]].tolist()
-        got = itemgetter(*idx)(recs) if len(idx) > 1 else (recs[idx[0]],)
-        out[name.replace(b" ", b"")] = b";\n".join(got) + b";\n"
-    return out
-
-
 class _Kind:
-    """Entities of one kind: ``ids (r,)``, their captured groups, a dense id -> row lookup."""
+    """Entities of one of the SMALL kinds: ``ids (r,)``, their captured groups (regular expression)."""
 
     def __init__(self, text: bytes, rx: re.Pattern, path):
-        found = re.compile(rb"#(\d+)\s*" + rx.pattern).findall(text)
+        found = re.compile(rb"#(\d+)" + rx.pattern).findall(text)
         if found and not isinstance(found[0], tuple):
             found = [(x,) for x in found]
         self.ids = np.array([int(g[0]) for g in found], dtype=np.int64)
@@ -150,32 +88,130 @@ class _Kind:
             kind = rx.pattern[1:rx.pattern.index(b"\\(")].decode()
             raise ExportError(f"{path}: {text.count(b';' + bytes([10])) - len(found)} {kind} entities do not "
                               "have the arguments a planar B-rep writer gives them")
-        self.row = None
 
-    def column(self, i: int) -> list[bytes]:
-        return [g[i] for g in self.groups]
 
-    def lookup(self, row: np.ndarray, kind: np.ndarray, code: int) -> None:
-        """Share the file's id -> row and id -> kind arrays; this kind is ``code``."""
-        self.row, self.kind, self.code = row, kind, code
+class _Lookup:
+    """id -> (kind code, row within its kind) for every entity of the BIG kinds."""
 
-    def at(self, refs, what: str, path) -> np.ndarray:
-        refs = np.asarray(refs, dtype=np.int64)
-        i = np.clip(refs, 0, len(self.row) - 1)
-        r = self.row[i]
-        bad = (self.kind[i] != self.code) | (refs >= len(self.row)) | (refs < 0)
+    def __init__(self, ids_by_kind: list[np.ndarray], n_records: int, path):
+        ids = np.concatenate(ids_by_kind) if ids_by_kind else np.zeros(0, np.int64)
+        codes = np.repeat(np.arange(len(ids_by_kind)), [len(x) for x in ids_by_kind])
+        rows = np.concatenate([np.arange(len(x)) for x in ids_by_kind]) if ids_by_kind else ids
+        self.path, top = path, int(ids.max()) + 1 if ids.size else 1
+        self.dense = top <= MAX_SPARSE * n_records + 10 ** 6
+        if self.dense:
+            seen = np.bincount(ids, minlength=top) if ids.size else np.zeros(1, np.int64)
+            self.row = np.full(top, -1, np.int64)
+            self.kind = np.full(top, -1, np.int16)
+            self.row[ids], self.kind[ids] = rows, codes
+        else:
+            order = np.argsort(ids, kind="stable")
+            self.sorted, self.row, self.kind = ids[order], rows[order], codes[order].astype(np.int16)
+            seen = np.diff(self.sorted) == 0
+        if (seen > 1 if self.dense else seen).any():
+            dup = int(np.argmax(seen > 1)) if self.dense else int(self.sorted[np.argmax(seen)])
+            raise ExportError(f"{path}: entity id #{dup} is used twice")
+
+    def at(self, refs, code: int, what: str) -> np.ndarray:
+        """Rows of ``refs`` in kind ``code``; ExportError when a reference is not such an entity."""
+        refs = np.asarray(refs, dtype=np.int64).ravel()
+        if self.dense:
+            i = np.clip(refs, 0, len(self.row) - 1)
+            bad = (self.kind[i] != code) | (refs >= len(self.row))
+        else:
+            i = np.clip(np.searchsorted(self.sorted, refs), 0, max(len(self.sorted) - 1, 0))
+            bad = (self.sorted[i] != refs) | (self.kind[i] != code)
         if bad.any():
-            raise ExportError(f"{path}: #{int(refs[np.argmax(bad)])} is not a {what}")
-        return r
+            raise ExportError(f"{self.path}: #{int(refs[np.argmax(bad)])} is not a {what}")
+        return self.row[i]
 
 
-def _segments(lists: list[bytes], path) -> tuple[np.ndarray, np.ndarray]:
-    """Flat refs and offsets ``(L+1,)`` of a column of ``#a,#b,...`` lists."""
-    counts = np.fromiter((x.count(b"#") for x in lists), dtype=np.int64, count=len(lists))
-    flat = _numbers(lists, "list of references", path, ints=True)
-    if flat.size != counts.sum():
-        raise ExportError(f"{path}: a list of references has an item that is not a #reference")
-    return flat, np.concatenate([[0], np.cumsum(counts)])
+def _parse(data: bytes, path):
+    """The BIG kinds as arrays and the SMALL kinds as :class:`_Kind`, from the DATA section."""
+    a, b = data.find(b"DATA;"), data.rfind(b"ENDSEC;")
+    if a < 0 or b < a:
+        raise ExportError(f"{path}: no DATA; ... ENDSEC; section")
+    a += 5
+    while a < b and data[a] in b" \t\r\n":
+        a += 1
+    while b > a and data[b - 1] in b" \t\r\n":
+        b -= 1
+    try:
+        return _parse_body(data[a:b], path)
+    except ExportError:
+        body = compact(data[a:b])
+        if body == data[a:b]:
+            raise
+        return _parse_body(body, path)                       # whitespace or comments between tokens
+
+
+def _parse_body(body: bytes, path):
+    R = Records(body, path)
+    hit = next((n for n in R.names if n in UNSUPPORTED_NAMES or any(w in n for w in UNSUPPORTED)), None)
+    hit = hit or next((w for t in R.complex_text() for w in UNSUPPORTED if w in t), None)
+    if hit is not None:
+        raise ExportError(f"{path}: has {hit[:40].decode('ascii', 'replace')} entities; this check reads "
+                          "planar B-reps only (run `fabricate check --occ` to read it with OpenCASCADE)")
+    rows = {k: R.of(name) for k, name in BIG.items()}
+    close = {k: R.after_string(r, BIG[k]) for k, r in rows.items()}
+    L = _Lookup([R.ids[rows[k]] for k in BIG], len(R.ids), path)
+    code = {k: c for c, k in enumerate(BIG)}
+    G: dict[str, np.ndarray] = {}
+
+    def at(refs, kind):
+        return L.at(refs, code[kind], BIG[kind].decode())
+
+    for k in ("point", "direction"):
+        r, c = rows[k], close[k]
+        G[k] = R.template(r, c, ",(N))", BIG[k].decode(), per=3)[2]
+    n = {k: BIG[k].decode() for k in BIG}
+    G["vert_pt"] = at(R.template(rows["vertex"], close["vertex"], ",#)", n["vertex"])[0][0], "point")
+    vr, _, _ = R.template(rows["vector"], close["vector"], ",#,N)", n["vector"])
+    G["v_dir"] = at(vr[0], "direction")
+    lr = R.template(rows["line"], close["line"], ",#,#)", n["line"])[0]
+    G["l_pt"], G["l_vec"] = at(lr[0], "point"), at(lr[1], "vector")
+    er = R.template(rows["edge"], close["edge"], ",#,#,#,?)", n["edge"])[0]
+    G["e_v"] = at(np.stack(er[:2], axis=1), "vertex").reshape(-1, 2)
+    G["e_line"] = at(er[2], "line")
+    orr, of, _ = R.template(rows["oriented"], close["oriented"], ",*,*,#,?)", n["oriented"])
+    G["o_edge"], G["o_fwd"] = at(orr[0], "edge"), of[0]
+    lp, G["lp_off"] = R.ref_list(rows["loop"], close["loop"], n["loop"])
+    G["lp_oe"] = at(lp, "oriented")
+    br, bf, _ = R.template(rows["bound"], close["bound"], ",#,?)", n["bound"])
+    G["b_loop"], G["b_fwd"] = at(br[0], "loop"), bf[0]
+    ar = _axes(R, rows["axis"], close["axis"])
+    G["a_pt"], G["a_dir"] = at(ar[:, 0], "point"), at(ar[:, 1], "direction")
+    G["p_axis"] = at(R.template(rows["plane"], close["plane"], ",#)", n["plane"])[0][0], "axis")
+    fr = rows["face"]
+    many = R.ref_hi[fr] - R.ref_lo[fr] > 2
+    if many.any():
+        raise ExportError(f"{path}: ADVANCED_FACE #{int(R.ids[fr[np.argmax(many)]])} has inner bounds (holes) "
+                          "or more arguments; this check reads faces with one bound only "
+                          "(run `fabricate check --occ`)")
+    fref, ff, _ = R.template(fr, close["face"], ",(#),#,?)", n["face"])
+    G["f_bound"], G["f_plane"], G["f_same"] = at(fref[0], "bound"), at(fref[1], "plane"), ff[0]
+    G["n_faces"] = np.int64(len(fr))
+    sh, G["sh_off"] = R.ref_list(rows["shell"], close["shell"], n["shell"])
+    G["sh_face"] = at(sh, "face")
+    sr = rows["solid"]
+    G["s_shell"] = at(R.template(sr, close["solid"], ",#)", n["solid"])[0][0], "shell")
+    labels = [R.data[int(o) + 1:int(c)].replace(b"''", b"'") for o, c in zip(R.paren[sr] + 1, close["solid"])]
+    G["S"] = list(zip(R.ids[sr].tolist(), labels))
+    K = {}
+    for k, rx in SMALL.items():
+        name = rx.pattern[1:rx.pattern.index(b"\\(")]
+        K[k] = _Kind(R.texts(R.of(name)), rx, path)
+    return G, K
+
+
+def _axes(R, rows, close) -> np.ndarray:
+    """``(r, 2)`` location and axis of AXIS2_PLACEMENT_3D records (reference direction or ``$``)."""
+    three = R.ref_hi[rows] - R.ref_lo[rows] == 3
+    out = np.zeros((len(rows), 2), np.int64)
+    for sel, pattern in ((three, ",#,#,#)"), (~three, ",#,#,$)")):
+        if sel.any():
+            out[sel] = np.stack(R.template(rows[sel], close[sel], pattern, "AXIS2_PLACEMENT_3D")[0][:2], axis=1)
+    return out
 
 
 def read_step_text(path) -> tuple[dict[str, dict], dict]:
@@ -190,67 +226,21 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
     STEP file this reader understands.
     """
     path = Path(path)
-    data = path.read_bytes()
-    if not data.lstrip().startswith(b"ISO-10303-21;"):
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ExportError(f"{path}: cannot read the STEP file ({exc.strerror or exc})") from None
+    if not data.lstrip()[:64].startswith(b"ISO-10303-21;"):
         raise ExportError(f"{path}: not a STEP file (no ISO-10303-21; header)")
-    for word in UNSUPPORTED:
-        if word in data:
-            raise ExportError(f"{path}: has {word.decode().strip('=(')} entities; this check reads planar "
-                              "B-reps only (run `fabricate check --occ` to read it with OpenCASCADE)")
-    texts = _by_kind(data)
-    K = {}
-    for k, rx in {**RX, **SMALL}.items():
-        text = texts.get(rx.pattern[1:rx.pattern.index(b"\\(")], b"")
-        K[k] = _Kind(text, rx, path)
-    size = 1 + max((int(k.ids.max()) for k in K.values() if k.ids.size), default=0)
-    row = np.full(size, -1, dtype=np.int64)       # one lookup for every kind: ids are unique in a file
-    kind = np.full(size, -1, dtype=np.int16)
-    for c, k in enumerate(K.values()):
-        row[k.ids] = np.arange(len(k.ids))
-        kind[k.ids] = c
-        k.lookup(row, kind, c)
-
-    def refs(kind: str, col: int, width: int) -> np.ndarray:
-        return _numbers(K[kind].column(col), kind, path, ints=True).reshape(-1, width)
-
-    def flag(kind: str, col: int) -> np.ndarray:
-        return np.array([x == b"T" for x in K[kind].column(col)], dtype=bool)
-
-    pts = _numbers(K["point"].column(0), "CARTESIAN_POINT", path).reshape(-1, 3)
-    dirs = _numbers(K["direction"].column(0), "DIRECTION", path).reshape(-1, 3)
-    if len(pts) != len(K["point"].ids) or len(dirs) != len(K["direction"].ids):
-        raise ExportError(f"{path}: a CARTESIAN_POINT or DIRECTION without three coordinates")
-    vert_pt = K["point"].at(refs("vertex", 0, 1)[:, 0], "CARTESIAN_POINT", path)
-    er = refs("edge", 0, 3)
-    E = er
-    e_v = K["vertex"].at(er[:, :2].ravel(), "VERTEX_POINT", path).reshape(-1, 2)
-    e_line = K["line"].at(er[:, 2], "LINE", path)
-    lr = refs("line", 0, 2)
-    l_pt = K["point"].at(lr[:, 0], "CARTESIAN_POINT", path)
-    l_vec = K["vector"].at(lr[:, 1], "VECTOR", path)
-    v_dir = K["direction"].at(refs("vector", 0, 1)[:, 0], "DIRECTION", path)
-    o_edge = K["edge"].at(refs("oriented", 0, 1)[:, 0], "EDGE_CURVE", path)
-    o_fwd = flag("oriented", 1)
-    lp_refs, lp_off = _segments(K["loop"].column(0), path)
-    lp_oe = K["oriented"].at(lp_refs, "ORIENTED_EDGE", path)
-    b_loop = K["loop"].at(refs("bound", 0, 1)[:, 0], "EDGE_LOOP", path)
-    b_fwd = flag("bound", 1)
-    ar = refs("axis", 0, 2)
-    a_pt = K["point"].at(ar[:, 0], "CARTESIAN_POINT", path)
-    a_dir = K["direction"].at(ar[:, 1], "DIRECTION", path)
-    p_axis = K["axis"].at(refs("plane", 0, 1)[:, 0], "AXIS2_PLACEMENT_3D", path)
-    fb_refs, fb_off = _segments(K["face"].column(0), path)
-    if np.any(np.diff(fb_off) != 1):
-        raise ExportError(f"{path}: a face with inner bounds (holes); this check reads faces with one "
-                          "bound only (run `fabricate check --occ`)")
-    Fc = K["face"].ids
-    f_bound = K["bound"].at(fb_refs, "FACE_OUTER_BOUND", path)
-    f_plane = K["plane"].at(refs("face", 1, 1)[:, 0], "PLANE", path)
-    f_same = flag("face", 2)
-    sh_refs, sh_off = _segments(K["shell"].column(0), path)
-    sh_face = K["face"].at(sh_refs, "ADVANCED_FACE", path)
-    S = [(int(i), g[0]) for i, g in zip(K["solid"].ids.tolist(), K["solid"].groups)]
-    s_shell = K["shell"].at(refs("solid", 1, 1)[:, 0], "CLOSED_SHELL", path)
+    G, K = _parse(data, path)
+    pts, dirs, vert_pt, e_v, e_line = G["point"], G["direction"], G["vert_pt"], G["e_v"], G["e_line"]
+    l_pt, l_vec, v_dir, o_edge, o_fwd = G["l_pt"], G["l_vec"], G["v_dir"], G["o_edge"], G["o_fwd"]
+    lp_oe, lp_off, b_loop, b_fwd = G["lp_oe"], G["lp_off"], G["b_loop"], G["b_fwd"]
+    a_pt, a_dir, p_axis, f_bound, f_plane, f_same = G["a_pt"], G["a_dir"], G["p_axis"], G["f_bound"], \
+        G["f_plane"], G["f_same"]
+    sh_face, sh_off, s_shell, S = G["sh_face"], G["sh_off"], G["s_shell"], G["S"]
+    Fc = np.arange(int(G["n_faces"]))
+    E = e_line
 
     # geometry of every face loop: vertices in traversal order (bound orientation applied)
     face_loop = b_loop[f_bound]
@@ -344,7 +334,7 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
     unc = re.search(rb"LENGTH_MEASURE\(\s*([-+0-9.EeDd]+)\s*\)\s*,\s*#\d+\s*,\s*'distance_accuracy_value'", data)
     head = data[: 1 << 16].replace(b" ", b"")
     file_facts = {"unit_mm": b"SI_UNIT(.MILLI.,.METRE.)" in head,
-                  "complete": data.rstrip().endswith(b"END-ISO-10303-21;"),
+                  "complete": data[-256:].rstrip().endswith(b"END-ISO-10303-21;"),
                   "uncertainty_mm": float(unc.group(1).replace(b"D", b"E")) if unc else None,
                   "solids": len(S), "unnamed": sum(not f["named"] for f in out.values()),
                   "duplicate_names": len(S) - len(out), "reader": "independent STEP text reader"}
