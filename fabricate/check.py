@@ -57,12 +57,15 @@ import numpy as np
 from optimize.errors import ExportError
 from optimize.tolerances import DEFAULT, Tolerances
 
+from .check_mesh import VOLUME_REL_TOL
+from .check_mesh import check_3mf as _check_3mf
+from .check_mesh import check_stl as _check_stl
+
 log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
          "dxf": "outlines.dxf", "svg": "outlines.svg", "flat": "flat.json", "ifc": "model.ifc", "3dm": "model.3dm",
          "nc1": "nc1"}
 REPORT = "report.json"
-VOLUME_REL_TOL = 1e-6
 AREA_REL_TOL = 1e-9
 EDGE_TOL_MM = 1e-6
 
@@ -314,111 +317,6 @@ def _head(path, n: int) -> str:
         return fh.read(n).decode("ascii", errors="replace")
 
 
-def _check_3mf(path, bom):
-    """One manifold3d mesh of all objects (indices apart, so each stays its own surface): status
-    NoError and genus ``1 - objects`` hold when every object is a closed 2-manifold of genus 0 (a
-    closed surface's genus is never negative); otherwise each object alone names the bad ones.
-    Volumes by the divergence theorem per object."""
-    import manifold3d
-
-    from .export.threemf_text import read_3mf_text
-    from .export.verify import solids_of
-
-    objects = read_3mf_text(path)
-    expected = _volumes(bom)
-    missing = sorted(set(expected) - set(objects))
-    extra = sorted(set(objects) - set(expected))
-    solids = solids_of(objects)
-    names = list(objects)
-    bad, worst, worst_id, errors = [], 0.0, None, []
-    if names:
-        sizes = np.array([len(objects[n][0]) for n in names])
-        base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-        V = np.concatenate([objects[n][0] for n in names]).astype(np.float64)
-        T = np.concatenate([objects[n][1] + b for n, b in zip(names, base)])
-        whole = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=V, tri_verts=T.astype(np.uint64)))
-        if whole.status().name != "NoError" or whole.genus() != 1 - len(names):
-            bad = [n for n in names if solids[n].manifold.status().name != "NoError"
-                   or solids[n].manifold.genus() != 0]
-        obj = np.repeat(np.arange(len(names)), [len(objects[n][1]) for n in names])
-        first = np.repeat(base, sizes)                                 # relative to each object's first vertex
-        X = V - V[first]
-        det = np.einsum("ij,ij->i", X[T[:, 0]], np.cross(X[T[:, 1]], X[T[:, 2]]))
-        vol = np.bincount(obj, weights=det, minlength=len(names)) / 6.0
-        for n, v in zip(names, vol.tolist()):
-            if n in expected and n not in bad:
-                rel = abs(v - expected[n]) / expected[n]
-                if rel > worst:
-                    worst, worst_id = rel, n
-                if rel > VOLUME_REL_TOL:
-                    errors.append(n)
-    split = _split_objects(list(objects.values()))
-    ok = not missing and not extra and not bad and not errors and not split
-    return ({"pass": ok, "objects": len(objects), "missing": missing[:20], "unexpected": extra[:20],
-             "not_manifold": bad[:20], "not_one_piece": split[:20], "volume_rel_error_max": worst,
-             "worst": worst_id, "volume_failures": errors[:20]}, solids)
-
-
-def _split_objects(objects: list[tuple[np.ndarray, np.ndarray]]) -> list[int]:
-    """Indices of the meshes ``[(V, T), ...]`` that are not one connected piece (one graph for all)."""
-    if not objects:
-        return []
-    sizes = np.array([len(V) for V, _ in objects])
-    base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    T = np.concatenate([t + b for (_, t), b in zip(objects, base)])
-    labels = _components(np.zeros((int(sizes.sum()), 3)), T, labels=True)
-    lo = np.minimum.reduceat(labels, base)
-    hi = np.maximum.reduceat(labels, base)
-    return np.nonzero(lo != hi)[0].tolist()
-
-
-def _check_stl(path, bom, meshes):
-    import manifold3d
-
-    from .export.stl import read_stl
-
-    P, header = read_stl(path)
-    order = [r["id"] for r in bom]
-    counts = [len(meshes[i].T) if i in meshes else -1 for i in order]
-    if min(counts, default=0) < 0 or sum(counts) != len(P):
-        return {"pass": False, "error": f"{len(P)} triangles in the STL, {sum(counts)} in the 3MF parts "
-                                        "(or a part is missing); expected the same triangles"}
-    verts, tris, base = [], [], 0
-    start = np.concatenate([[0], np.cumsum(counts)])
-    for k in range(len(order)):  # weld each part's corners (exact float32 equality)
-        X = P[start[k]:start[k + 1]].reshape(-1, 3)
-        U, inv = np.unique(X, axis=0, return_inverse=True)
-        verts.append(U)
-        tris.append(inv.reshape(-1, 3) + base)
-        base += len(U)
-    V = np.concatenate(verts).astype(np.float32)
-    m = manifold3d.Manifold(manifold3d.Mesh(vert_properties=V, tri_verts=np.concatenate(tris).astype(np.uint32)))
-    status = m.status().name
-    comps = _components(V, np.concatenate(tris))
-    analytic = sum(_volumes(bom).values())
-    A = P.astype(float)
-    area = 0.5 * float(np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1).sum())
-    bound = 4 * float(np.finfo(np.float32).eps) * float(np.abs(A).max()) * area
-    dv = abs(m.volume() - analytic)
-    ok = status == "NoError" and comps == len(order) and m.genus() == 1 - len(order) and dv <= bound
-    return {"pass": ok, "status": status, "triangles": int(len(P)), "components": comps, "parts": len(order),
-            "genus": int(m.genus()), "expected_genus": 1 - len(order), "volume_mm3": m.volume(),
-            "volume_error_mm3": dv, "float32_bound_mm3": bound, "origin_mm": header["origin"].tolist()}
-
-
-def _components(V: np.ndarray, T: np.ndarray, labels: bool = False):
-    """Number of connected components of a triangle mesh (vertex graph through triangle edges),
-    or the component label of every vertex ``(n,)`` with ``labels``."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-
-    a = np.concatenate([T[:, 0], T[:, 1], T[:, 2]])
-    b = np.concatenate([T[:, 1], T[:, 2], T[:, 0]])
-    G = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(len(V), len(V)))
-    n, lab = connected_components(G, directed=False)
-    return lab if labels else int(n)
-
-
 def _check_intersections(meshes, tol):
     from .export.verify import intersections
 
@@ -490,13 +388,21 @@ def _check_dxf(path, bom, solids_step, flat_path=None, reader=None):
 
 
 def _check_svg(path, bom):
-    import xml.etree.ElementTree as ET
+    """Well-formed XML (expat, in C, no tree), an SVG root, one ``<g id=...>`` per panel and beam."""
+    import re
+    from xml.parsers import expat
+    from xml.sax.saxutils import unescape
 
+    data = Path(path).read_bytes()
     try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as exc:
+        expat.ParserCreate().Parse(data, True)
+    except expat.ExpatError as exc:
         return {"pass": False, "error": f"{path.name}: not well-formed XML ({exc})"}
-    ids = {g.get("id") for g in root.iter("{http://www.w3.org/2000/svg}g") if g.get("id")}
+    root = re.search(rb"<(?:[\w.-]+:)?svg\b[^>]*>", data)
+    if root is None or b"http://www.w3.org/2000/svg" not in root.group():
+        return {"pass": False, "error": f"{path.name}: the root element is not an SVG <svg> element"}
+    ids = {unescape(m.decode("utf-8", "replace"), {"&quot;": '"', "&apos;": "'"})
+           for m in re.findall(rb"<g\s[^>]*?\bid=\"([^\"]*)\"", data)}
     flat = {r["id"] for r in bom if r["kind"] in ("panel", "beam")}
     missing = sorted(flat - ids)
     return {"pass": not missing, "groups": len(ids & flat), "expected": len(flat), "missing": missing[:20]}

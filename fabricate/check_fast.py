@@ -92,17 +92,19 @@ def scan_step(path, bom: list[dict]) -> dict:
 def dxf_against_bom(path, bom: list[dict]) -> dict:
     """Flat outlines against the BOM: audit, units, one outline and one id per part, areas."""
     from .export.dxf_text import read_outlines_text as read_outlines
-    from .export.verify import polygon_measures
+    from .export.verify import outline_areas
 
     outlines, facts = read_outlines(path)
     area = {r["id"]: float(r["area_m2"]) * 1e6 for r in bom if r["kind"] in ("panel", "beam")}
     missing = sorted(set(area) - set(outlines))
     failures, worst, worst_id = [], 0.0, None
-    for pid, Q in outlines.items():  # one outline per part
+    ids = list(outlines)
+    got = dict(zip(ids, outline_areas([np.asarray(outlines[i], dtype=float) for i in ids]).tolist()))
+    for pid in ids:  # one outline per part
         if pid not in area:
             failures.append({"id": pid, "error": "no BOM row of that id"})
             continue
-        a, _ = polygon_measures(np.asarray(Q, dtype=float))
+        a = got[pid]
         err = abs(a - area[pid])
         if err > worst:
             worst, worst_id = err, pid

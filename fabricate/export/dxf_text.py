@@ -31,50 +31,76 @@ def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
     (their count), ``units`` ($INSUNITS), ``texts`` (TEXT entities on ETCH)."""
     path = Path(path)
     try:
-        text = path.read_bytes().decode("utf-8", errors="replace").replace("\r", "")
+        data = path.read_bytes().replace(b"\r", b"")
     except OSError as exc:
         raise ExportError(f"{path}: cannot read the DXF file ({exc.strerror or exc})") from None
-    lines = text.split("\n")
-    if lines and lines[-1] == "":
+    lines = data.split(b"\n")
+    del data
+    if lines and lines[-1] == b"":
         lines.pop()
     lint: list[str] = []
     if len(lines) % 2:
         lint.append(f"{len(lines)} lines: a group code without its value")
         lines = lines[:-1]
-    raw = lines[0::2]
-    values = [v.strip() for v in lines[1::2]]
+    raw, vals = lines[0::2], lines[1::2]
+    del lines
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
-        codes = np.fromstring(" ".join(raw), dtype=np.int64, sep=" ")
+        try:
+            codes = np.fromstring(b" ".join(raw), dtype=np.int64, sep=" ")
+        except ValueError:
+            codes = np.zeros(0, np.int64)
     if codes.size != len(raw):
         raise ExportError(f"{path}: a group code is not an integer; not an ASCII DXF file")
-    V = np.array(values, dtype=object)
+
+    def pick(idx) -> np.ndarray:
+        """The values at ``idx`` (indices or mask), stripped, as an object array of str."""
+        idx = np.flatnonzero(idx) if getattr(idx, "dtype", None) == bool else np.asarray(idx, np.int64)
+        return np.array([vals[i].strip().decode("utf-8", "replace") for i in idx.tolist()] + [None],
+                        dtype=object)[:-1]
+
+    def numbers(idx, dtype, what: str) -> np.ndarray:
+        idx = np.flatnonzero(idx)
+        text = b" ".join([vals[i] for i in idx.tolist()])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            try:
+                x = np.fromstring(text, dtype=np.float64, sep=" ") if idx.size else np.zeros(0)
+            except ValueError:
+                x = np.zeros(0)
+        if x.size != idx.size:
+            raise ExportError(f"{path}: {what} is not a number")
+        return x.astype(dtype)
+
     zero = np.nonzero(codes == 0)[0]
-    kinds = V[zero]
-    if not len(values) or values[-1] != "EOF":
+    kinds = pick(zero)
+    if not len(vals) or vals[-1].strip() != b"EOF":
         lint.append("the file does not end with 0/EOF")
     if int(np.sum(kinds == "SECTION")) != int(np.sum(kinds == "ENDSEC")):
         lint.append("SECTION and ENDSEC do not pair up")
     units = 0
-    hdr = np.nonzero((codes == 9) & (V == "$INSUNITS"))[0]
+    nine = np.nonzero(codes == 9)[0]
+    hdr = nine[pick(nine) == "$INSUNITS"]
     if hdr.size and hdr[0] + 1 < len(codes) and codes[hdr[0] + 1] == 70:
-        units = int(values[hdr[0] + 1])
-    sec = np.nonzero((codes == 2) & (V == "ENTITIES"))[0]
+        units = int(vals[hdr[0] + 1])
+    two = np.nonzero(codes == 2)[0]
+    sec = two[pick(two) == "ENTITIES"]
     if not sec.size:
         raise ExportError(f"{path}: no ENTITIES section")
     a = int(sec[0]) + 1
-    ends = zero[(zero >= a) & (V[zero] == "ENDSEC")]
+    ends = zero[(zero >= a) & (kinds == "ENDSEC")]
     b = int(ends[0]) if ends.size else len(codes)
-    starts = zero[(zero >= a) & (zero < b)]                      # one 0/TYPE per entity
+    in_sec = (zero >= a) & (zero < b)
+    starts = zero[in_sec]                                        # one 0/TYPE per entity
     a = int(starts[0]) if len(starts) else b
     ent = np.searchsorted(starts, np.arange(a, b), side="right") - 1      # >= 0: a is the first start
-    c, v = codes[a:b], V[a:b]
+    c = codes[a:b]
     n = len(starts)
-    etype = V[starts]
+    etype = kinds[in_sec]
     layer = np.full(n, "", dtype=object)
     on = c == 8
-    layer[ent[on]] = v[on]
-    handles = v[c == 5]
+    layer[ent[on]] = pick(np.flatnonzero(on) + a)
+    handles = pick(np.flatnonzero(c == 5) + a)
     if len(set(handles.tolist())) != len(handles):
         lint.append(f"{len(handles) - len(set(handles.tolist()))} duplicate entity handles")
     try:
@@ -84,11 +110,15 @@ def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
     cut = (etype == "LWPOLYLINE") & (layer == "CUT")
     texts = int(np.sum((etype == "TEXT") & (layer == "ETCH")))
     in_cut = cut[ent]
-    try:
-        xs = np.array(v[in_cut & (c == 10)].tolist(), dtype=float)
-        ys = np.array(v[in_cut & (c == 20)].tolist(), dtype=float)
-    except ValueError:
-        raise ExportError(f"{path}: an outline vertex is not a number") from None
+    full = np.zeros(len(codes), bool)
+
+    def at(mask):                                                # a mask over the section -> the file
+        full[:] = False
+        full[a:b] = mask
+        return full
+
+    xs = numbers(at(in_cut & (c == 10)), float, "an outline vertex")
+    ys = numbers(at(in_cut & (c == 20)), float, "an outline vertex")
     if xs.size != ys.size or not (np.isfinite(xs).all() and np.isfinite(ys).all()):
         lint.append("outline vertices without both coordinates, or not finite")
         return {}, {"lint": lint, "audit_errors": len(lint), "units": units, "texts": texts,
@@ -98,10 +128,10 @@ def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
     count = np.bincount(owner, minlength=n)[cut_ids]
     declared = np.zeros(n, dtype=np.int64)
     decl = in_cut & (c == 90)
-    declared[ent[decl]] = np.array(v[decl].tolist(), dtype=np.int64)
+    declared[ent[decl]] = numbers(at(decl), np.int64, "a vertex count (90)")
     flags = np.zeros(n, dtype=np.int64)
     fl = in_cut & (c == 70)
-    flags[ent[fl]] = np.array(v[fl].tolist(), dtype=np.int64)
+    flags[ent[fl]] = numbers(at(fl), np.int64, "a polyline flag (70)")
     if np.any(declared[cut_ids] != count):
         lint.append(f"{int(np.sum(declared[cut_ids] != count))} outlines with a vertex count (90) "
                     "other than their vertices")
@@ -111,8 +141,8 @@ def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
     xd = in_cut & (c == 1000)
     app = in_cut & (c == 1001)
     ok_app = np.zeros(n, dtype=bool)
-    ok_app[ent[app][v[app] == APPID]] = True
-    pid[ent[xd]] = v[xd]
+    ok_app[ent[app][pick(np.flatnonzero(app) + a) == APPID]] = True
+    pid[ent[xd]] = pick(np.flatnonzero(xd) + a)
     order = np.argsort(owner, kind="stable")
     P = np.stack([xs, ys], axis=1)[order]
     bounds = np.concatenate([[0], np.cumsum(count)])

@@ -50,7 +50,7 @@ def compact(body: bytes) -> bytes:
     def keep(m):
         s = m.group()
         return s if s[:1] == b"'" else b""
-    return re.sub(rb"'(?:[^']|'')*'|/\*.*?\*/|\s+", keep, body, flags=re.S)
+    return re.sub(rb"'(?:[^']|'')*'|/\*.*?\*/|\s+", keep, body, flags=re.DOTALL)
 
 
 _ONES, _HIGH = np.uint64(0x0101010101010101), np.uint64(0x8080808080808080)
@@ -312,7 +312,6 @@ class Records:
                 pos = pos + 1
         ok &= pos == self.end[rows]
         self._fail(rows, ok, what, f"its arguments are not ('<string>'{pattern}")
-        r = len(rows)
         if real is not None:
             real = self.reals(rows, real, self.end[rows] - (len(pattern) - pattern.index("N") - 1), per, what)
         return refs, flags, real

@@ -13,9 +13,9 @@ quoting) is read by :func:`fabricate.export.threemf.read_3mf` (ElementTree).
 from __future__ import annotations
 
 import re
-from itertools import chain
 import warnings
 import zipfile
+from itertools import chain
 from pathlib import Path
 from xml.parsers import expat
 from xml.sax.saxutils import unescape

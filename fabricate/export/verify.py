@@ -44,6 +44,23 @@ def polygon_measures(P: np.ndarray) -> tuple[float, np.ndarray]:
     return area, np.sqrt((D * D).sum(axis=1))
 
 
+def outline_areas(outlines: list[np.ndarray]) -> np.ndarray:
+    """``(m,)`` areas of planar 2D polygons ``[(k, 2), ...]`` (shoelace about each first corner, as
+    :func:`polygon_measures`), all at once."""
+    k = np.array([len(Q) for Q in outlines], dtype=np.int64)
+    if not (k > 0).all():
+        out = np.zeros(len(outlines))
+        out[k > 0] = outline_areas([Q for Q in outlines if len(Q)])
+        return out
+    P = np.concatenate(outlines)
+    first = np.concatenate([[0], np.cumsum(k)[:-1]])
+    Q = P - np.repeat(P[first], k, axis=0)
+    nxt = np.arange(len(P)) + 1
+    nxt[first + k - 1] = first
+    cz = Q[:, 0] * Q[nxt, 1] - Q[:, 1] * Q[nxt, 0]
+    return 0.5 * np.abs(np.add.reduceat(cz, first))
+
+
 _NEXT: dict[int, np.ndarray] = {}
 _SHIFTS: dict[int, np.ndarray] = {}
 
@@ -149,7 +166,7 @@ class Solid:
             self._face_support = (self.normals[keep], self.offsets[keep])
         return self._face_support
 
-    def separates(self, other: "Solid", tol: float) -> bool:
+    def separates(self, other: Solid, tol: float) -> bool:
         """True when a supporting plane of this solid (a face plane, or a face of its convex hull) has
         all of ``other`` outside (touching allowed): their interiors are then disjoint."""
         n, c = self.support_planes
@@ -253,7 +270,7 @@ def intersections(solids: list[Solid], linear_tol: float) -> dict:
             worst, worst_pair = vol, (A.name, B.name)
         if vol > limit:
             failures.append({"pair": [A.name, B.name], "volume_mm3": vol, "limit_mm3": limit})
-    return {"pass": not failures, "parts": len(solids), "box_pairs": int(len(pairs)),
+    return {"pass": not failures, "parts": len(solids), "box_pairs": len(pairs),
             "cleared_by_plane": by_plane, "boolean_pairs": booleans, "max_volume_mm3": worst,
             "worst_pair": worst_pair, "tolerance": f"{linear_tol:g} mm x smaller surface area",
             "failures": failures[:20], "failed": len(failures)}
@@ -267,8 +284,9 @@ its distance to that part is below ``linear_tol`` unless two of its faces meet a
 
 
 def _witnessed(solids: dict[str, Solid], pairs: list[tuple[str, str]], delta: float) -> np.ndarray:
-    """``(q,) bool``: a corner, triangle-edge midpoint or triangle centroid of one part of each pair lies in the other
-    (a convex part, within ``delta`` of its face planes), for all pairs at once."""
+    """``(q,) bool``: a corner, triangle-edge midpoint or triangle centroid of one part of each pair
+    lies in the other (a convex part, within ``delta`` of its face planes), for all pairs at once;
+    and ``(q,)`` the best witness's largest distance outside a face plane (mm)."""
     names = sorted({n for p in pairs for n in p})
     k = {n: i for i, n in enumerate(names)}
     S = [solids[n] for n in names]
@@ -287,14 +305,14 @@ def _witnessed(solids: dict[str, Solid], pairs: list[tuple[str, str]], delta: fl
             Op[i] = -np.inf                                     # not convex: no witness inside it
     a = np.array([k[p] for p, _ in pairs], dtype=np.int64)
     b = np.array([k[q] for _, q in pairs], dtype=np.int64)
-    out = np.zeros(len(pairs), bool)
+    best = np.full(len(pairs), np.inf)
     step = max(1, 4_000_000 // (M * F))
     for i in range(0, len(pairs), step):
         for x, y in ((a[i:i + step], b[i:i + step]), (b[i:i + step], a[i:i + step])):
             d = np.matmul(Np[y], Cp[x].transpose(0, 2, 1)) - Op[y][:, :, None]
             d = np.where(np.isnan(d), np.inf, d)
-            out[i:i + step] |= d.max(axis=1).min(axis=1) <= delta
-    return out
+            best[i:i + step] = np.minimum(best[i:i + step], d.max(axis=1).min(axis=1))
+    return best <= delta, np.maximum(best, 0.0)
 
 
 def bearing(solids: dict[str, Solid], supports: dict[str, list[str]], linear_tol: float) -> dict:
@@ -310,7 +328,8 @@ def bearing(solids: dict[str, Solid], supports: dict[str, list[str]], linear_tol
                 failures.append({"pair": [pid, bid], "missing": True})
             else:
                 pairs.append((pid, bid))
-    touch = _witnessed(solids, pairs, WITNESS_REL * linear_tol) if pairs else np.zeros(0, bool)
+    touch, outside = _witnessed(solids, pairs, WITNESS_REL * linear_tol) if pairs else (np.zeros(0, bool),
+                                                                                         np.zeros(0))
     for (pid, bid), ok in zip(pairs, touch.tolist()):
         n += 1
         if ok:
@@ -321,5 +340,6 @@ def bearing(solids: dict[str, Solid], supports: dict[str, list[str]], linear_tol
         if gap > linear_tol:
             failures.append({"pair": [pid, bid], "gap_mm": gap})
     return {"pass": not failures, "pairs": n, "touching_by_witness": int(touch.sum()),
+            "witness_off_plane_mm_max": float(outside[touch].max()) if touch.any() else 0.0,
             "min_gap_pairs": n - int(touch.sum()), "max_gap_mm": worst, "worst_pair": worst_pair,
             "tolerance_mm": linear_tol, "failures": failures[:20], "failed": len(failures)}
