@@ -137,16 +137,16 @@ def _parse(data: bytes, path):
     while b > a and data[b - 1] in b" \t\r\n":
         b -= 1
     try:
-        return _parse_body(data[a:b], path)
+        return _parse_body(data, a, b, path)
     except ExportError:
         body = compact(data[a:b])
         if body == data[a:b]:
             raise
-        return _parse_body(body, path)                       # whitespace or comments between tokens
+        return _parse_body(body, 0, len(body), path)          # whitespace or comments between tokens
 
 
-def _parse_body(body: bytes, path):
-    R = Records(body, path)
+def _parse_body(data: bytes, a: int, b: int, path):
+    R = Records(data, a, b, path)
     hit = next((n for n in R.names if n in UNSUPPORTED_NAMES or any(w in n for w in UNSUPPORTED)), None)
     hit = hit or next((w for t in R.complex_text() for w in UNSUPPORTED if w in t), None)
     if hit is not None:

@@ -30,7 +30,8 @@ from numpy.lib.stride_tricks import as_strided
 from optimize.errors import ExportError
 
 QUOTE, SEMI, HASH, EQ, LPAR, RPAR, COMMA, NL = 39, 59, 35, 61, 40, 41, 44, 10
-PAD = 64                       # bytes after the data, so that windows never run off the end
+PAD = 32                       # bytes after the data, so that windows never run off the end
+CHUNK = 1 << 22                # bytes scanned at a time (temporaries stay small and in cache)
 MAX_DIGITS = 11                # a reference of more digits is refused (ids up to 10^11)
 NAME_WINDOW = 24               # entity names shorter than this are classified with numpy
 MAX_NAME = 200                 # a longer entity name is refused
@@ -42,6 +43,16 @@ NUMBER_CHARS[np.frombuffer(b"0123456789.+-Ee ", np.uint8)] = True
 def _window(buf: np.ndarray, width: int) -> np.ndarray:
     """``(N - width, width)`` view: row ``i`` is ``buf[i:i + width]`` (no copy)."""
     return as_strided(buf, shape=(len(buf) - width, width), strides=(1, 1), writeable=False)
+
+
+def _scan(buf: np.ndarray, a: int, b: int, chars: tuple[int, ...]) -> list[np.ndarray]:
+    """Positions ``(k,)`` of each byte of ``chars`` in ``buf[a:b]``, a chunk at a time."""
+    found: list[list[np.ndarray]] = [[] for _ in chars]
+    for c in range(a, b, CHUNK):
+        part = buf[c:min(c + CHUNK, b)]
+        for out, ch in zip(found, chars):
+            out.append(np.flatnonzero(part == ch) + c)
+    return [np.concatenate(f) if f else np.zeros(0, np.int64) for f in found]
 
 
 def compact(body: bytes) -> bytes:
@@ -56,26 +67,12 @@ def compact(body: bytes) -> bytes:
 _ONES, _HIGH = np.uint64(0x0101010101010101), np.uint64(0x8080808080808080)
 
 
-_GATHER = np.uint64(0x0102040810204080)     # (flags 0x01 per byte) * this >> 56: one bit per byte
-
-
-def _gathered(i: int) -> int:
-    return (((1 << (8 * i)) * int(_GATHER)) % (1 << 64)) >> 56
-
-
-_LOWEST = np.full(256, 8, dtype=np.int64)   # gathered flag byte -> index of the lowest flagged byte
-for _p in range(255, 0, -1):
-    _g = 0
-    for _i in range(8):
-        if _p >> _i & 1:
-            _g |= _gathered(_i)
-    _LOWEST[_g] = min(_i for _i in range(8) if _p >> _i & 1)
-
-
 def _lowest_byte(m: np.ndarray) -> np.ndarray:
     """Index 0..7 of the lowest byte of ``m (h,) uint64`` whose high bit is set (only high bits
-    set); 8 when none."""
-    return _LOWEST[((m >> np.uint64(7)) * _GATHER) >> np.uint64(56)]
+    set); 8 when none.  The lowest set bit ``2^(8i + 7)`` is exact as a float: its exponent gives i."""
+    low = m & (~m + np.uint64(1))
+    _, e = np.frexp(low.astype(np.float64))                          # 2^(8i+7) -> e = 8i + 8; 0 -> 0
+    return np.where(e == 0, 8, (e >> 3) - 1).astype(np.int64)
 
 
 def _first_byte(x: np.ndarray, byte: int) -> np.ndarray:
@@ -116,35 +113,35 @@ class Records:
     ``hlen`` (digits).  Strings: ``qpos`` (quotes, in pairs).
     """
 
-    def __init__(self, body: bytes, path):
-        """``body``: the DATA section with no whitespace outside strings except one newline after
-        each ``;`` (:func:`canonical` makes it so)."""
+    def __init__(self, data: bytes, a: int, b: int, path):
+        """The records of ``data[a:b]``, the DATA section (from its first ``#`` to its last ``;``), with
+        no whitespace outside strings except one newline after each ``;`` (:func:`compact` makes it
+        so).  Positions are indices into ``data`` (not copied unless fewer than ``PAD`` bytes follow)."""
         self.path = path
-        self.data = body + b" " * PAD
-        buf = self.buf = np.frombuffer(self.data, np.uint8)
-        self.u64 = np.ndarray(shape=(len(buf) - 8,), dtype="<u8", buffer=self.data, strides=(1,))  # unaligned
-        n_data = len(body)
-        self.qpos = q = np.flatnonzero(buf == QUOTE)
+        if len(data) - b < PAD:
+            data = data + b" " * PAD
+        self.data = data
+        buf = self.buf = np.frombuffer(data, np.uint8)
+        self.u64 = np.ndarray(shape=(len(buf) - 8,), dtype="<u8", buffer=data, strides=(1,))  # unaligned
+        self.a = a
+        q, semi, hpos = _scan(buf, a, b, (QUOTE, SEMI, HASH))
+        self.qpos = q
         if len(q) % 2:
             raise ExportError(f"{path}: a string of the DATA section has no closing quote")
         opens, closes = q[0::2], q[1::2]
         full = closes - opens > 1
-        semi = np.flatnonzero(buf == SEMI)
-        hpos = np.flatnonzero(buf == HASH)
         if full.any():                                  # ';' and '#' inside strings are text
             o, ln = opens[full] + 1, closes[full] - opens[full] - 1
             inside = np.repeat(o - np.concatenate([[0], np.cumsum(ln)[:-1]]), ln) + np.arange(int(ln.sum()))
             chars = buf[inside]
-            for c, pos in ((SEMI, "semi"), (HASH, "hpos")):
-                text = inside[chars == c]
-                if text.size:
-                    arr = semi if pos == "semi" else hpos
-                    arr = arr[~np.isin(arr, text)]
-                    semi, hpos = (arr, hpos) if pos == "semi" else (semi, arr)
-        if not len(semi) or semi[-1] != n_data - 1:
+            if (chars == SEMI).any():
+                semi = semi[~np.isin(semi, inside[chars == SEMI])]
+            if (chars == HASH).any():
+                hpos = hpos[~np.isin(hpos, inside[chars == HASH])]
+        if not len(semi) or semi[-1] != b - 1:
             raise ExportError(f"{path}: the DATA section does not end with ';' before ENDSEC;")
         self.end = semi
-        start = np.concatenate([[0], semi[:-1] + 1])
+        start = np.concatenate([[a], semi[:-1] + 1])
         start += buf[start] == NL
         self.start = start
         self._references(hpos)
@@ -174,7 +171,7 @@ class Records:
             val[long], hlen[long] = v, n
         self.hpos, self.hval, self.hlen = hpos, val, hlen
         prev = buf[np.maximum(hpos - 1, 0)]
-        rec = np.flatnonzero((prev == NL) | (prev == SEMI) | (hpos == 0))  # a record's own '#'
+        rec = np.flatnonzero((prev == NL) | (prev == SEMI) | (hpos == self.a))  # a record's own '#'
         if len(rec) != len(self.start) or not np.array_equal(hpos[rec], self.start):
             bad = np.ones(len(self.start), bool)
             if len(rec) == len(self.start):
