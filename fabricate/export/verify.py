@@ -103,18 +103,24 @@ def match_outline(outline: np.ndarray, faces: list[np.ndarray]) -> tuple[int, fl
 
 
 def overlapping_boxes(lo: np.ndarray, hi: np.ndarray, pad: float = 0.0) -> np.ndarray:
-    """(q, 2) int pairs ``i < j`` whose bounding boxes ``lo, hi (p, 3)`` overlap (sweep and prune on x)."""
-    order = np.argsort(lo[:, 0], kind="stable")
-    xl, xh = lo[order, 0], hi[order, 0]
-    end = np.searchsorted(xl, xh + pad, side="right")
+    """(q, 2) int pairs ``i < j`` whose bounding boxes ``lo, hi (p, 3)`` overlap (sweep and prune
+    along the axis with the fewest candidate pairs)."""
+    best = None
+    for ax in range(lo.shape[1] if lo.ndim == 2 and len(lo) else 1):
+        order = np.argsort(lo[:, ax], kind="stable")
+        end = np.searchsorted(lo[order, ax], hi[order, ax] + pad, side="right")
+        count = np.maximum(end - (np.arange(len(order)) + 1), 0)
+        if best is None or count.sum() < best[1].sum():
+            best = (order, count)
+    order, count = best
     start = np.arange(len(order)) + 1
-    count = np.maximum(end - start, 0)
     i = np.repeat(np.arange(len(order)), count)
     j = start[i] + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
     a, b = order[i], order[j]
-    keep = np.all((lo[a] <= hi[b] + pad) & (lo[b] <= hi[a] + pad), axis=1)
-    pairs = np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1)[keep]
-    return pairs
+    for ax in range(lo.shape[1]):                  # one axis at a time: fewer pairs to gather each time
+        keep = (lo[a, ax] <= hi[b, ax] + pad) & (lo[b, ax] <= hi[a, ax] + pad)
+        a, b = a[keep], b[keep]
+    return np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1)
 
 
 class Solid:
@@ -174,44 +180,45 @@ class Solid:
         return bool((d.min(axis=0) >= -tol).any())
 
 
+def _by_shape(objects: list[tuple[np.ndarray, np.ndarray]]) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Meshes grouped by ``(vertices, triangles)`` counts: ``[(indices (g,), V (g, nv, 3), T (g, t, 3))]``."""
+    shape: dict[tuple[int, int], list[int]] = {}
+    for k, (V, T) in enumerate(objects):
+        shape.setdefault((len(V), len(T)), []).append(k)
+    return [(np.array(ix), np.stack([objects[i][0] for i in ix]).astype(float), np.stack([objects[i][1] for i in ix]))
+            for ix in shape.values()]
+
+
 def solids_of(objects: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, Solid]:
     """:class:`Solid` of every mesh ``{name: (V (nv, 3), T (t, 3))}``, their planes, areas and
-    convexity computed for all meshes at once (the same figures as ``Solid(name, V, T)``)."""
+    convexity computed for all meshes of one shape at once (the same figures as ``Solid(name, V, T)``)."""
     names = list(objects)
-    nv = np.array([len(objects[n][0]) for n in names], dtype=np.int64)
-    nt = np.array([len(objects[n][1]) for n in names], dtype=np.int64)
-    if not names or (nv == 0).any() or (nt == 0).any():
+    meshes = [objects[n] for n in names]
+    if not names or any(len(V) == 0 or len(T) == 0 for V, T in meshes):
         return {n: Solid(n, *objects[n]) for n in names}
-    vo = np.concatenate([[0], np.cumsum(nv)])
-    V = np.concatenate([objects[n][0] for n in names]).astype(float)
-    obj = np.repeat(np.arange(len(names)), nt)                         # (T,) object of each triangle
-    T = np.concatenate([objects[n][1] for n in names]) + vo[obj][:, None]
-    A, B, C = V[T[:, 0]], V[T[:, 1]], V[T[:, 2]]
-    cr = _cross(B - A, C - A)
-    norm = np.sqrt((cr * cr).sum(axis=1))
-    area = 0.5 * np.bincount(obj, weights=norm, minlength=len(names))
-    N = cr / np.maximum(norm, 1e-300)[:, None]
-    off = (N * A).sum(axis=1)
-    size = np.sqrt(((np.maximum.reduceat(V, vo[:-1]) - np.minimum.reduceat(V, vo[:-1])) ** 2).sum(axis=1))
-    tol = 1e-9 * np.maximum(size, 1.0)
-    rep = nv[obj]                                                      # every triangle against every vertex
-    ti = np.repeat(np.arange(len(T)), rep)
-    vi = np.repeat(vo[obj], rep) + np.arange(int(rep.sum())) - np.repeat(np.cumsum(rep) - rep, rep)
-    d = (N[ti] * V[vi]).sum(axis=1) - off[ti]
-    per_tri = np.maximum.reduceat(d, np.concatenate([[0], np.cumsum(rep)[:-1]]))      # (T,) worst vertex
-    worst = np.maximum.reduceat(per_tri, np.concatenate([[0], np.cumsum(nt)[:-1]]))
-    to = np.concatenate([[0], np.cumsum(nt)])
-    out = {}
-    for k, n in enumerate(names):
-        s = Solid.__new__(Solid)
-        s.name, s.V, s.T = n, objects[n][0], objects[n][1]
-        s.area, s.normals, s.offsets = float(area[k]), N[to[k]:to[k + 1]], off[to[k]:to[k + 1]]
-        s.tol, s.convex = float(tol[k]), bool(worst[k] <= tol[k])
-        s._manifold = s._planes = None
-        keep = per_tri[to[k]:to[k + 1]] <= tol[k]
-        s._face_support = (s.normals[keep], s.offsets[keep])
-        out[n] = s
-    return out
+    out: list[Solid | None] = [None] * len(names)
+    for ix, V, T in _by_shape(meshes):
+        g = np.arange(len(ix))[:, None]
+        A, B, C = V[g, T[:, :, 0]], V[g, T[:, :, 1]], V[g, T[:, :, 2]]             # (g, t, 3)
+        cr = _cross(B - A, C - A)
+        norm = np.sqrt((cr * cr).sum(axis=2))
+        area = 0.5 * norm.sum(axis=1)
+        N = cr / np.maximum(norm, 1e-300)[:, :, None]
+        off = (N * A).sum(axis=2)
+        size = np.sqrt(((V.max(axis=1) - V.min(axis=1)) ** 2).sum(axis=1))
+        tol = 1e-9 * np.maximum(size, 1.0)
+        per_tri = (np.matmul(N, V.transpose(0, 2, 1)) - off[:, :, None]).max(axis=2)   # (g, t) worst vertex
+        convex = per_tri.max(axis=1) <= tol
+        for r, k in enumerate(ix.tolist()):
+            s = Solid.__new__(Solid)
+            s.name, (s.V, s.T) = names[k], meshes[k]
+            s.area, s.normals, s.offsets = float(area[r]), N[r], off[r]
+            s.tol, s.convex = float(tol[r]), bool(convex[r])
+            s._manifold = s._planes = None
+            keep = per_tri[r] <= tol[r]
+            s._face_support = (N[r][keep], off[r][keep])
+            out[k] = s
+    return dict(zip(names, out))
 
 
 def _separated(solids: list[Solid], a: np.ndarray, b: np.ndarray, tol: float, hull: bool) -> np.ndarray:
@@ -252,8 +259,13 @@ def intersections(solids: list[Solid], linear_tol: float) -> dict:
     computes the intersection volume, which must stay below ``linear_tol x`` the
     smaller surface area.
     """
-    lo = np.array([s.V.min(axis=0) for s in solids]).reshape(-1, 3)
-    hi = np.array([s.V.max(axis=0) for s in solids]).reshape(-1, 3)
+    n = np.array([len(s.V) for s in solids], dtype=np.int64)
+    if len(solids) and (n > 0).all():
+        V, first = np.concatenate([s.V for s in solids]), np.concatenate([[0], np.cumsum(n)[:-1]])
+        lo, hi = np.minimum.reduceat(V, first), np.maximum.reduceat(V, first)
+    else:
+        lo = np.array([s.V.min(axis=0) for s in solids]).reshape(-1, 3)
+        hi = np.array([s.V.max(axis=0) for s in solids]).reshape(-1, 3)
     pairs = overlapping_boxes(lo, hi, pad=linear_tol)
     a, b = pairs[:, 0], pairs[:, 1]
     rest = np.ones(len(pairs), bool)
@@ -290,8 +302,14 @@ def _witnessed(solids: dict[str, Solid], pairs: list[tuple[str, str]], delta: fl
     names = sorted({n for p in pairs for n in p})
     k = {n: i for i, n in enumerate(names)}
     S = [solids[n] for n in names]
-    cand = [np.concatenate([s.V, 0.5 * (s.V[s.T] + s.V[np.roll(s.T, 1, axis=1)]).reshape(-1, 3),
-                            s.V[s.T].mean(axis=1)]) for s in S]
+    cand: list[np.ndarray | None] = [None] * len(S)
+    for ix, V, T in _by_shape([(s.V, s.T) for s in S]):      # corners, edge midpoints, centroids
+        g = np.arange(len(ix))[:, None, None]
+        X = V[g, T]                                            # (g, t, 3, 3)
+        pts = np.concatenate([V, (0.5 * (X + np.roll(X, 1, axis=2))).reshape(len(ix), -1, 3),
+                              X.mean(axis=2)], axis=1)
+        for r, i in enumerate(ix.tolist()):
+            cand[i] = pts[r]
     M = max(len(c) for c in cand)
     F = max(len(s.normals) for s in S)
     Cp = np.zeros((len(S), M, 3))
@@ -306,12 +324,16 @@ def _witnessed(solids: dict[str, Solid], pairs: list[tuple[str, str]], delta: fl
     a = np.array([k[p] for p, _ in pairs], dtype=np.int64)
     b = np.array([k[q] for _, q in pairs], dtype=np.int64)
     best = np.full(len(pairs), np.inf)
-    step = max(1, 4_000_000 // (M * F))
-    for i in range(0, len(pairs), step):
-        for x, y in ((a[i:i + step], b[i:i + step]), (b[i:i + step], a[i:i + step])):
-            d = np.matmul(Np[y], Cp[x].transpose(0, 2, 1)) - Op[y][:, :, None]
-            d = np.where(np.isnan(d), np.inf, d)
-            best[i:i + step] = np.minimum(best[i:i + step], d.max(axis=1).min(axis=1))
+    corners = max(len(s.V) for s in S)
+    for m in (corners, M):              # the corners first (the first points of every part), then all
+        todo = np.flatnonzero(best > delta)
+        step = max(1, 4_000_000 // (m * F))
+        for i in range(0, len(todo), step):
+            t = todo[i:i + step]
+            for x, y in ((a[t], b[t]), (b[t], a[t])):
+                d = np.matmul(Np[y], Cp[x, :m].transpose(0, 2, 1)) - Op[y][:, :, None]
+                d = np.where(np.isnan(d), np.inf, d)
+                best[t] = np.minimum(best[t], d.max(axis=1).min(axis=1))
     return best <= delta, np.maximum(best, 0.0)
 
 
