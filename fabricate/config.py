@@ -90,9 +90,7 @@ class ShapeInput(Section):
     name: str
     params: dict[str, Any] = Field(default_factory=dict)
 
-    _faces: int = PrivateAttr(default=0)
-    _levels: int = PrivateAttr(default=0)
-    _scheme: str = PrivateAttr(default="catmull_clark")
+    _design: Any = PrivateAttr(default=None)
 
     @model_validator(mode="after")
     def _known_design(self) -> "ShapeInput":
@@ -104,8 +102,13 @@ class ShapeInput(Section):
         except ImportError as exc:  # the modelling package is not installed
             raise PydanticCustomError("designs", "built-in designs are not available ({err})",
                                       {"err": str(exc)}) from None
-        self._faces, self._levels, self._scheme = design.mesh.n_faces, design.levels, design.scheme
+        self._design = design  # built once: the input stage uses this one
         return self
+
+    @property
+    def design(self):
+        """The :class:`optimize.designs.Design` built while validating (the input stage's mesh)."""
+        return self._design
 
 
 class InputSection(Section):
@@ -387,12 +390,13 @@ def _cross_checks(cfg: RunConfig, source: Path, lines: dict[tuple, int]) -> None
                           "(scale still applies)")
     shape = cfg.input.shape
     if shape is not None:
-        levels = shape._levels if cfg.subdivision.levels is None else cfg.subdivision.levels
-        scheme = cfg.subdivision.scheme or shape._scheme
-        faces = subdivided_faces(shape._faces, scheme, levels)
+        design = shape.design
+        levels = design.levels if cfg.subdivision.levels is None else cfg.subdivision.levels
+        scheme = cfg.subdivision.scheme or design.scheme
+        faces = subdivided_faces(design.mesh.n_faces, scheme, levels)
         if faces > MAX_FACES:
             where = _at(source, lines, ("subdivision", "levels"), ("input", "shape"))
-            raise ConfigError(f"{where}: input.shape: design {shape.name} has {shape._faces:,} faces; {levels} "
+            raise ConfigError(f"{where}: input.shape: design {shape.name} has {design.mesh.n_faces:,} faces; {levels} "
                               f"rounds of {scheme} make about {faces:,}, more than {MAX_FACES:,} (the largest "
                               "design run); expected fewer quads (the design's count parameters) or fewer "
                               "subdivision.levels")

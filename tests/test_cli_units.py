@@ -211,12 +211,11 @@ def test_run_with_a_layer_past_the_focal_distance_is_marked_and_builds_no_parts(
 
 def test_a_too_deep_beam_says_to_reduce_the_depth(tmp_path):
     """9 m deep beams under a cap of a 12 m sphere: the advice is the depth, not the beam width."""
-    from fabricate.cad import PartSpec, build_parts
-    from optimize.errors import ConfigError
+    from fabricate.cad import PartError, PartSpec, build_parts
 
     s = offset_structure(_dome(1000.0), (0.0, -9000.0))
     assert s.report["turned_over"]["ok"]  # not past the focal distance: the beams fold at their ends
-    with pytest.raises(ConfigError, match="reduce parts.beam_depth") as err:
+    with pytest.raises(PartError, match="reduce parts.beam_depth") as err:
         build_parts(s, PartSpec(beam_depth=9000.0, beam_width=200.0))
     assert "beam_width" not in str(err.value)
 

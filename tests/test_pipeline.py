@@ -167,8 +167,8 @@ def test_failed_output_check_is_exit_4_written_and_marked(tmp_path, monkeypatch)
 def test_failure_in_a_stage_leaves_no_folder(tmp_path, monkeypatch, stage, error):
     original = getattr(stages, f"stage_{stage}")
 
-    def fail_after(ctx):
-        original(ctx)  # the stage has written its files into the temporary folder
+    def fail_after(*args, **kwargs):
+        original(*args, **kwargs)  # the stage has written its files into the temporary folder
         raise error("injected")
 
     monkeypatch.setattr(stages, f"stage_{stage}", fail_after)
@@ -181,7 +181,7 @@ def test_rerun_replaces_only_when_complete(tmp_path, monkeypatch):
     out = tmp_path / "out"
     first = run_pipeline(tiny_config(tmp_path), out)
     before = (out / "tiny" / "report.json").read_text()
-    monkeypatch.setattr(stages, "stage_report", lambda ctx: (_ for _ in ()).throw(RuntimeError("late")))
+    monkeypatch.setattr(stages, "stage_report", lambda run: (_ for _ in ()).throw(RuntimeError("late")))
     with pytest.raises(RuntimeError):
         run_pipeline(tiny_config(tmp_path), out, force=True)
     assert (out / "tiny" / "report.json").read_text() == before  # the previous result is untouched
@@ -197,7 +197,7 @@ def test_sigterm_during_a_run_leaves_no_folder(tmp_path):
     cfg = tmp_path / "slow.yaml"
     cfg.write_text("name: slow\ninput:\n  shape: {name: dome, params: {meridians: 6, rings: 3}}\n")
     driver = ("import sys, time\nimport fabricate.stages as s\n"
-              "def slow(ctx):\n    print('IN CAD', flush=True)\n    time.sleep(120)\n"
+              "def slow(*args, **kwargs):\n    print('IN CAD', flush=True)\n    time.sleep(120)\n"
               "s.stage_cad = slow\nfrom fabricate.cli import main\n"
               f"sys.exit(main(['run', {str(cfg)!r}, '--out', {str(tmp_path / 'out')!r}, '-q']))\n")
     proc = subprocess.Popen([sys.executable, "-c", driver], cwd=REPO, stdout=subprocess.PIPE,
