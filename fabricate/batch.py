@@ -32,6 +32,7 @@ from optimize.atomic import atomic_open
 from optimize.errors import ConfigError, ConicalFabError
 
 from .config import RunConfig, load_config, override_values
+from .options import COMMAND
 from .pipeline import EXIT_CODES, RunSummary, run_pipeline, worst
 
 log = logging.getLogger(__name__)
@@ -153,7 +154,7 @@ def run_job(job: Job, out_root: str, force: bool = False) -> RunSummary:
 
 
 def make_executor(workers: int, scheduler: str | None = None, *,
-                  timeout: float = 20.0) -> tuple[cf.Executor, Callable[[], None]]:
+                  timeout: float = COMMAND.connect_timeout_s) -> tuple[cf.Executor, Callable[[], None]]:
     """A concurrent.futures executor and its closer: worker processes, or a Dask cluster's
     (``timeout`` seconds to connect)."""
     if scheduler:

@@ -29,6 +29,7 @@ from optimize.atomic import remove_part
 
 from . import runfolder, stages
 from .config import RunConfig
+from .options import COMMAND
 from .progress import NullProgress
 from .records import Outcome, RunRecord, frozen
 from .report.measures import collect_measures
@@ -70,8 +71,8 @@ class RunSummary:
 
 
 def run_folder(config: RunConfig, out_root: str | Path | None = None) -> Path:
-    """``<out_root>/<name>`` (``out_root`` default: ``./outputs``)."""
-    root = Path(out_root) if out_root is not None else Path.cwd() / "outputs"
+    """``<out_root>/<name>`` (``out_root`` default: ``./outputs``, :data:`fabricate.options.COMMAND`)."""
+    root = Path(out_root) if out_root is not None else Path.cwd() / COMMAND.out_root
     return root / config.name
 
 

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
+
+from fabricate.config_section import Section  # the strict base of every section (no import of fabricate.config)
 
 from .sections import SectionProperties, section
 
@@ -21,16 +23,6 @@ ALPHA = {"a0": 0.13, "a": 0.21, "b": 0.34, "c": 0.49, "d": 0.76}
 """Imperfection factor of each flexural buckling curve (EN 1993-1-1 Table 6.1)."""
 GRADES = {"S235": 235.0, "S275": 275.0, "S355": 355.0, "S460": 460.0}
 """Yield strength f_y (MPa) of the structural steel grades (EN 10025-2, t <= 40 mm)."""
-
-
-class Section(BaseModel):
-    """A config section (as :class:`fabricate.config.Section`, kept here so config.py can import this module)."""
-
-    model_config = ConfigDict(extra="forbid", validate_default=True, populate_by_name=True)
-
-    @classmethod
-    def allowed_keys(cls) -> list[str]:
-        return [f.alias or name for name, f in cls.model_fields.items()]
 
 
 class SectionOption(Section):
@@ -133,10 +125,10 @@ class StructureSection(Section):
     combinations: list[CombinationOption] | None = None   # null: DEFAULT_COMBINATIONS
     sizing: SizingOption = Field(default_factory=SizingOption)
 
-    @field_validator("check", mode="before")
+    @field_validator("up", mode="before")
     @classmethod
-    def _yaml_off(cls, v):
-        return "off" if v is False else v  # YAML 1.1 reads a bare `off` as false
+    def _up_list(cls, v):  # YAML gives a list; the strict tuple takes it converted
+        return tuple(v) if isinstance(v, list) else v
 
     @field_validator("supports")
     @classmethod
