@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from fabricate.config import RunConfig, TolerancesSection, load_config, parse_config
+from fabricate.app.config import RunConfig, TolerancesSection, load_config, parse_config
 from optimize import shapes
 from optimize.errors import ConfigError
 from optimize.io import write_mesh
@@ -224,7 +224,7 @@ def test_override_errors_name_the_set_option(folder):
 
 def test_reference_config_states_every_range():
     """Every key with a range has it on its line of configs/reference.yaml, as the messages write it."""
-    from fabricate.config_errors import field_range
+    from fabricate.app.config_errors import field_range
     lines = (REPO / "configs" / "reference.yaml").read_text().splitlines()
     checked = 0
     for section, field in RunConfig.model_fields.items():

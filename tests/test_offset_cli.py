@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from fabricate.cli import main
+from fabricate.app.cli import main
 from fabricate.offset import offset_structure
 from optimize import shapes
 from optimize.io import read_mesh, write_mesh
@@ -118,7 +118,7 @@ def test_bad_distances_exit_2(dome_file, tmp_path, capsys, text, pattern):
 def test_output_folder_is_atomic_and_a_foreign_folder_is_not_replaced(dome_file, tmp_path, capsys,
                                                                       monkeypatch):
     """-o DIR follows the run-folder rules: a marker, --replace to replace, never a foreign file."""
-    from fabricate.runfolder import MARKER
+    from fabricate.app.runfolder import MARKER
 
     foreign = tmp_path / "mine"
     foreign.mkdir()

@@ -5,9 +5,9 @@ import sys
 import pytest
 from pydantic import ValidationError
 
-from fabricate import options
-from fabricate.config import OffsetSection, OutputsSection, RunConfig, TolerancesSection
-from fabricate.config_section import OPTIONS, Section
+from fabricate.app import options
+from fabricate.app.config import OffsetSection, OutputsSection, RunConfig, TolerancesSection
+from fabricate.app.config_section import OPTIONS, Section
 from optimize.tolerances import Tolerances
 
 
@@ -56,7 +56,7 @@ def test_the_structure_section_is_on_the_strict_base():
 
 
 def test_the_command_line_reads_its_defaults_from_the_option_objects(monkeypatch):
-    from fabricate.cli import build_parser
+    from fabricate.app.cli import build_parser
 
     parser = build_parser()
     run = parser.parse_args(["run", "x.yaml"])

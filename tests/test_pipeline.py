@@ -12,10 +12,10 @@ import zipfile
 
 import pytest
 
-import fabricate.stages as stages
-from fabricate.config import load_config
-from fabricate.pipeline import STAGES, run_pipeline
-from fabricate.progress import RecordingProgress
+import fabricate.app.stages as stages
+from fabricate.app.config import load_config
+from fabricate.app.pipeline import STAGES, run_pipeline
+from fabricate.app.progress import RecordingProgress
 from optimize.errors import ConfigError, ExportError, MeshError
 from optimize.io import read_mesh
 
@@ -196,9 +196,9 @@ def test_sigterm_during_a_run_leaves_no_folder(tmp_path):
     """``kill`` of a running ``fabricate run`` unwinds like Ctrl-C: the temporary folder is removed."""
     cfg = tmp_path / "slow.yaml"
     cfg.write_text("name: slow\ninput:\n  shape: {name: dome, params: {meridians: 6, rings: 3}}\n")
-    driver = ("import sys, time\nimport fabricate.stages as s\n"
+    driver = ("import sys, time\nimport fabricate.app.stages as s\n"
               "def slow(*args, **kwargs):\n    print('IN CAD', flush=True)\n    time.sleep(120)\n"
-              "s.stage_cad = slow\nfrom fabricate.cli import main\n"
+              "s.stage_cad = slow\nfrom fabricate.app.cli import main\n"
               f"sys.exit(main(['run', {str(cfg)!r}, '--out', {str(tmp_path / 'out')!r}, '-q']))\n")
     proc = subprocess.Popen([sys.executable, "-c", driver], cwd=REPO, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
@@ -235,7 +235,7 @@ def test_folded_panels_write_no_cut_file_and_end_marked(tmp_path, capsys):
     """Planar to tolerance but dented: z = x y meshed along its rulings, noisy boundary fixed.
     The optimizer says "folded"; no panel or beam is built and no cut file written, but the mesh,
     the layers and the report are, marked as a missed tolerance (exit 3), with the faces named."""
-    from fabricate.cli import main
+    from fabricate.app.cli import main
     from optimize import optimize_mesh, shapes
     from optimize.io import write_mesh
 
@@ -384,7 +384,7 @@ def test_check_off_and_auto(tmp_path):
     assert summary.status == "ok" and summary.exit_code == 0
     check = json.loads((tmp_path / "out" / "off" / "report.json").read_text())["check"]
     assert check["mode"] == "off" and check["pass"] is None and check["checks"] == {}
-    from fabricate.config import CHECK_AUTO_MAX_PARTS
+    from fabricate.app.config import CHECK_AUTO_MAX_PARTS
 
     auto = tiny_config(tmp_path, outputs=CAD_FILES).outputs
     assert auto.check == "auto"

@@ -10,17 +10,17 @@ from collections.abc import Mapping
 
 import pytest
 
-import fabricate.stages as stages
+import fabricate.app.stages as stages
 from _pipeline_fixtures import tiny_config
-from fabricate import records
-from fabricate.pipeline import run_pipeline
+from fabricate.app import records
+from fabricate.app.pipeline import run_pipeline
 
 
 def _names() -> dict:
     """The names the records' annotations use (imported only for annotations there)."""
     from fabricate.cad.parts import Parts
     from fabricate.cad.spec import PartSpec
-    from fabricate.config import RunConfig
+    from fabricate.app.config import RunConfig
     from fabricate.offset.structure import OffsetStructure
     from fabricate.structure.check import StructureCheck
     from optimize.mesh import Mesh

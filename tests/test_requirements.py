@@ -2,8 +2,8 @@
 import numpy as np
 
 from fabricate.offset import offset_structure
-from fabricate.pipeline import outcome
-from fabricate.requirements import apply_requirements, default_requirements, warnings
+from fabricate.app.pipeline import outcome
+from fabricate.app.requirements import apply_requirements, default_requirements, warnings
 from optimize import shapes
 
 

@@ -12,9 +12,9 @@ import time
 
 import pytest
 
-import fabricate.stages as stages
-from fabricate.pipeline import outcome, run_pipeline
-from fabricate.runfolder import MARKER, run_lock
+import fabricate.app.stages as stages
+from fabricate.app.pipeline import outcome, run_pipeline
+from fabricate.app.runfolder import MARKER, run_lock
 from optimize.atomic import PART_OWNER, atomic_dir, atomic_open, part_dir
 from optimize.errors import ConfigError
 
@@ -120,7 +120,7 @@ def test_a_failing_rerun_is_written_beside_the_passing_result(tmp_path, passing)
 HOLDER = """
 import sys, time
 from pathlib import Path
-from fabricate.runfolder import run_lock
+from fabricate.app.runfolder import run_lock
 with run_lock(Path(sys.argv[1])):
     print("LOCKED", flush=True)
     time.sleep(60)
@@ -193,13 +193,13 @@ def test_temporary_folders_of_dead_runs_are_removed_and_named(tmp_path):
 # -- Ctrl-C at any moment --------------------------------------------------------------------------
 STUCK_IN_NATIVE_CODE = """
 import hashlib, sys
-import fabricate.stages as s
+import fabricate.app.stages as s
 def stuck(*args, **kwargs):
     print("IN CAD", flush=True)
     # one C call that never looks at signals, like a long OpenCASCADE call
     hashlib.pbkdf2_hmac("sha256", b"x", b"y", 2 ** 31 - 1)
 s.stage_cad = stuck
-from fabricate.cli import main
+from fabricate.app.cli import main
 sys.argv = ["fabricate", "run", sys.argv[1], "--out", sys.argv[2], "-q"]
 sys.exit(main())
 """
@@ -357,7 +357,7 @@ def test_killing_the_command_kills_its_work_too(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
-    from fabricate.runfolder import clean_stale_parts
+    from fabricate.app.runfolder import clean_stale_parts
 
     notes = clean_stale_parts(out, "slow")
     assert notes and notes[0].startswith(f"removed {part}") and list(out.iterdir()) == []

@@ -325,7 +325,7 @@ def _sweep(out_root: str, jobs: list[Job]) -> list[str]:
 
 
 def exit_code(summaries: list[RunSummary]) -> int:
-    """0 when every job is ok, else the code of the worst job (:data:`fabricate.pipeline.PRECEDENCE`):
+    """0 when every job is ok, else the code of the worst job (:data:`fabricate.app.pipeline.PRECEDENCE`):
     a lost or crashed job (1) first, then bad input (2), a failed export (4), a missed tolerance (3)."""
     return EXIT_CODES[worst(s.status for s in summaries)] if summaries else 0
 

@@ -11,7 +11,7 @@ did-you-mean for misspelt keys::
 
     configs/dome.yaml:7: optimize.targte: unknown key (did you mean 'target'?); allowed: ...
 
-Files are read by :mod:`fabricate.config_yaml` (safe YAML, bounded in size,
+Files are read by :mod:`fabricate.app.config_yaml` (safe YAML, bounded in size,
 nesting and alias expansion, duplicate keys refused); paths in a config are
 resolved relative to the config file's folder.
 
@@ -50,7 +50,7 @@ from .config_set import override_values, set_key, takes_list  # noqa: F401 - the
 from .config_yaml import MAX_DEPTH, read_config
 from .options import (CHECK_AUTO_MAX_PARTS, TOLERANCE_KEYS, UNIT_TO_MM, OffsetOptions,  # noqa: F401 - re-exported
                       OutputsOptions, RunOptions)
-from .structure.options import StructureSection
+from ..structure.options import StructureSection
 
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
 
@@ -87,7 +87,7 @@ def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
 
 class ShapeInput(Section):
     """A built-in design of :mod:`optimize.designs` with its parameters (checked by
-    :func:`fabricate.config_design.check_design`)."""
+    :func:`fabricate.app.config_design.check_design`)."""
 
     name: str
     params: dict[str, Any] = Field(default_factory=dict)
@@ -209,12 +209,12 @@ class OptimizeSection(Section):
 
 MEASURE_NAMES = ("planarity", "folded", "conical", "circular", "closeness", "offset_distance", "beam_planarity",
                  "beam_planarity_boundary", "beam_twist", "axis_defect")
-"""What ``tolerances.requirements`` may name (``fabricate.requirements.MEASURES``)."""
+"""What ``tolerances.requirements`` may name (``fabricate.app.requirements.MEASURES``)."""
 
 
 class TolerancesSection(section_base(Tolerances, meta=TOLERANCE_KEYS)):
     """Thresholds (see :class:`optimize.tolerances.Tolerances`, their defaults): relative, radians, or mm;
-    bounds in :data:`fabricate.options.TOLERANCE_KEYS`."""
+    bounds in :data:`fabricate.app.options.TOLERANCE_KEYS`."""
 
     requirements: list[Literal[MEASURE_NAMES]] | None = None
 
@@ -224,7 +224,7 @@ class TolerancesSection(section_base(Tolerances, meta=TOLERANCE_KEYS)):
 
 class OffsetSection(section_base(OffsetOptions)):
     """Layer distances in mm (signed, along the face normals); ``null``: ``[0, -beam_depth]``
-    (defaults and bounds: :class:`fabricate.options.OffsetOptions`)."""
+    (defaults and bounds: :class:`fabricate.app.options.OffsetOptions`)."""
 
     @field_validator("distances")
     @classmethod
@@ -241,7 +241,7 @@ class OutputsSection(section_base(OutputsOptions, extra={"nesting": (NestingSect
         default_factory=NestingSection))}, order=_OUTPUT_KEYS[:_OUTPUT_KEYS.index("layout_plan") + 1] + ["nesting"]
         + _OUTPUT_KEYS[_OUTPUT_KEYS.index("layout_plan") + 1:])):
     """Which files to write (``true``/``false``); report.json is always written (defaults and
-    what each key means: :class:`fabricate.options.OutputsOptions`).
+    what each key means: :class:`fabricate.app.options.OutputsOptions`).
 
     ``check``: how the written files are re-validated (``fabricate.check``):
     ``full`` (every check, with OpenCASCADE reading model.step back: about 10 ms
@@ -279,7 +279,7 @@ _SECTIONS = {
 
 class RunConfig(section_base(RunOptions, extra=_SECTIONS, order=["name", *_SECTIONS, "units", "scale"])):
     """A whole run configuration (one YAML file): the sections and the keys of
-    :class:`fabricate.options.RunOptions`."""
+    :class:`fabricate.app.options.RunOptions`."""
 
     _source: Path | None = PrivateAttr(default=None)
 
@@ -310,7 +310,7 @@ class RunConfig(section_base(RunOptions, extra=_SECTIONS, order=["name", *_SECTI
 
 # -- loading ---------------------------------------------------------------
 def load_config(path: str | Path, overrides: dict[str, Any] | None = None) -> RunConfig:
-    """Read and validate a YAML config file (read by :func:`fabricate.config_yaml.read_config`).
+    """Read and validate a YAML config file (read by :func:`fabricate.app.config_yaml.read_config`).
 
     overrides : ``{"parts.glass_thickness": 8, ...}`` applied to the YAML data
         before validation (the ``--set`` of ``fabricate run`` / ``batch``).
@@ -391,7 +391,7 @@ def _safe_name(stem: str) -> str:
 
 def _copy(data: Any, source: Path | str, depth: int = 0) -> Any:
     """A deep copy of nested dicts and lists (YAML aliases become separate copies), at most
-    :data:`~fabricate.config_yaml.MAX_DEPTH` deep."""
+    :data:`~fabricate.app.config_yaml.MAX_DEPTH` deep."""
     if depth > MAX_DEPTH:
         raise ConfigError(f"{source}: nested deeper than {MAX_DEPTH} levels; expected a config of sections and keys")
     if isinstance(data, dict):

@@ -1,6 +1,6 @@
 """The base of every config section: unknown keys refused, strict types, finite numbers, YAML's
-``off`` / ``on`` read as the word where a key allows the word (see :mod:`fabricate.config`);
-:func:`section_base` derives a section from a frozen option object (:mod:`fabricate.options`)."""
+``off`` / ``on`` read as the word where a key allows the word (see :mod:`fabricate.app.config`);
+:func:`section_base` derives a section from a frozen option object (:mod:`fabricate.app.options`)."""
 from __future__ import annotations
 
 import dataclasses
@@ -54,7 +54,7 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
                  order: typing.Sequence[str] | None = None) -> type[Section]:
     """A :class:`Section` whose keys are the fields of the frozen dataclass ``options``: each key's
     default is the field's, its bounds, alias, unit and help those of the field metadata
-    (:func:`fabricate.options.option`; ``meta`` adds to it by field name, for an option class that has
+    (:func:`fabricate.app.options.option`; ``meta`` adds to it by field name, for an option class that has
     none, like :class:`optimize.tolerances.Tolerances`).  A ``tuple[X, ...]`` field is a YAML list
     (with ``items`` bounds on each item).  ``extra``: further keys ``{name: (annotation, Field)}`` of
     the section only (nested sections); ``order``: the order of the keys.  Subclass the result to add

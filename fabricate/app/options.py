@@ -2,8 +2,8 @@
 
 Each class is a frozen dataclass whose fields carry their default, their
 bounds, unit and help in the field metadata (:func:`option`).  The config
-sections of :mod:`fabricate.config` are derived from them
-(:func:`fabricate.config_section.section_base`), and the command line reads
+sections of :mod:`fabricate.app.config` are derived from them
+(:func:`fabricate.app.config_section.section_base`), and the command line reads
 its defaults from them, so every default is written once.  This module imports
 no pydantic and nothing heavy (``fabricate --help`` reads it).
 

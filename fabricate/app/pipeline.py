@@ -1,13 +1,13 @@
 """The whole run: input -> optimize -> offset -> CAD -> structure -> exports -> report.
 
-:func:`run_pipeline` drives the stages of :mod:`fabricate.stages` in order (each a function
-from the config and earlier records to its record, :mod:`fabricate.records`) and
+:func:`run_pipeline` drives the stages of :mod:`fabricate.app.stages` in order (each a function
+from the config and earlier records to its record, :mod:`fabricate.app.records`) and
 writes everything into ``<out_root>/<name>/``: the files are built in a hidden
 temporary folder beside the target that is renamed into place only after the
 report and the run marker are written, so a failed or interrupted run never
 leaves a folder that looks complete.  What a run may replace (only a finished
 run of this tool, only when asked, and a passing one never by a failing one)
-is :mod:`fabricate.runfolder`'s decision.
+is :mod:`fabricate.app.runfolder`'s decision.
 
 Outcomes (``RunSummary.status`` -> exit code), in this precedence when several
 apply: ``error`` 1 (a bug) > ``bad_input`` 2 > ``export_failed`` 4 (files written
@@ -32,7 +32,7 @@ from .config import RunConfig
 from .options import COMMAND
 from .progress import NullProgress
 from .records import Outcome, RunRecord, frozen
-from .report.measures import collect_measures
+from ..report.measures import collect_measures
 from .requirements import apply_requirements, warnings
 
 log = logging.getLogger(__name__)
@@ -71,7 +71,7 @@ class RunSummary:
 
 
 def run_folder(config: RunConfig, out_root: str | Path | None = None) -> Path:
-    """``<out_root>/<name>`` (``out_root`` default: ``./outputs``, :data:`fabricate.options.COMMAND`)."""
+    """``<out_root>/<name>`` (``out_root`` default: ``./outputs``, :data:`fabricate.app.options.COMMAND`)."""
     root = Path(out_root) if out_root is not None else Path.cwd() / COMMAND.out_root
     return root / config.name
 
@@ -81,9 +81,9 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
     """Run every stage for ``config`` and write ``<out_root>/<config.name>/``.
 
     out_root : parent folder of the run folder (default ``./outputs``).
-    progress : a :class:`fabricate.progress.NullProgress`-like reporter (default: silent).
+    progress : a :class:`fabricate.app.progress.NullProgress`-like reporter (default: silent).
     force : replace an earlier finished run there (also ``outputs.overwrite: true``); see
-        :mod:`fabricate.runfolder` for what a run may replace, and when it writes beside.
+        :mod:`fabricate.app.runfolder` for what a run may replace, and when it writes beside.
 
     Returns the :class:`RunSummary` (exit code 0, 3 or 4; ``out_dir`` is where it was written).
     Raises ConfigError / MeshError (bad input, exit 2: also a folder in the way or busy),

@@ -1,7 +1,7 @@
 """The typed records that travel between the stages of a run.
 
-Each stage of :mod:`fabricate.stages` is a function from the config and the
-records of earlier stages to its own record; :func:`fabricate.pipeline.run_pipeline`
+Each stage of :mod:`fabricate.app.stages` is a function from the config and the
+records of earlier stages to its own record; :func:`fabricate.app.pipeline.run_pipeline`
 chains them and collects everything in one :class:`RunRecord`, from which the
 report is built (:func:`fabricate.report.write_report`)::
 
@@ -29,11 +29,11 @@ if TYPE_CHECKING:  # pragma: no cover - names for annotations only
     from optimize.mesh import Mesh
     from optimize.result import OptimizeResult
 
-    from .cad.parts import Parts
-    from .cad.spec import PartSpec
+    from ..cad.parts import Parts
+    from ..cad.spec import PartSpec
     from .config import RunConfig
-    from .offset.structure import OffsetStructure
-    from .structure.check import StructureCheck
+    from ..offset.structure import OffsetStructure
+    from ..structure.check import StructureCheck
 
 EMPTY: Mapping[str, Any] = MappingProxyType({})
 
@@ -129,7 +129,7 @@ class ExportsRecord:
 
 @dataclass(frozen=True)
 class Outcome:
-    """How a run ends: status (see :data:`fabricate.pipeline.PRECEDENCE`), its exit code, the names
+    """How a run ends: status (see :data:`fabricate.app.pipeline.PRECEDENCE`), its exit code, the names
     of what failed (measures, ``check:<name>``, ``parts``) and a one-line message naming them."""
 
     status: str

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fabricate.config import MEASURE_NAMES as MEASURES  # noqa: F401  (the names requirements accepts)
+from fabricate.app.config import MEASURE_NAMES as MEASURES  # noqa: F401  (the names requirements accepts)
 
 
 def default_requirements(target: str) -> tuple[str, ...]:

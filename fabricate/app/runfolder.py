@@ -62,7 +62,7 @@ def manifest(folder: Path) -> dict[str, list[int]]:
 
 def write_marker(folder: Path, facts: dict) -> None:
     """Write :data:`MARKER` into ``folder`` (last, so the manifest covers every other file)."""
-    from . import __version__
+    from .. import __version__
 
     data = {"tool": "conical-fab", "version": __version__,
             "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **facts,

@@ -1,7 +1,7 @@
 """The stages of a run, each a thin adapter around the public API of its owner.
 
 Every stage is a function from the config and the records of earlier stages
-(:mod:`fabricate.records`) to its own record; it calls one stage of the product
+(:mod:`fabricate.app.records`) to its own record; it calls one stage of the product
 (never reimplements it) and puts a one-line note for the progress bar in the
 record's ``line``.  Files go into the work folder the pipeline gives the exports.
 
@@ -226,9 +226,16 @@ def stage_structure(cfg, off: OffsetRecord, parts: PartsRecord) -> StructureReco
     ``structure.check`` is ``report`` or ``enforce``."""
     if cfg.structure.check == "off":
         return StructureRecord(line="off (structure.check: off)")
+    if parts.parts is None and parts.skipped:
+        msg = f"structure check skipped: {parts.skipped}"
+        return StructureRecord(report=frozen({"check": cfg.structure.check, "skipped": msg}), notes=(msg,),
+                               line="skipped: no parts")
+    from fabricate.structure.outputs import structure_measures
     from fabricate.structure.run import check_run
 
-    return check_run(cfg, off, parts)
+    chk, rep, notes, line = check_run(cfg.structure, off.structure, parts.spec)
+    return StructureRecord(check=chk, report=frozen(rep), measures=frozen(structure_measures(chk)),
+                           notes=tuple(notes), line=line)
 
 
 # -- exports -------------------------------------------------------------------------

@@ -72,7 +72,7 @@ def parts_summary(parts) -> dict[str, Any] | None:
 
 
 def build_report(run, pictures: dict[str, str], own_files: Mapping[str, Mapping] | None = None) -> dict[str, Any]:
-    """The report dict of a finished run, from ``run`` (:class:`fabricate.records.RunRecord`) alone;
+    """The report dict of a finished run, from ``run`` (:class:`fabricate.app.records.RunRecord`) alone;
     ``pictures`` and ``own_files`` are what the report stage itself wrote (captions, facts)."""
     cfg = run.config
     result = run.optimize.result

@@ -70,7 +70,7 @@ def entry(values: np.ndarray, tolerance: float | None, unit: str, element: str, 
 
 def collect_measures(cfg, inp, opt, off) -> dict[str, dict]:
     """All measures of a run: ``cfg`` its RunConfig, ``inp``, ``opt``, ``off`` the records of its input,
-    optimize and offset stages (:mod:`fabricate.records`)."""
+    optimize and offset stages (:mod:`fabricate.app.records`)."""
     tol = cfg.tolerances.to_tolerances()
     mesh: Mesh = opt.mesh
     target = inp.target

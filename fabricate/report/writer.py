@@ -71,7 +71,7 @@ def write_pictures(run) -> dict[str, str]:
 
 
 def write_report(run) -> list[str]:
-    """Every report file of ``run`` (:class:`fabricate.records.RunRecord`, the only input) into its
+    """Every report file of ``run`` (:class:`fabricate.app.records.RunRecord`, the only input) into its
     work folder; their names."""
     out, cfg, mesh = run.workdir, run.config, run.optimize.mesh
     written: list[str] = []

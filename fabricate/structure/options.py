@@ -13,7 +13,7 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from fabricate.config_section import Section  # the strict base of every section (no import of fabricate.config)
+from fabricate.app.config_section import Section  # the strict base of every section (no import of fabricate.app.config)
 
 from .sections import SectionProperties, section
 

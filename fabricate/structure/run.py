@@ -1,10 +1,11 @@
 """The structure stage of a run: check the frame, keep the results, draw the pictures.
 
-``check_run(cfg, offset, parts)`` reads the offset structure and the part spec from their
-records, runs :func:`fabricate.structure.check.check_structure`, and returns the
-:class:`fabricate.records.StructureRecord`: ``check`` (the StructureCheck), ``report``
-(report.json's ``structure``) and ``measures`` (with the check's pass/fail, enforced for
-``structure.check: enforce``: exit 3).  :func:`write_pictures` draws its pictures for the report.
+``check_run(options, structure, spec)`` runs :func:`fabricate.structure.check.check_structure`
+on the offset structure with the part spec and returns the check, report.json's ``structure``,
+the run's notes and a one-line result; the application's structure stage
+(``fabricate.app.stages.stage_structure``) keeps them in its record, with the measures of
+:func:`fabricate.structure.outputs.structure_measures` (enforced for ``structure.check:
+enforce``: exit 3).  :func:`write_pictures` draws its pictures for the report.
 """
 from __future__ import annotations
 
@@ -14,20 +15,16 @@ from .check import beam_table, check_structure, report
 from .outputs import structure_measures
 
 
-def check_run(cfg, off, built):
-    """The :class:`fabricate.records.StructureRecord` of the run: ``off`` (OffsetRecord) and ``built``
-    (PartsRecord) give the beam network and the part spec."""
-    from fabricate.records import StructureRecord, frozen
+def check_run(opt, structure, spec) -> tuple:
+    """The structural check of a run: ``opt`` the config's ``structure`` section, ``structure`` the
+    OffsetStructure, ``spec`` the PartSpec the beams were cut with.
 
-    opt = cfg.structure
-    if built.parts is None and built.skipped:
-        msg = f"structure check skipped: {built.skipped}"
-        return StructureRecord(report=frozen({"check": opt.check, "skipped": msg}), notes=(msg,),
-                               line="skipped: no parts")
-    spec = built.spec
-    chk = check_structure(off.structure, opt, spec)
+    Returns ``(check, report, notes, line)``: the StructureCheck, report.json's ``structure`` (with
+    the beam table and the notes), notes for the run (what the check and the cut list disagree on)
+    and a one-line result for the progress bar."""
+    chk = check_structure(structure, opt, spec)
     rep = report(chk)
-    d0, d1 = off.structure.beam_span
+    d0, d1 = structure.beam_span
     built_name = f"plate {spec.beam_width:g}x{abs(d1 - d0):g}"
     notes = []
     if chk.section.name != built_name:
@@ -43,8 +40,7 @@ def check_run(cfg, off, built):
     worst = u["worst"][0]["id"] if u["worst"] else "-"
     line = (f"max utilization {u['max']:.3g} ({worst}, {rep['governing_combination']}), deflection "
             f"{rep['deflection']['max_ratio']:.3g} of {rep['deflection']['limit']}")
-    return StructureRecord(check=chk, report=frozen(rep), measures=frozen(structure_measures(chk)),
-                           notes=tuple(f"structure: {n}" for n in notes), line=line)
+    return chk, rep, [f"structure: {n}" for n in notes], line
 
 
 def write_pictures(chk, out, name: str) -> dict[str, str]:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 
 def register(sub) -> None:
-    from fabricate.options import COMMAND
+    from fabricate.app.options import COMMAND
 
     p = sub.add_parser(
         "batch", help="run many configs / a parameter sweep in parallel and tabulate them",
@@ -39,12 +39,12 @@ def run(args) -> int:
 
     from rich.console import Console
 
-    from fabricate.batch import exit_code, expand_jobs, parse_sets, print_table, run_batch, write_csv
+    from fabricate.app.batch import exit_code, expand_jobs, parse_sets, print_table, run_batch, write_csv
     from optimize.errors import ConfigError
 
     if args.workers is not None and args.workers < 1:
         raise ConfigError(f"--workers {args.workers}: expected a positive number of worker processes")
-    from fabricate.runfolder import make_parent
+    from fabricate.app.runfolder import make_parent
 
     csv_path = Path(args.csv) if args.csv else Path(args.out) / "batch_summary.csv"
     make_parent(Path(args.out) / "x")

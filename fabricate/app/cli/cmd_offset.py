@@ -69,7 +69,7 @@ def run(args) -> int:
     from optimize.tolerances import Tolerances
 
     from .. import runfolder
-    from ..offset import offset_structure, require_pq, write_offset_files
+    from ...offset import offset_structure, require_pq, write_offset_files
     from .units import UNIT_TO_MM, read_mm
 
     texts, values = parse_distances(args.distances)

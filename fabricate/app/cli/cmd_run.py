@@ -6,7 +6,7 @@ from pathlib import Path
 
 
 def register(sub) -> None:
-    from fabricate.options import COMMAND
+    from fabricate.app.options import COMMAND
 
     p = sub.add_parser(
         "run", help="run the whole pipeline for one YAML config",
@@ -37,10 +37,10 @@ def register(sub) -> None:
 def run(args) -> int:
     from rich.console import Console
 
-    from fabricate.batch import parse_sets
-    from fabricate.config import load_config
-    from fabricate.pipeline import STAGES, run_folder, run_pipeline
-    from fabricate.progress import NullProgress, RichProgress
+    from fabricate.app.batch import parse_sets
+    from fabricate.app.config import load_config
+    from fabricate.app.pipeline import STAGES, run_folder, run_pipeline
+    from fabricate.app.progress import NullProgress, RichProgress
     from optimize.errors import ConfigError
 
     sets = parse_sets(args.sets)

@@ -24,9 +24,9 @@ def run(args) -> int:
     import json
     from pathlib import Path
 
-    from fabricate import stages
-    from fabricate.batch import parse_sets
-    from fabricate.config import load_config
+    from fabricate.app import stages
+    from fabricate.app.batch import parse_sets
+    from fabricate.app.config import load_config
     from fabricate.structure.sizing import size_sections
     from optimize.atomic import atomic_open
     from optimize.errors import ConfigError

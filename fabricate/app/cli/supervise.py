@@ -8,7 +8,7 @@ supervisor: it forwards SIGINT / SIGTERM / SIGHUP to the child (which turns
 the first into KeyboardInterrupt and unwinds, removing its temporary folders;
 a batch stops its workers), and when the group has not ended :data:`GRACE` seconds later it kills
 it (batch workers included) and removes the temporary folders the killed
-processes left (:func:`fabricate.runfolder.clean_stale_parts`).
+processes left (:func:`fabricate.app.runfolder.clean_stale_parts`).
 Ctrl-Z stops the whole group and ``fg`` resumes it.
 """
 from __future__ import annotations
@@ -152,8 +152,8 @@ def _watch(pid: int, folders: Callable[[], Iterable[Path]]) -> int:
 def _clean(folders: Callable[[], Iterable[Path]]) -> list[str]:
     """Remove the temporary folders under ``folders`` whose owner process (on this host) is gone,
     waiting a second for killed ones to go, and the lock files no process holds; the removed
-    folders (:func:`fabricate.runfolder.remove_dead_parts`, the one owner-record check)."""
-    from fabricate.runfolder import remove_dead_parts  # light: no solver, no CAD kernel
+    folders (:func:`fabricate.app.runfolder.remove_dead_parts`, the one owner-record check)."""
+    from fabricate.app.runfolder import remove_dead_parts  # light: no solver, no CAD kernel
 
     removed: list[str] = []
     for folder in folders():
