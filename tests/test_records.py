@@ -151,3 +151,22 @@ def test_one_place_decides_the_method_of_a_strip_run(tmp_path):
     assert method == "default" and kwargs["formulation"] == "auto"
     sqp = tiny_config(tmp_path, optimize={"target": "strip", "method": "sqp"})
     assert stages.optimizer_call(sqp, "strip")[0] == "sqp" and "formulation" not in stages.optimizer_call(sqp, "strip")[1]
+
+
+def test_the_readme_layout_shows_every_package_and_the_stages_in_run_order():
+    import re
+    from pathlib import Path
+
+    from fabricate.app.pipeline import STAGES
+
+    repo = Path(__file__).resolve().parents[1]
+    text = (repo / "README.md").read_text()
+    layout = text[text.index("## Layout"):]
+    layout = layout[:layout.index("\n## ", 1)]
+    packages = sorted(p.parent.name for p in (repo / "fabricate").glob("*/__init__.py"))
+    assert packages and all(re.search(rf"^  {name}/ ", layout, re.M) for name in packages), packages
+    shown = re.findall(r"stage_(\w+)", layout)
+    assert shown == list(STAGES), shown  # the picture's stages are the pipeline's, in its order
+    for name in ("InputRecord", "OptimizeRecord", "OffsetRecord", "PartsRecord", "StructureRecord",
+                 "ExportsRecord", "RunRecord"):
+        assert name in layout and hasattr(records, name), name
