@@ -170,3 +170,19 @@ def test_the_readme_layout_shows_every_package_and_the_stages_in_run_order():
     for name in ("InputRecord", "OptimizeRecord", "OffsetRecord", "PartsRecord", "StructureRecord",
                  "ExportsRecord", "RunRecord"):
         assert name in layout and hasattr(records, name), name
+
+
+def test_fabricate_optimize_runs_a_strip_with_the_method_a_run_would_use(tmp_path, capsys):
+    """``fabricate optimize --target strip`` (method default) runs what a config with target strip runs,
+    instead of refusing the default method."""
+    from fabricate.app.cli import main
+    from optimize import shapes
+    from optimize.hierarchy import STRIP_METHOD
+    from optimize.io import write_mesh
+
+    strip = shapes.perturbed(shapes.grid(6, 2, size=(5, 1), height=lambda x, y: 0.1 * x * y), 0.1, seed=3)
+    write_mesh(tmp_path / "strip.obj", strip)
+    code = main(["optimize", str(tmp_path / "strip.obj"), "-o", str(tmp_path / "out.obj"), "--target", "strip",
+                 "--max-iter", "30", "--progress", "off"])
+    out = capsys.readouterr().out
+    assert code in (0, 3) and f", {STRIP_METHOD}/strip)" in out, out

@@ -78,17 +78,24 @@ def stage_input(cfg) -> InputRecord:
 
 
 # -- optimize ------------------------------------------------------------------
+def method_for(target: str, method: str) -> str:
+    """The optimizer method that runs for ``method`` asked and ``target``: ``strip`` has no default
+    solver, so ``default`` means the paper's :data:`optimize.hierarchy.STRIP_METHOD` there (the one
+    place this is decided for ``fabricate run`` and ``fabricate optimize``)."""
+    if target == "strip" and method == "default":
+        from optimize.hierarchy import STRIP_METHOD
+
+        return STRIP_METHOD
+    return method
+
+
 def optimizer_call(cfg, target: str) -> tuple[str, dict[str, Any]]:
     """``(method, keyword arguments)`` of the optimizer for the config's ``optimize`` section: the one
     place that decides which method runs.  Target ``strip`` has no default solver: ``default`` means
     the paper's :data:`optimize.hierarchy.STRIP_METHOD`; the keys of the default method (formulation,
     linear solver, torsion-free beams, convexity) go only where the default method was asked for."""
     opt = cfg.optimize
-    method = opt.method
-    if target == "strip" and method == "default":
-        from optimize.hierarchy import STRIP_METHOD
-
-        method = STRIP_METHOD
+    method = method_for(target, opt.method)
     kwargs = dict(method=method, fixed=_fixed(opt.fixed), glide_boundary=opt.glide_boundary,
                   fairness=opt.fairness, closeness=opt.closeness, tol=cfg.tolerances.to_tolerances(),
                   max_iter=opt.max_iter)
