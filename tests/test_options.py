@@ -8,22 +8,24 @@ from pydantic import ValidationError
 from fabricate.app import options
 from fabricate.app.config import OffsetSection, OutputsSection, RunConfig, TolerancesSection
 from fabricate.app.config_section import OPTIONS, Section
+from fabricate.structure.options import LoadsOption, LoadsOptions, StructureOptions, StructureSection
 from optimize.tolerances import Tolerances
 
 
-def _plain(value):
-    return list(value) if isinstance(value, tuple) else value
+def _frozen(value):
+    return tuple(value) if isinstance(value, list) else value
 
 
 @pytest.mark.parametrize("section,cls", [(OffsetSection, options.OffsetOptions),
                                          (OutputsSection, options.OutputsOptions),
-                                         (TolerancesSection, Tolerances), (RunConfig, options.RunOptions)])
+                                         (TolerancesSection, Tolerances), (RunConfig, options.RunOptions),
+                                         (StructureSection, StructureOptions), (LoadsOption, LoadsOptions)])
 def test_every_config_default_is_the_option_objects(section, cls):
     assert OPTIONS[section.__mro__[1]] is cls  # derived, not written again
     defaults = cls()
     for f in dataclasses.fields(cls):
         key = section.model_fields[f.name]
-        assert key.get_default(call_default_factory=True) == _plain(getattr(defaults, f.name)), f.name
+        assert _frozen(key.get_default(call_default_factory=True)) == getattr(defaults, f.name), f.name
         for bound in ("ge", "gt", "le", "lt"):
             value = f.metadata.get(bound, (options.TOLERANCE_KEYS.get(f.name, {}) if cls is Tolerances else {})
                                    .get(bound))
@@ -46,8 +48,6 @@ def test_a_derived_key_keeps_its_bounds_alias_and_strictness():
 
 
 def test_the_structure_section_is_on_the_strict_base():
-    from fabricate.structure.options import LoadsOption, StructureSection
-
     assert issubclass(StructureSection, Section) and issubclass(LoadsOption, Section)
     for bad in ({"loads": {"snow": float("inf")}}, {"loads": {"snow": "0.8"}}, {"gamma_m0": True}):
         with pytest.raises(ValidationError):
