@@ -323,14 +323,12 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
     volume = np.bincount(face_solid[face_solid >= 0], weights=vol_face[face_solid >= 0], minlength=n_s)
     out = {}
     for si, (sid, label) in enumerate(S):
-        fl = s_faces[s_first[si]:s_first[si + 1]].tolist()
         name = names.get(int(sid)) or label.decode("ascii", "replace")
-        out[name] = {
-            "faces": [P[first[f]:first[f] + counts[f]] for f in fl],
+        out[name] = _Facts(P, first, counts, s_faces[s_first[si]:s_first[si + 1]], {
             "volume_mm3": float(volume[si]), "closed": bool(closed[si]), "euler": int(euler[si]),
             "loops_closed": bool(lc[si]), "normals_agree": bool(ag[si]), "simple": bool(sm[si]),
             "on_plane_mm": float(plane_err[si]), "on_line_mm": float(line_err[si]),
-            "colour": colours.get(int(sid)), "named": int(sid) in names}
+            "colour": colours.get(int(sid)), "named": int(sid) in names})
     unc = re.search(rb"LENGTH_MEASURE\(\s*([-+0-9.EeDd]+)\s*\)\s*,\s*#\d+\s*,\s*'distance_accuracy_value'", data)
     head = data[: 1 << 16].replace(b" ", b"")
     file_facts = {"unit_mm": b"SI_UNIT(.MILLI.,.METRE.)" in head,
@@ -339,6 +337,22 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
                   "solids": len(S), "unnamed": sum(not f["named"] for f in out.values()),
                   "duplicate_names": len(S) - len(out), "reader": "independent STEP text reader"}
     return out, file_facts
+
+
+class _Facts(dict):
+    """One solid's facts; its ``faces`` (list of ``(k, 3)`` loops) are cut from the file's loop
+    array when first asked for (most checks never ask)."""
+
+    def __init__(self, P, first, counts, faces, facts):
+        super().__init__(facts)
+        self._loops = (P, first, counts, faces)
+
+    def __missing__(self, key):
+        if key != "faces":
+            raise KeyError(key)
+        P, first, counts, faces = self._loops
+        self["faces"] = [P[first[f]:first[f] + counts[f]] for f in faces.tolist()]
+        return self["faces"]
 
 
 def _small(K, kind: str) -> list[tuple]:

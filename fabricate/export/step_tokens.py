@@ -103,6 +103,33 @@ def _eight_digits(x: np.ndarray, n: np.ndarray) -> np.ndarray:
     return v.astype(np.int64)
 
 
+def _word(b: bytes) -> np.uint64:
+    return np.uint64(int.from_bytes(b, "little"))
+
+
+def _ops(pattern: str) -> list[tuple[str, object]]:
+    """A template as operations: ``("#", None)``, ``("?", b".T.<literals>")`` (a flag and up to five
+    literals after it), ``("N", literals after it)``, ``("lit", up to 8 bytes)``."""
+    out: list[tuple[str, object]] = []
+    i = 0
+    while i < len(pattern):
+        ch = pattern[i]
+        if ch == "#":
+            out.append(("#", None))
+            i += 1
+        elif ch == "N":
+            out.append(("N", len(pattern) - i - 1))
+            i += 1
+        else:
+            j = i + 1 if ch == "?" else i
+            while j < len(pattern) and pattern[j] not in "#?N" and j - i < (5 if ch == "?" else 8):
+                j += 1
+            lit = pattern[i + 1 if ch == "?" else i:j].encode()
+            out.append(("?", b".T." + lit) if ch == "?" else ("lit", lit))
+            i = j
+    return out
+
+
 class Records:
     """Every record of a DATA section.
 
@@ -290,23 +317,25 @@ class Records:
         pos = close + 1
         ok = np.ones(len(rows), bool)
         refs, flags, k, real = [], [], 0, None
-        for at, ch in enumerate(pattern):
-            if ch == "#":
+        for op, arg in _ops(pattern):
+            if op == "#":
                 j = lo + k
                 ok &= self.hpos[j] == pos
                 refs.append(self.hval[j])
                 pos = pos + 1 + self.hlen[j]
                 k += 1
-            elif ch == "?":
-                ok &= (buf[pos] == 46) & (buf[pos + 2] == 46) & ((buf[pos + 1] == 84) | (buf[pos + 1] == 70))
-                flags.append(buf[pos + 1] == 84)
-                pos = pos + 3
-            elif ch == "N":
+            elif op == "?":                                      # .T. or .F., then literals
+                w = self.u64[pos] & _MASKS[len(arg)]
+                t = w == _word(b".T." + arg[3:])
+                ok &= t | (w == _word(b".F." + arg[3:]))
+                flags.append(t)
+                pos = pos + len(arg)
+            elif op == "N":
                 real = pos
-                pos = self.end[rows] - (len(pattern) - at - 1)
-            else:
-                ok &= buf[pos] == ord(ch)
-                pos = pos + 1
+                pos = self.end[rows] - arg
+            else:                                                # up to 8 literal bytes at once
+                ok &= (self.u64[pos] & _MASKS[len(arg)]) == _word(arg)
+                pos = pos + len(arg)
         ok &= pos == self.end[rows]
         self._fail(rows, ok, what, f"its arguments are not ('<string>'{pattern}")
         if real is not None:
