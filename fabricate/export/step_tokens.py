@@ -308,7 +308,6 @@ class Records:
         once, followed by literals to the end); other characters literal.  Returns ``(refs
         ``[(r,) int] * n#``, flags ``[(r,) bool] * n?``, reals ``(r, per) float`` or None)``.
         """
-        buf = self.buf
         lo = self.ref_lo[rows]
         n_ref = pattern.count("#")
         count = self.ref_hi[rows] - lo
