@@ -103,3 +103,16 @@ def test_svg_without_a_group_or_not_xml_fails(folder, tmp_path):
     assert c["pass"] is False and c["missing"] == ["P0001"]
     (bad / "outlines.svg").write_text(text.replace("</g>", "", 1))
     assert "not well-formed" in check_outputs(bad)["checks"]["svg"]["error"]
+
+
+def test_dxf_reader_reads_crlf_the_same_and_refuses_a_bad_group_code(folder, tmp_path):
+    from fabricate.export.dxf_text import read_outlines_text
+
+    mine, facts = read_outlines_text(folder / "outlines.dxf")
+    raw = (folder / "outlines.dxf").read_bytes()
+    (tmp_path / "crlf.dxf").write_bytes(raw.replace(b"\n", b"\r\n"))
+    theirs, tf = read_outlines_text(tmp_path / "crlf.dxf")
+    assert tf == facts and list(theirs) == list(mine) and all(np.array_equal(mine[k], theirs[k]) for k in mine)
+    (tmp_path / "bad.dxf").write_bytes(raw.replace(b"\n 10\n", b"\n1x\n", 1))
+    with pytest.raises(ExportError, match="group code is not an integer"):
+        read_outlines_text(tmp_path / "bad.dxf")

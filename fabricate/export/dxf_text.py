@@ -26,42 +26,75 @@ from optimize.errors import ExportError
 APPID = "CONICAL_FAB"
 
 
+CHUNK = 1 << 22
+
+
+def _codes(buf: np.ndarray, data: bytes, cs: np.ndarray, ce: np.ndarray, path) -> np.ndarray:
+    """``(n,)`` group codes of the code lines ``data[cs:ce]``: up to 8 characters, spaces then digits,
+    read eight bytes at a time; other lines (a sign, more characters) by ``np.fromstring``."""
+    L = ce - cs
+    if len(cs) and (L >= 1).all() and (L <= 8).all():
+        words = np.ndarray(shape=(len(buf) - 8,), dtype="<u8", buffer=data, strides=(1,))  # unaligned
+        W = words[cs].view(np.uint8).reshape(-1, 8)                          # (n, 8) the line's bytes
+        inside = np.arange(8)[None, :] < L[:, None]
+        space = W == 32
+        digit = (W >= 48) & (W <= 57)
+        lead = np.logical_and.accumulate(space, axis=1)                      # spaces before the digits
+        ok = np.all(~inside | digit | lead, axis=1) & np.any(inside & digit, axis=1)
+        if ok.all():
+            x = np.ascontiguousarray(np.where(space, 48, W).astype(np.uint8)).view("<u8")[:, 0]
+            k = (np.uint64(8) - L.astype(np.uint64)) * np.uint64(8)
+            v = (x - np.uint64(0x3030303030303030)) << k
+            v = (v * np.uint64(10) + (v >> np.uint64(8))) & np.uint64(0x00FF00FF00FF00FF)
+            v = (v * np.uint64(100) + (v >> np.uint64(16))) & np.uint64(0x0000FFFF0000FFFF)
+            v = (v * np.uint64(10000) + (v >> np.uint64(32))) & np.uint64(0xFFFFFFFF)
+            return v.astype(np.int64)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        try:
+            codes = np.fromstring(b" ".join([data[a:b] for a, b in zip(cs.tolist(), ce.tolist())]),
+                                  dtype=np.int64, sep=" ")
+        except ValueError:
+            codes = np.zeros(0, np.int64)
+    if codes.size != len(cs):
+        raise ExportError(f"{path}: a group code is not an integer; not an ASCII DXF file")
+    return codes
+
+
 def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
     """``({part id: CUT outline (k, 2)}, facts)``; facts: ``lint`` (problems), ``audit_errors``
     (their count), ``units`` ($INSUNITS), ``texts`` (TEXT entities on ETCH)."""
     path = Path(path)
     try:
-        data = path.read_bytes().replace(b"\r", b"")
+        data = path.read_bytes()
     except OSError as exc:
         raise ExportError(f"{path}: cannot read the DXF file ({exc.strerror or exc})") from None
-    lines = data.split(b"\n")
-    del data
-    if lines and lines[-1] == b"":
-        lines.pop()
+    if b"\r" in data:
+        data = data.replace(b"\r", b"")
+    n_data = len(data)
+    data += b"\n" + b" " * 16                      # the last line ends; words never run off the end
+    buf = np.frombuffer(data, np.uint8)
+    ends = np.concatenate([np.flatnonzero(buf[c:min(c + CHUNK, n_data + 1)] == 10) + c
+                           for c in range(0, n_data + 1, CHUNK)])
+    starts = np.concatenate([[0], ends[:-1] + 1])
+    if len(ends) and starts[-1] == n_data:          # the newline after the last line
+        starts, ends = starts[:-1], ends[:-1]
     lint: list[str] = []
-    if len(lines) % 2:
-        lint.append(f"{len(lines)} lines: a group code without its value")
-        lines = lines[:-1]
-    raw, vals = lines[0::2], lines[1::2]
-    del lines
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        try:
-            codes = np.fromstring(b" ".join(raw), dtype=np.int64, sep=" ")
-        except ValueError:
-            codes = np.zeros(0, np.int64)
-    if codes.size != len(raw):
-        raise ExportError(f"{path}: a group code is not an integer; not an ASCII DXF file")
+    if len(starts) % 2:
+        lint.append(f"{len(starts)} lines: a group code without its value")
+        starts, ends = starts[:-1], ends[:-1]
+    cs, ce, vs, ve = starts[0::2], ends[0::2], starts[1::2], ends[1::2]
+    codes = _codes(buf, data, cs, ce, path)
 
     def pick(idx) -> np.ndarray:
         """The values at ``idx`` (indices or mask), stripped, as an object array of str."""
         idx = np.flatnonzero(idx) if getattr(idx, "dtype", None) == bool else np.asarray(idx, np.int64)
-        return np.array([vals[i].strip().decode("utf-8", "replace") for i in idx.tolist()] + [None],
-                        dtype=object)[:-1]
+        return np.array([data[a:b].strip().decode("utf-8", "replace")
+                         for a, b in zip(vs[idx].tolist(), ve[idx].tolist())] + [None], dtype=object)[:-1]
 
     def numbers(idx, dtype, what: str) -> np.ndarray:
         idx = np.flatnonzero(idx)
-        text = b" ".join([vals[i] for i in idx.tolist()])
+        text = b" ".join([data[a:b] for a, b in zip(vs[idx].tolist(), ve[idx].tolist())])
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", DeprecationWarning)
             try:
@@ -72,9 +105,10 @@ def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
             raise ExportError(f"{path}: {what} is not a number")
         return x.astype(dtype)
 
+    vals_last = data[int(vs[-1]):int(ve[-1])] if len(vs) else b""
     zero = np.nonzero(codes == 0)[0]
     kinds = pick(zero)
-    if not len(vals) or vals[-1].strip() != b"EOF":
+    if vals_last.strip() != b"EOF":
         lint.append("the file does not end with 0/EOF")
     if int(np.sum(kinds == "SECTION")) != int(np.sum(kinds == "ENDSEC")):
         lint.append("SECTION and ENDSEC do not pair up")
@@ -82,7 +116,7 @@ def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
     nine = np.nonzero(codes == 9)[0]
     hdr = nine[pick(nine) == "$INSUNITS"]
     if hdr.size and hdr[0] + 1 < len(codes) and codes[hdr[0] + 1] == 70:
-        units = int(vals[hdr[0] + 1])
+        units = int(data[int(vs[hdr[0] + 1]):int(ve[hdr[0] + 1])])
     two = np.nonzero(codes == 2)[0]
     sec = two[pick(two) == "ENTITIES"]
     if not sec.size:
