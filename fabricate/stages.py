@@ -281,7 +281,9 @@ def stage_exports(ctx) -> str:
             ctx.files[fname].update(add_bom_columns(out / fname, ctx["statics"]))
     if cfg.outputs.wanted("cut_files"):  # one nested DXF and SVG per material and thickness
         ctx.progress.advance("exports", 1, "nested cut files")
-        ctx.files.update(export.write_cut_files(ctx["parts"], out, cfg.outputs.nesting.model_dump()))
+        nesting = cfg.outputs.nesting.model_dump()
+        ctx.values["cut_batches"] = batches = export.nest_cut_files(ctx["parts"], nesting)  # the report draws them
+        ctx.files.update(export.write_cut_files(ctx["parts"], out, nesting, batches=batches))
     if cfg.outputs.stl_parts:  # one STL per part (a welding viewer fuses the touching parts of model.stl)
         ctx.progress.advance("exports", 1, "one STL per part")
         ctx.files["stl/"] = export.write_stl_parts(ctx["parts"], out / "stl")

@@ -49,7 +49,7 @@ def write_bom(parts, path, *, mesh=None) -> dict:
             w = csv.writer(fh)
             w.writerow(COLUMNS)
             for g in parts.groups:
-                density = parts.spec.density(g.kind)
+                density = parts.spec.group_density(g)
                 weight = g.volume_mm3 * density * 1e-9
                 mass[g.kind] = mass.get(g.kind, 0.0) + float(weight.sum())
                 verts = _mesh_vertices(g, mesh)
