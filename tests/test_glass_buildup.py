@@ -248,3 +248,18 @@ def test_shipped_configs_use_overhead_build_ups():
     assert types["atrium_roof"].type == "insulated" and types["atrium_roof"].inner.laminated
     assert types["railway_station"].type == "laminated"
     assert all(b.type != "monolithic" for n, b in types.items() if n != "quickstart")
+
+
+def test_shop_limits_flag_a_unit_once_by_its_id():
+    from fabricate.cad import PartSpec, build_parts
+
+    spec = PartSpec(glass=INSULATED, joint_gap=10.0, limits={"min_corner_deg": 80.0, "max_panel_kg": 100.0})
+    parts = build_parts(dome_structure(n_around=6, k=3), spec)
+    lim = parts.report["limits"]
+    assert lim["corner"]["count"] == 12 and lim["corner"]["ids"] == sorted(set(lim["corner"]["ids"]))
+    assert all("." not in i for key in ("corner", "weight") for i in lim[key]["ids"])
+    per_unit = {}
+    for g in parts.of_kind("panel"):
+        for i, v in zip(g.ids, g.volume_mm3 * spec.group_density(g) * 1e-9):
+            per_unit[i.split(".")[0]] = per_unit.get(i.split(".")[0], 0.0) + v
+    assert set(lim["weight"]["ids"]) == {u for u, kg in per_unit.items() if kg > 100.0}

@@ -54,6 +54,13 @@ def check_limits(groups, spec) -> dict:
     limit = {"corner": f">= {lim.min_corner_deg:g} deg", "edge": f">= {lim.min_edge_mm:g} mm",
              "sheet": f"within {W:g} x {H:g} mm", "weight": f"<= {lim.max_panel_kg:g} kg"}
     out = {}
+    for key in ("corner", "edge", "sheet"):  # a glass unit is flagged once, by its id, at its worst ply
+        best: dict[str, tuple] = {}
+        for pid, value in found[key]:
+            uid = pid.split(".", 1)[0]
+            if uid not in best or (key != "sheet" and value < best[uid][1]):
+                best[uid] = (uid, value)
+        found[key] = list(best.values())
     for key, rows in found.items():
         entry = {"limit": limit[key], "count": len(rows), "ids": [r[0] for r in rows]}
         if rows:
