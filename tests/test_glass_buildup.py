@@ -263,3 +263,14 @@ def test_shop_limits_flag_a_unit_once_by_its_id():
         for i, v in zip(g.ids, g.volume_mm3 * spec.group_density(g) * 1e-9):
             per_unit[i.split(".")[0]] = per_unit.get(i.split(".")[0], 0.0) + v
     assert set(lim["weight"]["ids"]) == {u for u, kg in per_unit.items() if kg > 100.0}
+
+
+def test_occ_step_engine_names_every_ply(tmp_path):
+    from fabricate.export.step import write_step
+    from fabricate.export.step_read import read_step
+
+    parts = parts_of("lam")
+    write_step(parts, tmp_path / "m.step", engine="occ")
+    named, _ = read_step(tmp_path / "m.step")
+    assert sorted(n for n, _ in named) == sorted(p.id for p in parts)
+    assert {"P0001.1", "P0001.2", "P0001.3"} <= {n for n, _ in named}
