@@ -274,3 +274,21 @@ def test_occ_step_engine_names_every_ply(tmp_path):
     named, _ = read_step(tmp_path / "m.step")
     assert sorted(n for n, _ in named) == sorted(p.id for p in parts)
     assert {"P0001.1", "P0001.2", "P0001.3"} <= {n for n, _ in named}
+
+
+def test_a_ply_that_cannot_be_built_names_itself_and_the_build_up():
+    """A unit far too thick for its panels in axis mode (sides leaning in): the outer ply folds and the
+    error names that ply, the build-up and what to change, in one line."""
+    from cad_fixtures import dome_mesh
+    from fabricate.cad import PartSpec, build_parts
+    from fabricate.offset import offset_structure
+
+    thick = {"type": "insulated", "outer": {"type": "laminated", "plies_mm": [25, 25, 25, 25], "interlayer_mm": 10},
+             "cavity_mm": 50, "inner": {"type": "laminated", "plies_mm": [25, 25, 25], "interlayer_mm": 10}}
+    # a 0.8 m dome with the glass inside (flip): the axes converge on the glass side
+    s = offset_structure(dome_mesh(8, 4, radius_m=0.4, rise_m=0.16), (0.0, -100.0), flip=True)
+    with pytest.raises(ConfigError) as err:
+        build_parts(s, PartSpec(glass=thick, edge="axis", joint_gap=10.0, beam_width=60.0))
+    message = str(err.value)
+    assert "\n" not in message and ".1 (element" in message and "outer ply 1 lies 250 to 275 mm" in message
+    assert "(parts.glass)" in message and "parts.edge: perpendicular" in message

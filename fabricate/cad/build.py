@@ -76,7 +76,8 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
             groups.append(_group("panel", ids, f, ply["vertices"], g["faces"], ply["normals"], g["bearing_face"],
                                  1 - g["bearing_face"], g["planarity_mm"], np.full(len(f), ly.thickness_mm),
                                  np.zeros(len(f)), nb, spec, member=ly.member if multi else "",
-                                 material="" if ly.material == "glass" else ly.material))
+                                 material="" if ly.material == "glass" else ly.material,
+                                 hint=None if j == bearing else _ply_hint(ly, spec)))
     if multi:                                          # the beams carry the bearing ply
         pid = np.char.add(pid, f".{bearing + 1}")
     beams = beam_solids(structure, P0, spec.beam_width, spec.node_radius, s_beam)
@@ -133,6 +134,14 @@ def span_positions(structure) -> tuple[list[float], np.ndarray, np.ndarray]:
     return d, V + d[0] * off, V + d[1] * off
 
 
+def _ply_hint(layer, spec):
+    """The hint for a ply above the one on the beams that folds (its sides lean in with the height)."""
+    text = (f"its {layer.member} lies {layer.offset_mm:g} to {layer.offset_mm + layer.thickness_mm:g} mm above "
+            f"the bearing face of the build-up {spec.glass.short()} (parts.glass) and the panel's sides lean in: "
+            "a thinner build-up, parts.edge: perpendicular or a smaller parts.joint_gap")
+    return lambda i: text
+
+
 def _touching(unit: str, j: int, build_up) -> list[str]:
     """Ids of the solids of ``unit`` in contact with its solid ``j`` (0-based, outside in): the solid
     layers directly above and below it (none across the cavity)."""
@@ -146,10 +155,10 @@ def _touching(unit: str, j: int, build_up) -> list[str]:
 
 
 def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thickness, length,
-           neighbours, spec, member: str = "", material: str = "") -> PartGroup:
+           neighbours, spec, member: str = "", material: str = "", hint=None) -> PartGroup:
     """Validate one batch and derive volumes, outlines and residuals."""
     element = np.asarray(element)
-    _validate(kind, ids, element, V, faces, normals)
+    _validate(kind, ids, element, V, faces, normals, hint)
     vol = volumes(V, faces)
     bad = vol <= 0
     if bad.any():
