@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_serializer, model_validator
 from pydantic_core import PydanticCustomError
 
 from .config_section import MAX_MM, Section
@@ -93,6 +93,15 @@ class PartsSection(Section):
                 "expected one of them (glass_thickness is the shorthand of a monolithic pane)",
                 {"t": f"{self.glass_thickness:g}", "kind": g.type})
         return self
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        """With a ``glass`` build-up, ``glass_thickness`` is left out of the dump (the config as run
+        stays loadable: giving both is an error)."""
+        data = handler(self)
+        if self.glass is not None:
+            data.pop("glass_thickness", None)
+        return data
 
 
 class SheetSection(Section):

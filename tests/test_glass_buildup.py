@@ -292,3 +292,19 @@ def test_a_ply_that_cannot_be_built_names_itself_and_the_build_up():
     message = str(err.value)
     assert "\n" not in message and ".1 (element" in message and "outer ply 1 lies 250 to 275 mm" in message
     assert "(parts.glass)" in message and "parts.edge: perpendicular" in message
+
+
+def test_the_config_as_run_loads_again_with_its_build_up(tmp_path):
+    """config.yaml of a run (defaults filled in) is a valid config: with parts.glass the shorthand
+    glass_thickness is left out of it."""
+    from _pipeline_fixtures import tiny_config
+    from fabricate.cad import PartSpec
+    from fabricate.config import parse_config
+
+    cfg = tiny_config(tmp_path, parts={"glass": INSULATED})
+    data = cfg.as_dict()
+    assert "glass_thickness" not in data["parts"]
+    again = parse_config(data, source=tmp_path / "config.yaml")
+    assert PartSpec(**again.parts.model_dump()).glass == PartSpec(**cfg.parts.model_dump()).glass
+    mono = tiny_config(tmp_path, parts={"glass_thickness": 8})
+    assert mono.as_dict()["parts"]["glass_thickness"] == 8 and mono.as_dict()["parts"]["glass"] is None
