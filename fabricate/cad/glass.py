@@ -30,6 +30,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from optimize.errors import ConfigError
 
 INTERLAYER_DENSITY = {"PVB": 1070.0, "SGP": 950.0}
@@ -284,10 +286,8 @@ def bearing_groups(parts) -> list:
     return [g for g in parts.of_kind("panel") if g.member == last]
 
 
-def unit_sums(parts, values) -> "np.ndarray":
+def unit_sums(parts, values) -> np.ndarray:
     """(n_faces,) per mesh face the sum over every panel solid of ``values(group) (p,)``."""
-    import numpy as np
-
     n = 1 + max((int(g.element.max()) for g in parts.of_kind("panel") if len(g)), default=-1)
     out = np.zeros(n)
     for g in parts.of_kind("panel"):  # a few groups (layers x face sizes)
