@@ -69,7 +69,8 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
             f = g["faces_index"]
             ply = g["plies"][order.index(j)]
             ids = np.char.add(pid[f], f".{j + 1}") if multi else pid[f]
-            nb = [tuple(_touching(pid[i], j, spec.glass)) for i in f.tolist()]
+            touch = _touching(j, spec.glass)
+            nb = [tuple(f"{u}.{k}" for k in touch) for u in pid[f].tolist()]
             if j == bearing:
                 nb = [t + tuple(bid[row]) + (tuple(nid[mesh.F[i, :g["k"]]]) if with_nodes else ())
                       for t, i, row in zip(nb, f.tolist(), g["edges"])]
@@ -142,16 +143,15 @@ def _ply_hint(layer, spec):
     return lambda i: text
 
 
-def _touching(unit: str, j: int, build_up) -> list[str]:
-    """Ids of the solids of ``unit`` in contact with its solid ``j`` (0-based, outside in): the solid
-    layers directly above and below it (none across the cavity)."""
+def _touching(j: int, build_up) -> list[int]:
+    """The solids (``k`` from 1) of a unit in contact with its solid ``j`` (0-based, outside in): the
+    solid layers directly above and below it (none across the cavity)."""
     everything = build_up.layers()
     solid_at = [i for i, ly in enumerate(everything) if ly.solid]
     if len(solid_at) == 1:
         return []
     at = solid_at[j]
-    return [f"{unit}.{solid_at.index(i) + 1}" for i in (at - 1, at + 1)
-            if 0 <= i < len(everything) and everything[i].solid]
+    return [solid_at.index(i) + 1 for i in (at - 1, at + 1) if 0 <= i < len(everything) and everything[i].solid]
 
 
 def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thickness, length,
