@@ -308,3 +308,17 @@ def test_the_config_as_run_loads_again_with_its_build_up(tmp_path):
     assert PartSpec(**again.parts.model_dump()).glass == PartSpec(**cfg.parts.model_dump()).glass
     mono = tiny_config(tmp_path, parts={"glass_thickness": 8})
     assert mono.as_dict()["parts"]["glass_thickness"] == 8 and mono.as_dict()["parts"]["glass"] is None
+
+
+def test_3mf_gives_the_interlayer_a_material_of_its_own(tmp_path):
+    import re
+    import zipfile
+
+    from fabricate.export.threemf import write_3mf
+
+    write_3mf(parts_of("lam"), tmp_path / "m.3mf")
+    model = zipfile.ZipFile(tmp_path / "m.3mf").read("3D/3dmodel.model").decode()
+    bases = re.findall(r'<base name="([^"]+)"', model)
+    assert bases[-1] == "PVB interlayer"
+    pindex = dict(re.findall(r'name="(P\d+\.\d)" type="model" pid="1" pindex="(\d)"', model))
+    assert pindex["P0001.2"] == str(len(bases) - 1) and bases[int(pindex["P0001.1"])] == "glass"
