@@ -131,6 +131,7 @@ def test_stepped_inner_pane_is_set_in_and_must_bear():
     off = lambda g: np.einsum("pfi,pfi->pf", g.normals[:, side],  # noqa: E731
                               g.vertices[:, [f[0] for f in g.faces[2:]]])
     np.testing.assert_allclose(off(outer) - off(inner), step, atol=1e-9)
+    assert parts.report["beams"]["bearing_width_mm"] == pytest.approx(0.5 * (60.0 - 10.0) - step)
     with pytest.raises(ConfigError, match="parts.glass.step_mm = 25 mm: the inner pane would not bear"):
         PartSpec(glass=dict(INSULATED, step_mm=25.0), beam_width=60.0, joint_gap=10.0)
 

@@ -251,7 +251,7 @@ def _report(groups, spec, mode, s_beam, distances, beams, node_facts) -> dict:
             "residual_mm_max": float(res.max()), "residual_worst": ids[int(np.argmax(res))]}
     sb = beams["setback"]
     out["beams"]["end_setback_mm"] = {"min": float(sb.min()), "max": float(sb.max())}
-    out["beams"]["bearing_width_mm"] = 0.5 * (spec.beam_width - spec.joint_gap)
+    out["beams"]["bearing_width_mm"] = 0.5 * (spec.beam_width - spec.joint_gap) - spec.glass.step_mm  # stepped unit
     out["beams"]["depth_mm"] = abs(distances[-1] - distances[0])
     panel_faces = [g.element for g in groups if g.kind == "panel"]
     units = int(len(np.unique(np.concatenate(panel_faces)))) if panel_faces else 0
