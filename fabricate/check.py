@@ -48,8 +48,10 @@ reason, never silently left out; a file the run wrote (listed in its
 """
 from __future__ import annotations
 
+import ctypes
 import logging
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -72,6 +74,39 @@ EDGE_TOL_MM = 1e-6
 
 def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset(),
                   step_reader: str = "text") -> dict:
+    """Run every check on ``outdir`` (see :func:`_check_outputs`), big temporaries reused (:func:`heap_reuse`)."""
+    with heap_reuse():
+        return _check_outputs(outdir, tol, skip=skip, step_reader=step_reader)
+
+
+@contextmanager
+def heap_reuse():
+    """While the check runs, glibc serves big arrays from its heap and keeps freed memory for the
+    next one (``mallopt`` mmap and trim thresholds at 1 GiB), so that the readers' many large
+    temporaries do not each fault in fresh pages (on this project's 165 MB STEP file a first read
+    spent 40 % of its time in page faults); afterwards the thresholds go back to glibc's defaults
+    and the heap is trimmed.  A no-op where there is no glibc."""
+    try:
+        libc = ctypes.CDLL(None)
+        mallopt, trim = libc.mallopt, libc.malloc_trim
+    except (OSError, AttributeError, TypeError):
+        yield
+        return
+    on = mallopt(M_MMAP_THRESHOLD, 1 << 30) and mallopt(M_TRIM_THRESHOLD, 1 << 30)
+    try:
+        yield
+    finally:
+        if on:
+            mallopt(M_MMAP_THRESHOLD, 128 * 1024)
+            mallopt(M_TRIM_THRESHOLD, 128 * 1024)
+            trim(0)
+
+
+M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3   # glibc's mallopt parameters
+
+
+def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset(),
+                   step_reader: str = "text") -> dict:
     """Run every check on ``outdir``; returns ``{"outdir", "pass", "checks": {name: {...}}, "seconds"}``.
 
     ``pass`` is False when any check failed (``pass: False``); skipped checks
