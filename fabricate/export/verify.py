@@ -288,11 +288,12 @@ def intersections(solids: list[Solid], linear_tol: float) -> dict:
             "failures": failures[:20], "failed": len(failures)}
 
 
-WITNESS_REL = 1e-2
-"""A point of one part within ``WITNESS_REL x linear_tol`` of every face plane of a convex part
-(inside it up to the files' rounding: 12 digits in the 3MF, 4e-8 mm at 40 m) proves the two touch:
-its distance to that part is below ``linear_tol`` unless two of its faces meet at less than
-``2 asin(WITNESS_REL)``, about 1.1 degrees (no panel or beam has such a sliver)."""
+WITNESS_REL = 1e-3
+"""A point of one part within ``WITNESS_REL x linear_tol`` (1e-6 mm) of every face plane of a convex
+part (inside it up to the files' rounding: 12 digits in the 3MF, 4e-8 mm at 40 m) proves the two
+touch: its distance to that part is below ``linear_tol`` unless two of its faces meet at less than
+``2 asin(WITNESS_REL)``, about 0.11 degrees (no panel or beam has such a sliver).  A pair without
+such a point (a gap, or coordinates so large that their rounding exceeds it) goes to min_gap."""
 
 
 def _witnessed(solids: dict[str, Solid], pairs: list[tuple[str, str]], delta: float) -> np.ndarray:
