@@ -46,13 +46,24 @@ def _window(buf: np.ndarray, width: int) -> np.ndarray:
 
 
 def _scan(buf: np.ndarray, a: int, b: int, chars: tuple[int, ...]) -> list[np.ndarray]:
-    """Positions ``(k,)`` of each byte of ``chars`` in ``buf[a:b]``, a chunk at a time."""
-    found: list[list[np.ndarray]] = [[] for _ in chars]
-    for c in range(a, b, CHUNK):
+    """Positions ``(k,)`` of each byte of ``chars`` in ``buf[a:b]``, a chunk at a time (counted
+    first, then written into their arrays: no per-chunk pieces to join)."""
+    counts = np.zeros((len(chars), -(-(b - a) // CHUNK)), np.int64)
+    for i, c in enumerate(range(a, b, CHUNK)):
         part = buf[c:min(c + CHUNK, b)]
-        for out, ch in zip(found, chars):
-            out.append(np.flatnonzero(part == ch) + c)
-    return [np.concatenate(f) if f else np.zeros(0, np.int64) for f in found]
+        for k, ch in enumerate(chars):
+            counts[k, i] = np.count_nonzero(part == ch)
+    kind = np.int32 if len(buf) < 2 ** 31 else np.int64            # positions: half the memory
+    out = [np.empty(int(n), kind) for n in counts.sum(axis=1)]
+    at = np.zeros(len(chars), np.int64)
+    for i, c in enumerate(range(a, b, CHUNK)):
+        part = buf[c:min(c + CHUNK, b)]
+        for k, ch in enumerate(chars):
+            n = int(counts[k, i])
+            out[k][at[k]:at[k] + n] = np.flatnonzero(part == ch)
+            out[k][at[k]:at[k] + n] += c
+            at[k] += n
+    return out
 
 
 def compact(body: bytes) -> bytes:
