@@ -78,12 +78,16 @@ def compact(body: bytes) -> bytes:
 _ONES, _HIGH = np.uint64(0x0101010101010101), np.uint64(0x8080808080808080)
 
 
+_BYTE_INDEX = np.uint64(0x0706050403020100)   # byte k holds k
+
+
 def _lowest_byte(m: np.ndarray) -> np.ndarray:
     """Index 0..7 of the lowest byte of ``m (h,) uint64`` whose high bit is set (only high bits
-    set); 8 when none.  The lowest set bit ``2^(8i + 7)`` is exact as a float: its exponent gives i."""
+    set); 8 when none.  The lowest set bit is ``2^(8i + 7)``; ``2^(8i)`` times :data:`_BYTE_INDEX`
+    shifts it up by i bytes, so the top byte holds ``7 - i``."""
     low = m & (~m + np.uint64(1))
-    _, e = np.frexp(low.astype(np.float64))                          # 2^(8i+7) -> e = 8i + 8; 0 -> 0
-    return np.where(e == 0, 8, (e >> 3) - 1).astype(np.int64)
+    top = ((low >> np.uint64(7)) * _BYTE_INDEX) >> np.uint64(56)
+    return np.where(m == 0, 8, 7 - top.astype(np.int64))
 
 
 def _first_byte(x: np.ndarray, byte: int) -> np.ndarray:
