@@ -3,7 +3,8 @@
 ``read_3mf_text(path)`` checks that ``3D/3dmodel.model`` is well-formed XML
 with expat (in C, no tree is built), then reads every ``<object>``'s name,
 ``<vertex x= y= z=>`` and ``<triangle v1= v2= v3=>`` with one regular
-expression per element type over the whole model and numpy for the numbers.
+expression per element type over the whole model (as this project writes them: attributes in
+that order, one space apart) and numpy for the numbers.
 Each object's vertex and triangle counts are those of its own text (counted
 between its ``<object`` tags), so no vertex can be given to the wrong
 object; a triangle index beyond its object's vertices is an error.  A model
@@ -15,7 +16,6 @@ from __future__ import annotations
 import re
 import warnings
 import zipfile
-from itertools import chain
 from pathlib import Path
 from xml.parsers import expat
 from xml.sax.saxutils import unescape
@@ -25,14 +25,17 @@ import numpy as np
 from optimize.errors import ExportError
 
 MODEL = "3D/3dmodel.model"
-_NUM = rb'"([-+0-9.eE]+)"'
-VERTEX = re.compile(rb'<vertex\s+x=' + _NUM + rb'\s+y=' + _NUM + rb'\s+z=' + _NUM + rb'\s*/>')
-TRIANGLE = re.compile(rb'<triangle\s+v1="(\d+)"\s+v2="(\d+)"\s+v3="(\d+)"[^>]*/>')
+_NUM = rb'[-+0-9.eE]+'
+VERTEX = re.compile(rb'<vertex x="(' + _NUM + rb'" y="' + _NUM + rb'" z="' + _NUM + rb')"/>')
+TRIANGLE = re.compile(rb'<triangle v1="(\d+" v2="\d+" v3="\d+)"/>')
+SEPARATORS = {"vertex": (b'" y="', b'" z="'), "triangle": (b'" v2="', b'" v3="')}
 NAME = re.compile(rb'\sname="([^"]*)"')
 
 
-def _numbers(groups: list[tuple], dtype, what: str, path) -> np.ndarray:
-    text = b" ".join(chain.from_iterable(groups))
+def _numbers(groups: list[bytes], dtype, what: str, path) -> np.ndarray:
+    """``(n, 3)`` numbers of the elements' three attribute values (one match each: ``1" y="2" z="3``)."""
+    a, b = SEPARATORS[what]
+    text = b" ".join(groups).replace(a, b" ").replace(b, b" ")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)
         try:
