@@ -57,7 +57,7 @@ def _row(label: str, seconds: float, result, paper: float | None) -> None:
 
 
 def trefoil(repeat: int) -> None:
-    from optimize.paper import kernels
+    from optimize import kernels
 
     compile_s = kernels.warm_up()  # numba: compiled or loaded from its disk cache, not counted below
     d = DESIGNS["trefoil_band"]()

@@ -52,7 +52,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from optimize import Mesh, measures, optimize_mesh, shapes  # noqa: E402
-from optimize.closeness import Reference  # noqa: E402
+from optimize.proximity import Reference  # noqa: E402
 
 TUNNEL = ROOT / "configs" / "meshes" / "tunnel.off"  # the built-in design tunnel, in metres
 DATA = None  # --data PATH: a folder with halftunnel.off and cylinder.obj (libigl tutorial meshes), else skipped

@@ -131,7 +131,7 @@ HEADER = ("method       seconds  cpu s  iters  ok   planarity        det    coni
 
 def warm_up():
     """Compile (or load) the numba kernels before any timing; print how long it took."""
-    from optimize.paper import kernels
+    from optimize import kernels
 
     sec = kernels.warm_up()
     state = "not available (NumPy paths)" if kernels.get() is None else f"ready in {sec:.3f} s"

@@ -13,9 +13,9 @@ import time
 import numpy as np
 
 from . import measures
-from .closeness import Reference
+from .proximity.curve import BoundaryCurve
+from .proximity.surface import Reference
 from .constraints import fixed as fixed_mod
-from .constraints import glide as glide_mod
 from .errors import ConfigError
 from .formulation import TARGETS, UNKNOWNS, Formulation, fit_axes
 from .conjugacy import record_net
@@ -146,7 +146,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
             E = mesh.topology.edges
             at = mesh.topology.is_boundary_edge & np.isin(E, bnd).any(1)  # a gliding vertex cannot slide onto its neighbour
             floor = GLIDE_EDGE_FLOOR * np.linalg.norm(norm.V[E[at, 0]] - norm.V[E[at, 1]], axis=1)
-            glide = Glide(bnd, glide_mod.BoundaryCurve(ref_norm), E[at], floor)
+            glide = Glide(bnd, BoundaryCurve(ref_norm), E[at], floor)
     unknowns = resolve_formulation(target, formulation)
     t = mesh.topology
     if torsion_free_beams not in ("auto", True, False):

@@ -46,7 +46,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import measures
-from .closeness import Reference, closeness_terms
+from .constraints.closeness import closeness_terms
+from .proximity.curve import BoundaryCurve
+from .proximity.footpoints import Footpoints
+from .proximity.surface import Reference
 from .constraints import convexity, edgefloor
 from .constraints import glide as glide_mod
 from .fairness import fairness_matrix, fairness_matrix_parts
@@ -90,7 +93,7 @@ class Glide:
     """Boundary gliding: ``vertices (b,)`` kept on ``curve`` (normalized coordinates)."""
 
     vertices: np.ndarray
-    curve: glide_mod.BoundaryCurve
+    curve: BoundaryCurve
     edges: np.ndarray  # (e, 2) boundary edges at gliding vertices, kept above ``floor (e,)``
     floor: np.ndarray
 
@@ -194,8 +197,6 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         # exact closest points, candidate triangles kept between iterations (vertices move
         # little): 10k-face conical dome 0.93 s of closest-point queries -> 0.26 s.  The NumPy
         # path: the compiled one (0.14 s) costs 0.4-0.9 s of numba load in a fresh process.
-        from .paper.footpoints import Footpoints
-
         finder = Footpoints(ref, FOOT_MARGIN, compiled=False)
 
     def residuals(x, foot, gfoot):

@@ -3,7 +3,7 @@ that satisfy it by construction, layout bookkeeping."""
 import numpy as np
 import pytest
 
-from optimize import shapes
+from optimize import proximity, shapes
 from optimize.constraints import anglebalance, anglesum, circular, conical, diagonals, glide, planarity, unit
 from optimize.errors import ConfigError
 from optimize.constraints import fixed as fixed_mod
@@ -134,7 +134,7 @@ def test_unit_jacobian(name):
 def test_glide_jacobian_and_footpoints():
     mesh = shapes.perturbed(shapes.grid(5, 4, height=lambda x, y: x * y), 0.05, seed=6)
     form = Formulation(mesh, "pq")
-    curve = glide.BoundaryCurve(mesh)
+    curve = proximity.BoundaryCurve(mesh)
     bnd = np.nonzero(mesh.topology.is_boundary_vertex)[0]
     x = form.start(mesh.V)
     r, _ = glide.terms(x, form.layout, bnd, curve)
@@ -146,7 +146,7 @@ def test_glide_jacobian_and_footpoints():
     # exact closest points against brute force over all segments
     P = mesh.V[bnd] + 0.3 * rng.standard_normal((len(bnd), 3))
     Y, _ = curve.closest(P)
-    best = np.min([np.linalg.norm(glide.closest_on_segments(P, np.broadcast_to(a, P.shape),
+    best = np.min([np.linalg.norm(proximity.closest_on_segments(P, np.broadcast_to(a, P.shape),
                                                             np.broadcast_to(b, P.shape)) - P, axis=1)
                    for a, b in zip(curve.A, curve.B)], axis=0)
     np.testing.assert_allclose(np.linalg.norm(Y - P, axis=1), best, atol=1e-14)

@@ -12,13 +12,14 @@ import numpy as np
 import pytest
 
 from optimize import measures
-from optimize.closeness import Reference, closest_on_triangles
-from optimize.paper import kernels, run_paper_method
+from optimize.proximity import Reference, closest_on_triangles
+from optimize import kernels
+from optimize.paper import run_paper_method
 from optimize.paper.angles import angle_local, corner_vertices
 from optimize.paper.assembly import gram_band
 from optimize.paper.cache import problem_for
 from optimize.paper.det import det_local
-from optimize.paper.footpoints import Footpoints
+from optimize.proximity import Footpoints
 from optimize.paper.problem import Problem
 from optimize.paper.strip import trefoil_band
 

@@ -9,10 +9,10 @@ import pytest
 import scipy.sparse as sp
 
 from optimize import measures, shapes
-from optimize.closeness import Reference
+from optimize.proximity import Reference
 from optimize.paper.assembly import gram_band, kkt_band
 from optimize.paper.banded import band_order
-from optimize.paper.footpoints import Footpoints
+from optimize.proximity import Footpoints
 from optimize.paper.linalg import solve
 from optimize.paper.penalty import Linearized
 from optimize.paper.problem import Problem

@@ -302,7 +302,7 @@ def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
     assert m["planarity"]["pass"] and m["conical"]["pass"] and m["folded"]["max"] == 0
     assert m["beam_planarity"]["pass"] and m["closeness"]["max"] < 0.005
     # closeness is measured to the user's triangle surface (the optimizer's reference), not to the quads
-    from optimize.closeness import Reference
+    from optimize.proximity import Reference
 
     dist = Reference(shipped).distance(mesh.V).max()
     assert dist == pytest.approx(m["closeness"]["max_mm"], rel=1e-3, abs=1e-3)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from optimize import ConfigError, Mesh, MeshError, Tolerances, surfaces
-from optimize.closeness import Reference
+from optimize.proximity import Reference
 from optimize.isolines import planar_faces
 from optimize.measures import conical_defect, planarity
 from optimize.remesh import as_triangles, isoparametric_remesh, remesh, surface_to_mesh

@@ -8,5 +8,6 @@ The modules load when imported (``from optimize.constraints import conical``).
 """
 from .._lazy import lazy_exports
 
-__all__ = ["anglebalance", "angles", "anglesum", "circular", "conical", "fixed", "glide", "planarity", "unit"]
+__all__ = ["anglebalance", "angles", "anglesum", "circular", "closeness", "conical", "convexity", "diagonals", "edgefloor",
+           "fixed", "glide", "nodeaxes", "planarity", "unit"]
 __getattr__, __dir__ = lazy_exports(__name__, {}, globals())

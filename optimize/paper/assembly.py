@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from . import kernels
+from .. import kernels
 from .banded import BandLU, BandOrder, RowGram, band_array, band_order, general_positions, lower_positions
 
 
@@ -184,7 +184,7 @@ class BandKKT:
     (``lower``) and ``band`` is built only if the LU is asked for.
 
     :meth:`solvers` yields ``L D L^T`` without pivoting of its lower band
-    (compiled, :mod:`optimize.paper.kernels`; the matrix is symmetric
+    (compiled, :mod:`optimize.kernels`; the matrix is symmetric
     quasi-definite, so such a factorization exists, though it is not always
     accurate), then LAPACK's banded LU with partial pivoting, factored only
     when it is asked for.  The caller checks each solution and takes the first

@@ -18,7 +18,7 @@ with one ``np.bincount`` or fancy assignment.  ``A^T A`` of a Jacobian is
 formed per *row group* (rows with the same columns, e.g. a quad's angle sum
 and its four determinants) by one batched ``matmul``.
 
-With the compiled kernels (:mod:`optimize.paper.kernels`) both systems are
+With the compiled kernels (:mod:`optimize.kernels`) both systems are
 factored instead by an ``L D L^T`` without pivoting that works only inside
 the band's envelope (:attr:`BandOrder.ext`: the columns' lengths below the
 diagonal; a third less work than the full band on the trefoil band), with
@@ -35,7 +35,7 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from . import kernels
+from .. import kernels
 
 BAND_FLOPS = 4e6  # n b^2 below this: a band is cheaper than a sparse factorization anyway
 
@@ -186,7 +186,7 @@ def cholesky_solve(ab: np.ndarray, b: np.ndarray, order: BandOrder) -> np.ndarra
 
     ``ab`` is overwritten.  Returns ``x (n,)`` in the original order, or None when
     the matrix is not positive definite to working precision (the caller falls back).
-    With the compiled kernels (:mod:`optimize.paper.kernels`) the factorization is
+    With the compiled kernels (:mod:`optimize.kernels`) the factorization is
     their ``L D L^T``, which fails where ``dpbtrf`` does (a pivot ``<= 0``).
     """
     k = kernels.get()

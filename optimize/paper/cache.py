@@ -13,7 +13,7 @@ unchanged), reference and options come again.
 
 Reuse is exact: nothing in a Problem depends on an earlier run's iterates
 except the closest-point candidates, whose answers are exact for any query
-(:class:`optimize.paper.footpoints.Footpoints`), and value caches keyed by
+(:class:`optimize.proximity.Footpoints`), and value caches keyed by
 the very positions they were computed at.
 """
 from __future__ import annotations

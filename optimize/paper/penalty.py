@@ -22,7 +22,7 @@ Linear algebra: where a reverse Cuthill-McKee ordering makes ``J^T J`` a
 narrow band (strips, small meshes; :func:`optimize.paper.assembly.gram_band`)
 it is assembled directly into band storage on a pattern fixed for the run and
 factored by LAPACK's banded Cholesky, or, with the compiled kernels
-(:mod:`optimize.paper.kernels`), by their ``L D L^T`` inside the band's
+(:mod:`optimize.kernels`), by their ``L D L^T`` inside the band's
 envelope; otherwise (or if that factorization finds the matrix not positive
 definite) by :class:`optimize.paper.linalg.SPDSolver` (SuperLU, then the LSQR
 fallback for near-singular systems: see :mod:`optimize.paper.linalg`).  The

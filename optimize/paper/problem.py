@@ -12,7 +12,7 @@ constraint systems' sparsity patterns, the pattern :attr:`Problem.hpat` of
 the objective's Hessian ``w1 K^T K + w2 C^T C``, the banded layouts of the
 solvers (:meth:`Problem.band`), and the closest-point search, which keeps
 each vertex's candidate triangles between iterations
-(:class:`optimize.paper.footpoints.Footpoints`, exact).  Problems are kept per input mesh
+(:class:`optimize.proximity.Footpoints`, exact).  Problems are kept per input mesh
 for repeated runs (:mod:`optimize.paper.cache`).
 """
 from __future__ import annotations
@@ -22,17 +22,17 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import shortest_path
 
 from .. import measures
-from ..closeness import Reference
+from ..proximity.surface import Reference
 from ..constraints.fixed import resolve
 from ..fairness import fairness_matrix
 from ..mesh import Mesh
 from ..conjugacy import record_net
 from ..result import OptimizeResult, check_folds, record_shape
 from ..tolerances import DEFAULT, Tolerances
-from . import kernels
+from .. import kernels
 from .angles import angle_values, corner_vertices
 from .det import det_values
-from .footpoints import Footpoints
+from ..proximity.footpoints import Footpoints
 from .system import ConstraintSystem, Pattern
 from .targets import sqp_terms, target_terms, tested_defects
 

@@ -46,7 +46,7 @@ Near-singular systems (the paper falls back to an SVD):
 - Where a reverse Cuthill-McKee ordering makes the KKT matrix a narrow band
   (strips, small meshes; :func:`optimize.paper.assembly.kkt_band`) LAPACK's
   banded LU with partial pivoting factors it, refilled on a layout fixed for
-  the run (with the compiled kernels of :mod:`optimize.paper.kernels` an
+  the run (with the compiled kernels of :mod:`optimize.kernels` an
   ``L D L^T`` without pivoting is tried first: the matrix is quasi-definite);
   otherwise, or when a banded solution fails the checks (not finite,
   relative residual above 1e-8, near-singular), SuperLU does; a failed or

@@ -14,7 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from . import kernels
+from .. import kernels
 from .angles import angle_local, angle_values, corner_vertices
 from .det import ALTERNATING, det_combined_local, det_local, det_quads, det_values
 
@@ -125,7 +125,7 @@ class ConstraintSystem:
             return last[1]
         out = {}
         k = kernels.get()
-        if k is not None:  # the same quantities, compiled (optimize.paper.kernels)
+        if k is not None:  # the same quantities, compiled (optimize.kernels)
             V = np.ascontiguousarray(V, dtype=np.float64)
             if "angle" in kinds:
                 out["phi"], G = k.angles(V, self.vid, jac)

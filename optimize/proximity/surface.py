@@ -1,4 +1,4 @@
-"""Closeness to a reference surface: exact closest points and the tangent-plane energy.
+"""Exact closest points and normals on a triangulated reference surface.
 
 The reference is a polygon mesh, fan-triangulated.  Closest points are exact:
 k-d trees over the triangle centroids propose candidates and a bound proves
@@ -13,23 +13,13 @@ of the group that could be closer; otherwise every centroid of the group in
 the ball of radius ``d* + R`` is tested.  Point-triangle distances
 use the Voronoi-region test of Ericson (Real-Time Collision Detection, 5.1.5),
 vectorized over all pairs.
-
-The paper's ``f_close`` is the tangent-plane approximation
-``sum_i ((v_i - y_i) . n_i)^2`` with footpoints ``y_i`` on the reference and
-unit normals ``n_i`` there, recomputed every iteration so that vertices may
-slide along the surface.  The normal at a footpoint interpolates the
-(area-weighted) vertex normals, so it is continuous: a vertex lying on an
-edge or a vertex of the reference gets the same tangent plane whichever
-neighbouring triangle the search reports (and the optimizer stays invariant
-under rigid motions).
 """
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
-from .mesh import Mesh
+from ..mesh import Mesh
 
 
 def closest_on_triangles(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
@@ -92,7 +82,7 @@ class Reference:
         self.radius = float(radii.max())
         nrm = np.cross(self._B - self._A, self._C - self._A)
         length = np.linalg.norm(nrm, axis=1)
-        from .measures import face_normals
+        from ..measures import face_normals
 
         fallback = face_normals(mesh)[self.triangle_face]
         ok = length > 1e-14 * max(self.radius, 1e-300) ** 2
@@ -191,26 +181,3 @@ class Reference:
         """(k,) float: exact distance of each point ``P (k, 3)`` to the reference."""
         Y, _ = self.closest(P)
         return np.linalg.norm(np.asarray(P).reshape(-1, 3) - Y, axis=1)
-
-
-def closeness_terms(V: np.ndarray, ref: Reference, Y: np.ndarray | None = None,
-                    N: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
-    """Tangent-plane closeness ``((v_i - y_i) . n_i)^2`` linearized at ``V``.
-
-    V : (n, 3) float vertices (or the stacked ``(3n,)`` vector).
-    ref : Reference.  ``Y, N (n, 3)`` footpoints and normals, computed from
-        ``ref`` when not given.
-    Returns ``J (n, 3n)`` sparse with ``J[i, 3 i + k] = n_i[k]`` and the
-    residual ``r (n,)``, ``r_i = (v_i - y_i) . n_i``; the energy is ``|r|^2``
-    and ``r + J dx`` its linearization (exact: the residual is linear in ``V``
-    for fixed footpoints).
-    """
-    V = np.asarray(V, dtype=np.float64).reshape(-1, 3)
-    if Y is None or N is None:
-        Y, N = ref.closest(V)
-    n = len(V)
-    r = np.einsum("ij,ij->i", V - Y, N)
-    rows = np.repeat(np.arange(n), 3)
-    cols = np.arange(3 * n)
-    J = sp.csr_matrix((N.ravel(), (rows, cols)), shape=(n, 3 * n))
-    return J, r

@@ -10,11 +10,11 @@ arithmetic in one compiled call each:
   ``(q, 4, 12)``, the formulas of :func:`optimize.paper.angles.angle_local`
   and :func:`optimize.paper.det.det_local`;
 - :func:`closest_candidates`: the closest point among each query point's
-  candidate triangles (:class:`optimize.paper.footpoints.Footpoints`), the
-  case analysis of :func:`optimize.closeness.closest_on_triangles`;
+  candidate triangles (:class:`optimize.proximity.Footpoints`), the
+  case analysis of :func:`optimize.proximity.surface.closest_on_triangles`;
 - :func:`scan_triangles`: new candidates for points that moved, every
   triangle tested (box, then exact distance);
-- :func:`interpolated_normals`: ``Reference._interpolated_normals``;
+- :func:`interpolated_normals`: ``optimize.proximity.surface.Reference._interpolated_normals``;
 - :func:`quad_planarity_max`: the largest of ``optimize.measures.quad_planarity``;
 - :func:`scatter_rows`: a term's Jacobian values summed into CSR data;
 - :func:`csr_matvec`: ``M @ x`` for CSR ``M`` (:func:`matvec` falls back to SciPy);

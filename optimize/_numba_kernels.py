@@ -1,4 +1,4 @@
-"""The numba kernels behind :mod:`optimize.paper.kernels` (imported only when numba is installed).
+"""The numba kernels behind :mod:`optimize.kernels` (imported only when numba is installed).
 
 Each function mirrors a NumPy expression of the package, named in its
 docstring, operation for operation (no ``fastmath``), so that both paths
@@ -93,7 +93,7 @@ def dets(V, quads, jac):
 
 @njit(cache=True)
 def _closest_on_triangle(p0, p1, p2, a0, a1, a2, b0, b1, b2, c0, c1, c2):
-    """One case of :func:`optimize.closeness.closest_on_triangles` (the same branch order)."""
+    """One case of :func:`optimize.proximity.surface.closest_on_triangles` (the same branch order)."""
     ab0, ab1, ab2 = b0 - a0, b1 - a1, b2 - a2
     ac0, ac1, ac2 = c0 - a0, c1 - a1, c2 - a2
     ap0, ap1, ap2 = p0 - a0, p1 - a1, p2 - a2
@@ -182,7 +182,7 @@ def closest_candidates(P, A, B, C, owner, cand, skip, lo, hi, prev):
 @njit(cache=True)
 def interpolated_normals(Y, tri, A, B, C, T, vn, fn):
     """(k, 3) unit normals at footpoints ``Y (k, 3)`` on triangles ``tri (k,)``:
-    ``optimize.closeness.Reference._interpolated_normals`` (triangles ``T (t, 3)``,
+    ``optimize.proximity.surface.Reference._interpolated_normals`` (triangles ``T (t, 3)``,
     vertex normals ``vn (n, 3)``, triangle normals ``fn (t, 3)``)."""
     k = Y.shape[0]
     N = np.empty((k, 3))

@@ -10,18 +10,18 @@ where ``M`` is a margin.  While a point ``p`` stays within ``M`` of ``p0``
 these candidates contain its closest triangle ``T*``: ``dist(p, T*) <=
 dist(p, T0) <= u + M``, hence ``dist(p0, T*) <= u + 2 M``.  A query then tests
 only its few candidates, exactly (the Voronoi-region test of
-:func:`optimize.closeness.closest_on_triangles`); a point that moved farther
+:func:`optimize.proximity.surface.closest_on_triangles`); a point that moved farther
 than ``M`` gets new candidates (a ball query on the triangle centroids with
 radius ``u + 2 M + R``, ``R`` the largest centroid-to-vertex radius, then the
 distance to each triangle's bounding box, a lower bound, then the exact
-distance; with the compiled kernels of :mod:`optimize.paper.kernels` and up
+distance; with the compiled kernels of :mod:`optimize.kernels` and up
 to ``SCAN_MAX`` point-triangle pairs, the box and exact tests run on every
 triangle instead, which finds the same candidates without the ball query).
 ``T0`` is the point's last closest triangle, or the nearest centroid's at the
 first call; the compiled warm query tests it first and skips candidates whose
 bounding box is farther than the best distance found.
 
-The answers equal :meth:`optimize.closeness.Reference.closest`'s: the same
+The answers equal :meth:`optimize.proximity.surface.Reference.closest`'s: the same
 distances and footpoints to rounding, normals by the reference's own
 interpolation (``Reference._interpolated_normals``).  Only ties between
 equally close triangles may be broken differently: on a shared edge or
@@ -38,8 +38,8 @@ from itertools import chain
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..closeness import Reference, closest_on_triangles
-from . import kernels
+from .. import kernels
+from .surface import Reference, closest_on_triangles
 
 MAX_CANDIDATES = 64  # mean candidates per point beyond which Reference.closest is used
 SCAN_MAX = 2_000_000  # (points x triangles) up to which renewals test every triangle (compiled)
@@ -50,7 +50,7 @@ class Footpoints:
 
     ref : Reference.  compiled : use the numba kernels where available (False: the
     NumPy path, which needs no compile/load time).  margin : ``M`` above, in the units of the reference
-    (``optimize.paper.problem.Problem`` uses ``FOOT_MARGIN`` = 0.3 mean edge lengths).
+    (``optimize.paper.problem.Problem`` uses ``FOOT_MARGIN`` = 0.3 mean edge lengths, the default solver 0.1).
     Counters ``queries`` and ``rebuilt`` (points given new candidates) for the record.
     """
 
@@ -91,7 +91,7 @@ class Footpoints:
             Y[idx], tri[idx] = got
         k = kernels.get() if self.compiled else None
         if not far.all():
-            if k is not None:  # the same search, compiled (optimize.paper.kernels)
+            if k is not None:  # the same search, compiled (optimize.kernels)
                 prev = self.tri if self.tri is not None else np.full(len(P), -1, dtype=np.int64)
                 Yk, tk, found = k.closest_candidates(P, self.A, self.B, self.C, self.owner, self.cand, far,
                                                      self.lo, self.hi, prev)
