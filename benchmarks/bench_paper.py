@@ -93,7 +93,7 @@ def slow_paths():
     """The implementation without banded layouts and cached footpoints (for ``--baseline``).
 
     Every ``Problem.band`` is None, so the penalty method assembles a sparse
-    ``J^T J`` each iteration for :class:`optimize.paper.linalg.SPDSolver` and
+    ``J^T J`` each iteration for :class:`optimize.linalg.spd.SPDSolver` and
     SQP factors its KKT matrix by SuperLU; footpoints come from
     ``Reference.closest`` directly.
     """

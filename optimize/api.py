@@ -22,7 +22,7 @@ from .conjugacy import record_net
 from .constraints import convexity
 from . import guided
 from .guided import Convex, Glide, solve
-from .linalg import BACKENDS
+from .linalg.normal import BACKENDS
 from .mesh import Mesh
 from .result import OptimizeResult, check_folds, record_shape
 from .tolerances import Tolerances

@@ -54,7 +54,7 @@ from .constraints import convexity, edgefloor
 from .constraints import glide as glide_mod
 from .fairness import fairness_matrix, fairness_matrix_parts
 from .formulation import Formulation
-from .linalg import NormalSolver, SolveError
+from .linalg.normal import NormalSolver, SolveError
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)

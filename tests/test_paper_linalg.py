@@ -11,9 +11,9 @@ import scipy.sparse as sp
 from optimize import measures, shapes
 from optimize.proximity import Reference
 from optimize.paper.assembly import gram_band, kkt_band
-from optimize.paper.banded import band_order
+from optimize.linalg.banded import band_order
 from optimize.proximity import Footpoints
-from optimize.paper.linalg import solve
+from optimize.linalg.spd import solve
 from optimize.paper.penalty import Linearized
 from optimize.paper.problem import Problem
 from optimize.paper.sqp import KKTFactor, kkt_matrix, objective

@@ -6,7 +6,7 @@ import scipy.sparse as sp
 from optimize import measures, shapes
 from optimize.errors import ConfigError, MeshError
 from optimize.paper import run_paper_method
-from optimize.paper.linalg import SPDSolver, solve
+from optimize.linalg.spd import SPDSolver, solve
 from optimize.paper.problem import Problem
 from optimize.paper.sqp import kkt_matrix, kkt_residual, kkt_step, objective
 from optimize.tolerances import Tolerances

@@ -13,7 +13,7 @@ constraint Jacobian's CSR data (:attr:`optimize.paper.system.ConstraintSystem.pa
 and the objective Hessian's data (:meth:`optimize.paper.problem.Problem.hessian_data`,
 pattern :attr:`~optimize.paper.problem.Problem.hpat`).  :func:`gram_band` and
 :func:`kkt_band` return None when the band would be too wide (see
-:func:`optimize.paper.banded.band_order`); the solvers then use their sparse path.
+:func:`optimize.linalg.banded.band_order`); the solvers then use their sparse path.
 """
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .. import kernels
-from .banded import BandLU, BandOrder, RowGram, band_array, band_order, general_positions, lower_positions
+from ..linalg.banded import BandLU, BandOrder, RowGram, band_array, band_order, general_positions, lower_positions
 
 
 def _clique_pattern(indptr: np.ndarray, indices: np.ndarray, k: int) -> sp.coo_matrix:

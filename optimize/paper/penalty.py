@@ -24,8 +24,8 @@ it is assembled directly into band storage on a pattern fixed for the run and
 factored by LAPACK's banded Cholesky, or, with the compiled kernels
 (:mod:`optimize.kernels`), by their ``L D L^T`` inside the band's
 envelope; otherwise (or if that factorization finds the matrix not positive
-definite) by :class:`optimize.paper.linalg.SPDSolver` (SuperLU, then the LSQR
-fallback for near-singular systems: see :mod:`optimize.paper.linalg`).  The
+definite) by :class:`optimize.linalg.spd.SPDSolver` (SuperLU, then the LSQR
+fallback for near-singular systems: see :mod:`optimize.linalg.spd`).  The
 predicted decrease needs ``s^T J^T J s``; after a banded solve it is
 ``-g.s - lam s^T D s``, without a product with the matrix.
 
@@ -49,8 +49,8 @@ from ..tolerances import DEFAULT, Tolerances
 from scipy.linalg.blas import dsbmv
 
 from .assembly import gram_band
-from .banded import cholesky_solve
-from .linalg import SPDSolver
+from ..linalg.banded import cholesky_solve
+from ..linalg.spd import SPDSolver
 from .cache import problem_for
 from .problem import Problem
 
@@ -79,7 +79,7 @@ class Linearized:
     p : Problem.  x : (3 n,) scaled positions.  w1, w2 : current weights.
     foot : closeness footpoints ``(Y (n, 3), N (n, 3))`` or None (``w2 = 0``).
     band : the run's :class:`optimize.paper.assembly.GramBand`, or None for the
-    sparse path, which solves with ``solver`` (:class:`optimize.paper.linalg.SPDSolver`).
+    sparse path, which solves with ``solver`` (:class:`optimize.linalg.spd.SPDSolver`).
 
     ``J`` and ``R`` stack the weighted constraint rows, ``sqrt(w1) K`` and
     ``sqrt(w2) C``; attributes ``E = |R|^2``, ``g = J^T R (k,)``, ``D (k,)``

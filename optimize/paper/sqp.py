@@ -50,7 +50,7 @@ Near-singular systems (the paper falls back to an SVD):
   ``L D L^T`` without pivoting is tried first: the matrix is quasi-definite);
   otherwise, or when a banded solution fails the checks (not finite,
   relative residual above 1e-8, near-singular), SuperLU does; a failed or
-  inaccurate SuperLU solve falls back to LSQR (:func:`optimize.paper.linalg.solve`).
+  inaccurate SuperLU solve falls back to LSQR (:func:`optimize.linalg.spd.solve`).
 
 Soft line search: the full step, then the full step with a second-order
 correction (a minimum-norm step back onto the linearized constraints, same
@@ -86,7 +86,7 @@ from ..result import OptimizeResult
 from ..tolerances import DEFAULT, Tolerances
 from .assembly import kkt_band
 from .hessian import constraint_curvature
-from .linalg import COND_LIMIT, RESIDUAL_TOL, Factor
+from ..linalg.spd import COND_LIMIT, RESIDUAL_TOL, Factor
 from .penalty import Run
 from .cache import problem_for
 from .problem import Problem
@@ -126,7 +126,7 @@ class KKTFactor:
     band : an :class:`optimize.paper.assembly.KKTBand` (then ``h_data``, the values
     of ``H`` on ``Problem.hpat``, ``a_data``, those of ``A`` on its pattern, and
     ``extra``, a sparse addition to ``H``, fill it) or None.  The banded LU's
-    solutions pass the checks of :class:`optimize.paper.linalg.Factor` (finite,
+    solutions pass the checks of :class:`optimize.linalg.spd.Factor` (finite,
     relative residual <= 1e-8, not near-singular); if one does not, the sparse
     path (SuperLU, then LSQR) is used, as without a band.
     """
@@ -164,7 +164,7 @@ def kkt_step(H: sp.spmatrix, A: sp.spmatrix, g: np.ndarray, c: np.ndarray, y: np
              delta: float, eps: float = EPS, factor=None):
     """Step ``s (k,)`` and multiplier change ``dy (r,)`` from the KKT system; and how it was solved.
 
-    factor : a :class:`KKTFactor` (or :class:`optimize.paper.linalg.Factor`) of
+    factor : a :class:`KKTFactor` (or :class:`optimize.linalg.spd.Factor`) of
     :func:`kkt_matrix` to reuse.
     """
     k = H.shape[0]

@@ -1,4 +1,4 @@
-"""Sparse solves for the paper's methods, with a stated fallback for near-singular systems.
+"""Checked sparse solves, with a stated fallback for near-singular systems (the paper's methods).
 
 What we do about (near-)singular systems (the paper falls back to an SVD):
 
@@ -21,10 +21,11 @@ import logging
 import warnings
 
 import numpy as np
-import scipy.linalg as la
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
-from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+from .banded import BandOrder, band_array, band_order, cholesky_solve, lower_positions
+from .superlu import superlu
 
 log = logging.getLogger(__name__)
 
@@ -35,53 +36,53 @@ COND_LIMIT = 1e12
 class SPDSolver:
     """Repeated solves ``M x = b`` with symmetric positive definite ``M`` of a fixed pattern.
 
-    The symbolic work is done on the first call and reused: a reverse
-    Cuthill-McKee ordering; when it gives a narrow band (strips and other thin
-    meshes: bandwidth ``<= 2 sqrt(n)``) every later matrix is factored by
-    LAPACK's banded Cholesky (``scipy.linalg.solveh_banded``), otherwise by
-    :func:`solve` (SuperLU, then the LSQR fallback).  A banded factorization
-    that finds the matrix not positive definite also falls back to :func:`solve`.
+    The symbolic work is done on the first call and reused: the narrow-band
+    ordering of :func:`optimize.linalg.banded.band_order` (reverse Cuthill-McKee;
+    kept when the half-bandwidth is ``<= 2 sqrt(n)``: strips and other thin
+    meshes); every later matrix is then factored inside that band by
+    :func:`optimize.linalg.banded.cholesky_solve` (LAPACK's banded Cholesky, or
+    the compiled ``L D L^T``), otherwise by :func:`solve` (SuperLU, then the LSQR
+    fallback).  A banded factorization that finds the matrix not positive
+    definite also falls back to :func:`solve`; a pattern that leaves the band's
+    envelope is analysed anew.
     """
 
     def __init__(self):
-        self.perm = None
-        self.inv = None
-        self.bandwidth = None
+        self.order: BandOrder | None = None
+        self.n = None
         self.calls = 0
 
-    def _analyse(self, M: sp.csr_matrix) -> None:
-        n = M.shape[0]
-        self.perm = reverse_cuthill_mckee(M, symmetric_mode=True).astype(np.int64)
-        self.inv = np.empty(n, dtype=np.int64)
-        self.inv[self.perm] = np.arange(n)
-        C = M.tocoo()
-        bw = int(np.abs(self.inv[C.row] - self.inv[C.col]).max(initial=0))
-        self.bandwidth = bw if bw <= 2 * np.sqrt(n) else None
+    @property
+    def bandwidth(self) -> int | None:
+        """The half-bandwidth of the banded path, None when the sparse path is used."""
+        return None if self.order is None else self.order.bw
+
+    def _analyse(self, C: sp.coo_matrix) -> None:
+        self.n = C.shape[0]
+        self.order = band_order(C.row, C.col, self.n, pivoting=True)  # pivoting: the plain 2 sqrt(n) rule
 
     def solve(self, M: sp.spmatrix, b: np.ndarray) -> tuple[np.ndarray, str]:
         """``x (k,)`` and how it was solved (``"banded"``, ``"lu"`` or ``"lsqr"``)."""
         self.calls += 1
         M = sp.csr_matrix(M)
         M.sum_duplicates()
-        if self.perm is None or len(self.perm) != M.shape[0]:
-            self._analyse(M)
-        if self.bandwidth is not None:
-            C = M.tocoo()
-            r, c = self.inv[C.row], self.inv[C.col]
-            if np.abs(r - c).max(initial=0) > self.bandwidth:  # the pattern grew
-                self._analyse(M)
+        C = M.tocoo()
+        if self.n != M.shape[0]:
+            self._analyse(C)
+        o = self.order
+        if o is not None:
+            i, j = o.inv[C.row], o.inv[C.col]
+            low = i >= j
+            if np.any((i - j)[low] > o.ext[j[low]]):  # the pattern grew out of the envelope
+                self._analyse(C)
                 return self.solve(M, b)
-            low = r >= c
-            ab = np.zeros((self.bandwidth + 1, M.shape[0]))
-            ab[(r - c)[low], c[low]] = C.data[low]
-            try:
-                y = la.solveh_banded(ab, b[self.perm], lower=True, check_finite=False)
-                x = np.empty_like(y)
-                x[self.perm] = y
-                if np.all(np.isfinite(x)):
-                    return x, "banded"
-            except la.LinAlgError as exc:
-                log.debug("banded Cholesky failed (%s); falling back", exc)
+            pos, low = lower_positions(o, C.row, C.col)
+            flat = np.zeros((o.bw + 1) * o.n)
+            flat[pos] = C.data[low]
+            x = cholesky_solve(band_array(flat, o.bw + 1), b, o)
+            if x is not None:
+                return x, "banded"
+            log.debug("banded Cholesky failed (not positive definite); falling back")
         return solve(M, b)
 
 
@@ -101,9 +102,7 @@ class Factor:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("error", sla.MatrixRankWarning)
-                opts = dict(SymmetricMode=True) if symmetric else {}
-                self.lu = sla.splu(self.M, permc_spec="MMD_AT_PLUS_A" if symmetric else "COLAMD",
-                                   diag_pivot_thresh=0.0 if symmetric else 1.0, options=opts)
+                self.lu = superlu(self.M, symmetric=symmetric)
         except (RuntimeError, sla.MatrixRankWarning) as exc:  # singular to working precision
             log.debug("sparse LU failed (%s); LSQR will be used", exc)
         self._norm1 = None
