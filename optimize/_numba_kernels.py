@@ -17,7 +17,7 @@ def _cross(a0, a1, a2, b0, b1, b2):
 
 @njit(cache=True)
 def angles(V, vid, jac):
-    """``phi (c,)`` and ``G (c, 9)`` of :func:`optimize.paper.angles.angle_local` at ``V[vid]``.
+    """``phi (c,)`` and ``G (c, 9)`` of :func:`optimize.corners.angle_local` at ``V[vid]``.
 
     V : (n, 3) float.  vid : (c, 3) int (corner, next, previous).  Without ``jac``
     ``G`` is empty ``(0, 9)``."""

@@ -7,7 +7,7 @@ arithmetic in one compiled call each:
 
 - :func:`angles` and :func:`dets`: corner angles ``(c,)`` with gradients
   ``(c, 9)`` and the four strip determinants ``(q, 4)`` with gradients
-  ``(q, 4, 12)``, the formulas of :func:`optimize.paper.angles.angle_local`
+  ``(q, 4, 12)``, the formulas of :func:`optimize.corners.angle_local`
   and :func:`optimize.paper.det.det_local`;
 - :func:`closest_candidates`: the closest point among each query point's
   candidate triangles (:class:`optimize.proximity.Footpoints`), the

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .corners import angle_values, corner_vertices
 from .mesh import Mesh, unit_exponent
 from .tolerances import DEFAULT, Tolerances
 
@@ -37,14 +38,9 @@ def _unit(V: np.ndarray) -> tuple[np.ndarray, int]:
 
 
 def corner_angles(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
-    """(c,) float: interior angle at every corner (radians), topology corner order."""
-    t = mesh.topology
+    """(c,) float: interior angle at every corner (radians), topology corner order (:mod:`optimize.corners`)."""
     V = _unit(mesh.V if V is None else V)[0]
-    p = V[t.corner_vertex]
-    u = V[t.corner_next_vertex] - p
-    w = V[t.corner_prev_vertex] - p
-    cross = np.linalg.norm(np.cross(u, w), axis=1)
-    return np.arctan2(cross, np.einsum("ij,ij->i", u, w))
+    return angle_values(V[corner_vertices(mesh.topology)])
 
 
 def quad_planarity(Q: np.ndarray) -> np.ndarray:

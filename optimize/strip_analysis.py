@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .corners import angle_values
 from .mesh import Mesh
 from .strips import StripLayout, ruling_points, strip_layouts, strip_mesh
 
@@ -243,9 +244,7 @@ def _quad_angles(Q: np.ndarray) -> np.ndarray:
     """(q, 4) float: corner angles of quads ``Q (q, 4, d)`` (unsigned)."""
     if Q.shape[2] == 2:
         Q = np.concatenate([Q, np.zeros(Q.shape[:2] + (1,))], axis=2)
-    u = np.roll(Q, -1, axis=1) - Q
-    w = np.roll(Q, 1, axis=1) - Q
-    return np.arctan2(np.linalg.norm(np.cross(u, w), axis=2), np.einsum("qkj,qkj->qk", u, w))
+    return angle_values(np.stack([Q, np.roll(Q, -1, axis=1), np.roll(Q, 1, axis=1)], axis=2))
 
 
 def strip_report(mesh: Mesh, *, tol: float = 1e-6) -> list[dict]:

@@ -6,7 +6,7 @@ import scipy.sparse as sp
 from optimize import shapes
 from optimize.mesh import Mesh
 from optimize.paper.angle_sum import angle_sum
-from optimize.paper.angles import corner_angle_terms
+from optimize.corners import corner_angle_gradients
 from optimize.paper.balance import angle_balance
 from optimize.paper.circular import circular_angles
 from optimize.paper.det import det_combined_local, det_constraints
@@ -55,7 +55,7 @@ def test_angle_sum_jacobian_on_ngons():
 
 def test_corner_angle_gradient_and_value():
     m = dome(noise=0.3)
-    phi, cols, vals = corner_angle_terms(m.topology, m.V)
+    phi, cols, vals = corner_angle_gradients(m.topology, m.V)
     from optimize.measures import corner_angles
     assert np.allclose(phi, corner_angles(m), atol=1e-14)
     assert cols.shape == vals.shape == (len(phi), 9)

@@ -15,7 +15,7 @@ from optimize import measures
 from optimize.proximity import Reference, closest_on_triangles
 from optimize import kernels
 from optimize.paper import run_paper_method
-from optimize.paper.angles import angle_local, corner_vertices
+from optimize.corners import angle_local, corner_vertices
 from optimize.paper.assembly import gram_band
 from optimize.paper.cache import problem_for
 from optimize.paper.det import det_local

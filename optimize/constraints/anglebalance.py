@@ -15,7 +15,7 @@ import numpy as np
 
 from ..mesh import Mesh
 from ..variables import Layout
-from .angles import corner_angle_terms
+from .angles import angle_rows
 
 
 def terms(x: np.ndarray, layout: Layout, mesh: Mesh, parts: bool = False,
@@ -28,5 +28,5 @@ def terms(x: np.ndarray, layout: Layout, mesh: Mesh, parts: bool = False,
     t = mesh.topology
     cv = t.interior_valence4 if which is None else t.interior_valence4[which]
     C = t.star_corners[cv, :4]
-    return corner_angle_terms(x, layout, mesh, C, np.array([1.0, -1.0, 1.0, -1.0]), np.zeros(len(C)),
+    return angle_rows(x, layout, mesh, C, np.array([1.0, -1.0, 1.0, -1.0]), np.zeros(len(C)),
                               parts=parts)

@@ -12,7 +12,7 @@ import scipy.sparse as sp
 
 from ..mesh import Mesh
 from ..variables import Layout
-from .angles import corner_angle_terms
+from .angles import angle_rows
 
 
 def terms(x: np.ndarray, layout: Layout, mesh: Mesh) -> tuple[np.ndarray, sp.csr_matrix]:
@@ -22,4 +22,4 @@ def terms(x: np.ndarray, layout: Layout, mesh: Mesh) -> tuple[np.ndarray, sp.csr
     C = t.offsets[Q][:, None] + np.arange(4)[None, :]  # (q, 4) corners in face order
     pairs = np.concatenate([C[:, [0, 2]], C[:, [1, 3]]], axis=0)  # (2q, 2): quad-major below
     order = np.stack([np.arange(len(Q)), len(Q) + np.arange(len(Q))], axis=1).ravel()
-    return corner_angle_terms(x, layout, mesh, pairs[order], np.ones(2), np.full(2 * len(Q), np.pi))
+    return angle_rows(x, layout, mesh, pairs[order], np.ones(2), np.full(2 * len(Q), np.pi))

@@ -10,7 +10,6 @@ Names load on first use (PEP 562).
 from .._lazy import lazy_exports
 
 _EXPORTS = {
-    "corner_angle_terms": ".angles",
     "angle_balance": ".balance",
     "circular_angles": ".circular",
     "det_constraints": ".det",

@@ -16,7 +16,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from .angles import combine, corner_angle_terms, face_corners
+from ..corners import corner_angle_gradients
+from .combine import combine, face_corners
 
 
 def angle_sum_faces(mesh: Mesh) -> np.ndarray:
@@ -25,7 +26,7 @@ def angle_sum_faces(mesh: Mesh) -> np.ndarray:
 
 
 def angle_sum_rows(mesh: Mesh, faces: np.ndarray | None = None):
-    """Row spec ``(corners (r, k), signs, const (r,))`` for :func:`optimize.paper.angles.combine`."""
+    """Row spec ``(corners (r, k), signs, const (r,))`` for :func:`optimize.paper.combine.combine`."""
     t = mesh.topology
     faces = angle_sum_faces(mesh) if faces is None else np.asarray(faces, dtype=np.int64)
     return face_corners(t, faces), 1.0, -(t.face_sizes[faces] - 2) * np.pi
@@ -40,12 +41,12 @@ def angle_sum(mesh: Mesh, V: np.ndarray, faces: np.ndarray | None = None,
     mesh : Mesh (topology used).
     V : (n, 3) float, positions.
     faces : (r,) int or None, faces to constrain (default :func:`angle_sum_faces`).
-    terms : optional precomputed :func:`corner_angle_terms` ``(phi, cols, vals)`` for ``V``.
+    terms : optional precomputed :func:`corner_angle_gradients` ``(phi, cols, vals)`` for ``V``.
 
     Returns
     -------
     r : (r,) float, ``sum of corner angles - (k - 2) pi`` (radians, <= 0 up to rounding).
     J : (r, 3 n) sparse CSR, ``d r / d x`` with ``x = V.ravel()``.
     """
-    phi, cols, vals = corner_angle_terms(mesh.topology, V) if terms is None else terms
+    phi, cols, vals = corner_angle_gradients(mesh.topology, V) if terms is None else terms
     return combine(phi, cols, vals, *angle_sum_rows(mesh, faces), mesh.n_vertices)

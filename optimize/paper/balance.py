@@ -10,13 +10,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from .angles import combine, corner_angle_terms
+from ..corners import corner_angle_gradients
+from .combine import combine
 
 SIGNS = np.array([1.0, -1.0, 1.0, -1.0])
 
 
 def balance_rows(mesh: Mesh):
-    """Row spec ``(corners (p, 4), signs (4,), const (p,))`` for :func:`optimize.paper.angles.combine`."""
+    """Row spec ``(corners (p, 4), signs (4,), const (p,))`` for :func:`optimize.paper.combine.combine`."""
     t = mesh.topology
     corners = t.star_corners[t.interior_valence4, :4]
     return corners, SIGNS, np.zeros(len(corners))
@@ -27,12 +28,12 @@ def angle_balance(mesh: Mesh, V: np.ndarray, terms=None) -> tuple[np.ndarray, sp
 
     Parameters
     ----------
-    mesh : Mesh.  V : (n, 3) float.  terms : optional :func:`corner_angle_terms` of ``V``.
+    mesh : Mesh.  V : (n, 3) float.  terms : optional :func:`corner_angle_gradients` of ``V``.
 
     Returns
     -------
     r : (p,) float, ``w1 - w2 + w3 - w4`` (radians).
     J : (p, 3 n) sparse CSR.
     """
-    phi, cols, vals = corner_angle_terms(mesh.topology, V) if terms is None else terms
+    phi, cols, vals = corner_angle_gradients(mesh.topology, V) if terms is None else terms
     return combine(phi, cols, vals, *balance_rows(mesh), mesh.n_vertices)

@@ -11,7 +11,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from .angles import combine, corner_angle_terms
+from ..corners import corner_angle_gradients
+from .combine import combine
 
 
 def circular_quads(mesh: Mesh) -> np.ndarray:
@@ -20,7 +21,7 @@ def circular_quads(mesh: Mesh) -> np.ndarray:
 
 
 def circular_rows(mesh: Mesh):
-    """Row spec ``(corners (2 q, 2), signs, const (2 q,))`` for :func:`optimize.paper.angles.combine`."""
+    """Row spec ``(corners (2 q, 2), signs, const (2 q,))`` for :func:`optimize.paper.combine.combine`."""
     base = mesh.topology.offsets[circular_quads(mesh)]
     corners = np.stack([base, base + 2, base + 1, base + 3], axis=1).reshape(-1, 2)  # (2q, 2)
     return corners, 1.0, np.full(len(corners), -np.pi)
@@ -31,12 +32,12 @@ def circular_angles(mesh: Mesh, V: np.ndarray, terms=None) -> tuple[np.ndarray, 
 
     Parameters
     ----------
-    mesh : Mesh.  V : (n, 3) float.  terms : optional :func:`corner_angle_terms` of ``V``.
+    mesh : Mesh.  V : (n, 3) float.  terms : optional :func:`corner_angle_gradients` of ``V``.
 
     Returns
     -------
     r : (2 q,) float (radians).
     J : (2 q, 3 n) sparse CSR.
     """
-    phi, cols, vals = corner_angle_terms(mesh.topology, V) if terms is None else terms
+    phi, cols, vals = corner_angle_gradients(mesh.topology, V) if terms is None else terms
     return combine(phi, cols, vals, *circular_rows(mesh), mesh.n_vertices)

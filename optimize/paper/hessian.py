@@ -5,7 +5,7 @@ constraint row is a sum of local functions (a corner angle of three points; a
 quad's determinants of four points), so ``sum_i y_i Hess c_i`` is assembled
 from small dense blocks, ``(9, 9)`` per corner and ``(12, 12)`` per quad,
 each by central differences of the *exact* local gradients
-(:func:`optimize.paper.angles.angle_local`, :func:`optimize.paper.det.det_local`,
+(:func:`optimize.corners.angle_local`, :func:`optimize.paper.det.det_local`,
 :func:`optimize.paper.det.det_combined_local`) with a step of ``1e-6`` times
 the element size (error about ``1e-10`` relative), for all elements at once.
 """
@@ -17,7 +17,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from .angles import angle_local, corner_vertices
+from ..corners import angle_local, corner_vertices
 from .det import det_combined_local, det_local, det_quads
 
 REL_STEP = 1e-6

@@ -30,7 +30,7 @@ from ..conjugacy import record_net
 from ..result import OptimizeResult, check_folds, record_shape
 from ..tolerances import DEFAULT, Tolerances
 from .. import kernels
-from .angles import angle_values, corner_vertices
+from ..corners import angle_values, corner_vertices
 from .det import det_values
 from ..proximity.footpoints import Footpoints
 from .system import ConstraintSystem, Pattern

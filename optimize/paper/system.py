@@ -15,7 +15,7 @@ import scipy.sparse as sp
 
 from ..mesh import Mesh
 from .. import kernels
-from .angles import angle_local, angle_values, corner_vertices
+from ..corners import angle_local, angle_values, corner_vertices
 from .det import ALTERNATING, det_combined_local, det_local, det_quads, det_values
 
 

@@ -22,7 +22,7 @@ import scipy.sparse as sp
 from ..errors import ConfigError, MeshError
 from ..mesh import Mesh
 from .angle_sum import angle_sum_rows
-from .angles import combine, sign_matrix
+from .combine import combine, sign_matrix
 from .balance import balance_rows
 from .circular import circular_rows
 from .det import det_constraints
@@ -36,7 +36,7 @@ class Term:
 
     name : str, key in histories and multiplier slices.
     kind : "angle" (signed sums of corner angles, given by ``corners``,
-        ``signs``, ``const`` as in :func:`optimize.paper.angles.combine`),
+        ``signs``, ``const`` as in :func:`optimize.paper.combine.combine`),
         "det" (the four strip determinants of every quad) or "det1" (their
         alternating mean, one row per quad: :func:`optimize.paper.det.det_combined_local`).
     weight : float, the block's weight in the penalty energy (``mu`` for ``det``).
