@@ -163,6 +163,26 @@ def _frenet(t: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray, np.nda
     return scale * c, N, B, D / np.linalg.norm(D, axis=1, keepdims=True)
 
 
+def trefoil_band_mesh(rulings: int = 336, width: float = 0.3, *, scale: float = 1.0, twist: bool = True,
+                      name: str = "trefoil_band") -> Mesh:
+    """The band of ``rulings`` rulings (as many quads, closed) along the trefoil knot scaled by ``scale``.
+
+    Rulings of length ``width`` (the knot's units times ``scale``).  ``twist``: the
+    paper's Moebius band (Fig. 9/11 of Liu et al. 2006: 336 quads), the ruling turning
+    half a turn about the knot relative to the Frenet frame (a smooth ruled surface, not
+    developable until optimized with target ``strip``); otherwise the two-sided band along
+    the Darboux direction, on the knot's rectifying developable.  Vertices are numbered as
+    :func:`optimize.strips.strip_mesh` numbers them.
+    """
+    t = np.linspace(0.0, 2 * np.pi, rulings, endpoint=False)
+    c, N, B, D = _frenet(t, scale)
+    if twist:  # the paper's band: the ruling turns half a turn about the knot
+        d = np.cos(0.5 * t)[:, None] * N + np.sin(0.5 * t)[:, None] * B
+    else:  # nearly developable from the start: the optimizer moves little, no ruling collapses
+        d = D
+    return strip_mesh(c - 0.5 * width * d, c + 0.5 * width * d, closed=True, twist=bool(twist), name=name)
+
+
 def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 42, levels: int = 3,
                  twist: bool = True, noise: float = 0.0, seed: int = 0) -> Design:
     """A PQ strip along a trefoil knot with a half twist (paper Fig. 9), made developable.
@@ -186,13 +206,7 @@ def trefoil_band(*, scale: float = 1000.0, width: float = 500.0, rulings: int = 
                           f"= {1.2 * s:g} mm (wider bands run through the neighbouring strand)")
     r = _int(name, "rulings", rulings, 6, 2000)
     levels = _int(name, "levels", levels, 0, 8)
-    t = np.linspace(0.0, 2 * np.pi, r, endpoint=False)
-    c, N, B, D = _frenet(t, s)
-    if twist:  # the paper's band: the ruling turns half a turn about the knot
-        d = np.cos(0.5 * t)[:, None] * N + np.sin(0.5 * t)[:, None] * B
-    else:  # nearly developable from the start: the optimizer moves little, no ruling collapses
-        d = D
-    mesh = strip_mesh(c - 0.5 * w * d, c + 0.5 * w * d, closed=True, twist=bool(twist), name=name)
+    mesh = trefoil_band_mesh(r, w, scale=s, twist=bool(twist), name=name)
     mesh = _noisy(mesh, _noise(name, noise), _int(name, "seed", seed, 0, 2 ** 31))
     return Design(name, mesh, levels, "chaikin", "strip",
                   f"{'Moebius' if twist else 'closed'} band along a trefoil knot, {r} control rulings", p)

@@ -21,7 +21,7 @@ from optimize.paper.cache import problem_for
 from optimize.paper.det import det_local
 from optimize.proximity import Footpoints
 from optimize.paper.problem import Problem
-from optimize.paper.strip import trefoil_band
+from optimize.designs import trefoil_band_mesh as trefoil_band
 
 RNG = np.random.default_rng(5)
 

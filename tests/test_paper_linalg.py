@@ -17,7 +17,7 @@ from optimize.linalg.spd import solve
 from optimize.paper.penalty import Linearized
 from optimize.paper.problem import Problem
 from optimize.paper.sqp import KKTFactor, kkt_matrix, objective
-from optimize.paper.strip import trefoil_band
+from optimize.designs import trefoil_band_mesh as trefoil_band
 
 RNG = np.random.default_rng(11)
 

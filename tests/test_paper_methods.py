@@ -131,7 +131,7 @@ def test_near_singular_systems_fall_back_to_least_squares():
 
 
 def test_banded_cholesky_matches_sparse_lu():
-    from optimize.paper.strip import trefoil_band
+    from optimize.designs import trefoil_band_mesh as trefoil_band
     m = trefoil_band(60, 0.4)
     p = Problem(m, "strip")
     c, A, _ = p.constraints(p.x0())
