@@ -452,8 +452,6 @@ def linalg(args):
         for be in BACKENDS:
             if be == "auto" or (be == "eliminate" and form.face_blocks() is None):
                 continue
-            if be == "cholespy" and importlib.util.find_spec("cholespy") is None:
-                continue
             s = NormalSolver(be, form.face_blocks(), reuse=False)
             t = time.perf_counter()
             xs = s.solve(A, b)

@@ -183,7 +183,7 @@ class OptimizeSection(Section):
     target: Literal["pq", "conical", "circular", "strip", "none"] | None = None
     method: Literal["default", "penalty", "sqp", "hybrid"] = "default"
     formulation: Literal["auto", "auxiliary", "vertices"] = "auto"
-    linear_solver: Literal["auto", "pardiso", "superlu", "cholespy", "eliminate"] = "auto"
+    linear_solver: Literal["auto", "pardiso", "superlu", "eliminate"] = "auto"
     torsion_free_beams: Literal["auto"] | bool = "auto"
     fairness: float = Field(default=1e-3, ge=0, le=1e6)
     closeness: float = Field(default=1e-2, ge=0, le=1e6)

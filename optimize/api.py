@@ -17,20 +17,18 @@ from .proximity.curve import BoundaryCurve
 from .proximity.surface import Reference
 from .constraints import fixed as fixed_mod
 from .errors import ConfigError
-from .formulation import TARGETS, UNKNOWNS, Formulation, fit_axes
+from .options import DEFAULTS, FORMULATIONS, METHODS, OptimizeOptions  # noqa: F401 (re-exported)
+from .formulation import Formulation, fit_axes
 from .conjugacy import record_net
 from .constraints import convexity
 from . import guided
 from .guided import Convex, Glide, solve
-from .linalg.normal import BACKENDS
 from .mesh import Mesh
 from .result import OptimizeResult, check_folds, record_shape
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
 
-METHODS = ("default", "penalty", "sqp", "hybrid")
-FORMULATIONS = ("auto",) + UNKNOWNS
 FOLD_ADVICE = ("the convexity rows should have prevented this: please report it; remeshing along "
                "principal directions (input.remesh) gives a mesh a fold-free PQ mesh is near")
 NO_CONVEX_FOLD_ADVICE = ("run with convexity kept (drop --no-convex / convex=False): faces then stay convex "
@@ -54,11 +52,12 @@ def normalization(mesh: Mesh) -> tuple[np.ndarray, float]:
     return mesh.V.mean(axis=0), float(measures.edge_lengths(mesh).mean())
 
 
-def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
-                  reference: Mesh | None = None, fixed=None, glide_boundary: bool = False,
-                  fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = Tolerances(),
-                  max_iter: int = 200, callback=None, linear_solver: str = "auto",
-                  formulation: str = "auto", torsion_free_beams="auto", convex: bool = True,
+def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DEFAULTS.method,
+                  reference: Mesh | None = None, fixed=None, glide_boundary: bool = DEFAULTS.glide_boundary,
+                  fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness,
+                  tol: Tolerances = DEFAULTS.tol, max_iter: int = DEFAULTS.max_iter, callback=None,
+                  linear_solver: str = DEFAULTS.linear_solver, formulation: str = DEFAULTS.formulation,
+                  torsion_free_beams=DEFAULTS.torsion_free_beams, convex: bool = DEFAULTS.convex,
                   **options) -> OptimizeResult:
     """Move the vertices of ``mesh`` so that it becomes ``target``; never mutates ``mesh``.
 
@@ -83,7 +82,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     tol : Tolerances; the run converges when every defect of the target is within it.
     max_iter : iteration budget.
     callback : ``callback(entry: dict)`` after each iteration.
-    linear_solver : one of ``optimize.linalg.BACKENDS`` (default method only);
+    linear_solver : one of ``optimize.options.LINEAR_SOLVERS`` (default method only);
         ``"auto"`` is MKL PARDISO where installed, else SciPy's SuperLU.
     formulation : ``"auxiliary"`` (quadratic rows on positions plus unit normals,
         cone axes, circle centres), ``"vertices"`` (positions only) or ``"auto"``
@@ -104,32 +103,37 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
 
     Returns :class:`OptimizeResult` (``success`` only when every tolerance is met).
     Raises :class:`ConfigError` for unknown target, method, fixed or solver values.
+    The keywords are those of :class:`optimize.options.OptimizeOptions` (their defaults
+    are its defaults); :func:`run` takes such an object.
     """
-    if method not in METHODS:
-        raise ConfigError(f"method: {method!r} is not known, expected one of {METHODS}")
-    if method != "default" and (formulation != "auto" or linear_solver != "auto"):
-        raise ConfigError(f"formulation / linear_solver ({formulation!r}, {linear_solver!r}) are settings "
-                          f"of the default method, not of {method!r}; leave them 'auto'")
-    if method != "default":
-        return _paper(mesh, target, method=method, reference=reference, fixed=fixed,
-                      glide_boundary=glide_boundary, fairness=fairness, closeness=closeness,
-                      tol=tol, max_iter=max_iter, callback=callback, **options)
-    if options:
-        raise ConfigError(f"options {sorted(options)} are only for the paper's methods, not {method!r}")
-    if target == "strip":
-        raise ConfigError("target: 'strip' is solved by the paper's methods only; use "
-                          "method='penalty', 'sqp' or 'hybrid'")
-    if target not in TARGETS:
-        raise ConfigError(f"target: {target!r} is not known, expected one of {TARGETS}")
-    if formulation not in FORMULATIONS:
-        raise ConfigError(f"formulation: {formulation!r} is not known, expected one of {FORMULATIONS}")
-    if linear_solver not in BACKENDS:
-        raise ConfigError(f"linear_solver: {linear_solver!r} is not known, expected one of {BACKENDS}")
-    for key, val in (("fairness", fairness), ("closeness", closeness)):
-        if not (np.isfinite(val) and val >= 0):
-            raise ConfigError(f"{key}: weight {val!r}, expected a finite number >= 0")
-    if int(max_iter) < 0:
-        raise ConfigError(f"max_iter: {max_iter!r}, expected a non-negative integer")
+    opts = OptimizeOptions(target=target, method=method, fairness=fairness, closeness=closeness,
+                           max_iter=max_iter, tol=tol, linear_solver=linear_solver, formulation=formulation,
+                           torsion_free_beams=torsion_free_beams, convex=convex, glide_boundary=glide_boundary,
+                           paper=options)
+    return run(mesh, opts, reference=reference, fixed=fixed, callback=callback)
+
+
+def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None = None, fixed=None,
+        callback=None) -> OptimizeResult:
+    """Optimize ``mesh`` with the settings ``opts`` (:class:`optimize.options.OptimizeOptions`).
+
+    reference, fixed, callback : as in :func:`optimize_mesh`.  The default method runs
+    here; the paper's methods in ``optimize.paper`` (imported only then).
+    """
+    if opts.method != "default":
+        return _paper(mesh, opts.target, method=opts.method, reference=reference, fixed=fixed,
+                      glide_boundary=opts.glide_boundary, fairness=opts.fairness, closeness=opts.closeness,
+                      tol=opts.tol, max_iter=opts.max_iter, callback=callback, **opts.paper)
+    target, tol, formulation, linear_solver = opts.target, opts.tol, opts.formulation, opts.linear_solver
+    fairness, closeness, max_iter = opts.fairness, opts.closeness, opts.max_iter
+    glide_boundary, torsion_free_beams, convex = opts.glide_boundary, opts.torsion_free_beams, opts.convex
+    method = opts.method
+    if linear_solver == "pardiso":
+        from .linalg import pardiso
+
+        if not pardiso.available():
+            raise ConfigError(f"linear_solver: 'pardiso' needs Intel MKL, which did not load "
+                              f"({pardiso.load_error()}); install the 'mkl' package or use 'auto' / 'superlu'")
     t0 = time.perf_counter()
     centre, h = normalization(mesh)
     norm = mesh.with_vertices((mesh.V - centre) / h)
@@ -149,8 +153,6 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
             glide = Glide(bnd, BoundaryCurve(ref_norm), E[at], floor)
     unknowns = resolve_formulation(target, formulation)
     t = mesh.topology
-    if torsion_free_beams not in ("auto", True, False):
-        raise ConfigError(f"torsion_free_beams: {torsion_free_beams!r}, expected 'auto', true or false")
     beams = (target == "conical" and unknowns == "vertices"
              and (bool(t.interior_irregular.size) if torsion_free_beams == "auto"
                   else bool(torsion_free_beams)))

@@ -27,7 +27,7 @@ def register(sub) -> None:
     p.add_argument("--formulation", choices=("auto", "auxiliary", "vertices"), default="auto",
                    help="default method's unknowns: auxiliary (positions + normals, axes, centres; "
                         "quadratic rows), vertices (positions only), auto (vertices for conical)")
-    p.add_argument("--linear-solver", choices=("auto", "pardiso", "superlu", "cholespy", "eliminate"),
+    p.add_argument("--linear-solver", choices=("auto", "pardiso", "superlu", "eliminate"),
                    default="auto", help="sparse solver of the default method (auto: MKL PARDISO "
                                         "where installed, else SuperLU)")
     p.add_argument("--torsion-free-beams", choices=("auto", "on", "off"), default="auto",

@@ -11,9 +11,6 @@ definite matrix with the same sparsity pattern every iteration.  Backends:
   on these systems (10k-face conical system 0.63 s against 5.7 s).
 - ``"superlu"``: SciPy's SuperLU in symmetric mode
   (``diag_pivot_thresh=0``, ``MMD_AT_PLUS_A`` ordering).
-- ``"cholespy"``: sparse Cholesky (CHOLMOD inside cholespy, which ships a
-  reference BLAS, so its supernodal kernels are slow: measured 1-3x slower
-  than SuperLU on these systems, see ``benchmarks/bench_optimize.py --linalg``).
 - ``"eliminate"``: per-face auxiliary unknowns (normals, circle centres)
   couple only within their face, so their diagonal blocks are small and
   independent; they are eliminated (batched dense inverses, Schur
@@ -23,10 +20,11 @@ definite matrix with the same sparsity pattern every iteration.  Backends:
 Measured on 10k-face systems (one fresh factorization, shared 2-core
 machine): PQ 60k unknowns cholespy 0.62 s, SuperLU 0.56 s, eliminate 0.51 s;
 circular 100k: 0.89 / 0.53 / 0.40 s; conical 100k: 18.1 / 8.3 / 12.1 s (the
-conical rows couple a whole vertex star: much more fill).
+conical rows couple a whole vertex star: much more fill).  cholespy (CHOLMOD
+with a reference BLAS), once a backend, was never faster than SuperLU (1-3x
+slower) and is no longer offered.
 
-Neither library exposes a numeric-only refactorization (cholespy factors in
-its constructor; factoring SuperLU's matrix permuted by a previous ``perm_c``
+SuperLU exposes no numeric-only refactorization (factoring its matrix permuted by a previous ``perm_c``
 with the ``NATURAL`` ordering was measured 10x slower, the etree postorder
 being lost).  What is reused across iterations instead is the whole factor:
 a new system is first solved by conjugate gradients preconditioned with the
@@ -42,11 +40,12 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from ..options import LINEAR_SOLVERS
 from .superlu import superlu
 
 log = logging.getLogger(__name__)
 
-BACKENDS = ("auto", "pardiso", "cholespy", "superlu", "eliminate")
+BACKENDS = LINEAR_SOLVERS  # the settings' values (optimize.options), one list
 
 
 def resolve_backend(backend: str) -> str:
@@ -60,27 +59,6 @@ def resolve_backend(backend: str) -> str:
 
 class SolveError(RuntimeError):
     """The factorization failed (matrix not positive definite or singular)."""
-
-
-def _cholespy_factor(A: sp.spmatrix):
-    """A function ``b -> A^{-1} b`` from a cholespy (CHOLMOD) factorization of SPD ``A``."""
-    from cholespy import CholeskySolverD, MatrixType
-
-    A = A.tocsr()
-    A.sort_indices()
-    solver = CholeskySolverD(A.shape[0], A.indptr.astype(np.int32), A.indices.astype(np.int32),
-                             np.ascontiguousarray(A.data), MatrixType.CSR)
-
-    def apply(b):
-        x = np.zeros(b.shape)
-        solver.solve(np.ascontiguousarray(b, dtype=np.float64), x)
-        return x
-
-    return apply
-
-
-def _cholespy_solve(A: sp.spmatrix, b: np.ndarray) -> np.ndarray:
-    return _cholespy_factor(A)(b)
 
 
 def _superlu_factor(A: sp.spmatrix):
@@ -136,8 +114,6 @@ class NormalSolver:
 
                     self._pardiso = PardisoCholesky()
                 self._factor = self._pardiso.update(A)
-            elif self.backend == "cholespy":
-                self._factor = _cholespy_factor(A)
             elif self.backend == "superlu":
                 self._factor = _superlu_factor(A)
             else:

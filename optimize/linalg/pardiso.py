@@ -73,6 +73,11 @@ def _load():
     return None
 
 
+def load_error() -> str:
+    """Why MKL did not load ("" when it did or was not tried yet)."""
+    return _LIB_ERROR
+
+
 def available() -> bool:
     """True when MKL PARDISO can be loaded here."""
     return _load() is not None

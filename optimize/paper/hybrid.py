@@ -25,6 +25,7 @@ import time
 from ..errors import ConfigError
 from ..mesh import Mesh
 from ..result import OptimizeResult
+from ..options import DEFAULTS
 from ..tolerances import DEFAULT, Tolerances
 from .penalty import penalty, run_penalty
 from .cache import problem_for
@@ -35,8 +36,8 @@ METHODS = ("penalty", "sqp", "hybrid")
 
 
 def hybrid(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=None,
-           fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = DEFAULT,
-           max_iter: int = 200, callback=None, mu: float | None = None, switch: float = 1.0,
+           fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness, tol: Tolerances = DEFAULT,
+           max_iter: int = DEFAULTS.max_iter, callback=None, mu: float | None = None, switch: float = 1.0,
            penalty_iter: int = 30, kkt_tol: float = 1e-6, kkt_patience: int = 10,
            hessian: str = "gauss-newton") -> OptimizeResult:
     """Penalty then SQP on ``mesh`` (unchanged); parameters as :func:`run_paper_method`."""
@@ -63,8 +64,8 @@ def hybrid(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fix
 
 def run_paper_method(mesh: Mesh, target: str = "pq", method: str = "hybrid", *,
                      reference: Mesh | None = None, fixed=None, glide_boundary: bool = False,
-                     fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = DEFAULT,
-                     max_iter: int = 200, callback=None, **options) -> OptimizeResult:
+                     fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness, tol: Tolerances = DEFAULT,
+                     max_iter: int = DEFAULTS.max_iter, callback=None, **options) -> OptimizeResult:
     """Run one of the paper's methods; same keywords as ``optimize.optimize_mesh``.
 
     mesh : Mesh (never modified).  target : "pq" | "conical" | "circular" | "strip".

@@ -45,6 +45,7 @@ import scipy.sparse as sp
 
 from ..mesh import Mesh
 from ..result import OptimizeResult
+from ..options import DEFAULTS
 from ..tolerances import DEFAULT, Tolerances
 from scipy.linalg.blas import dsbmv
 
@@ -238,8 +239,8 @@ def run_penalty(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, pati
 
 
 def penalty(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=None,
-            fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = DEFAULT,
-            max_iter: int = 200, callback=None, mu: float | None = None) -> OptimizeResult:
+            fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness, tol: Tolerances = DEFAULT,
+            max_iter: int = DEFAULTS.max_iter, callback=None, mu: float | None = None) -> OptimizeResult:
     """Run the penalty method on ``mesh`` (unchanged) and return an :class:`OptimizeResult`.
 
     Parameters are those of :func:`optimize.paper.run_paper_method`; ``mu`` is

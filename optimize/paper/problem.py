@@ -28,6 +28,7 @@ from ..fairness import fairness_matrix
 from ..mesh import Mesh
 from ..conjugacy import record_net
 from ..result import OptimizeResult, check_folds, record_shape
+from ..options import DEFAULTS
 from ..tolerances import DEFAULT, Tolerances
 from .. import kernels
 from ..corners import angle_values, corner_vertices
@@ -54,7 +55,7 @@ class Problem:
     """
 
     def __init__(self, mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=None,
-                 fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = DEFAULT,
+                 fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness, tol: Tolerances = DEFAULT,
                  mu: float | None = None):
         self.mesh, self.target, self.tol = mesh, target, tol
         self.terms = target_terms(mesh, target, mu)

@@ -83,6 +83,7 @@ import scipy.sparse as sp
 
 from ..mesh import Mesh
 from ..result import OptimizeResult
+from ..options import DEFAULTS
 from ..tolerances import DEFAULT, Tolerances
 from .assembly import kkt_band
 from .hessian import constraint_curvature
@@ -370,8 +371,8 @@ def check_hessian(hessian: str) -> str:
 
 
 def sqp(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=None,
-        fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = DEFAULT,
-        max_iter: int = 200, callback=None, mu: float | None = None,
+        fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness, tol: Tolerances = DEFAULT,
+        max_iter: int = DEFAULTS.max_iter, callback=None, mu: float | None = None,
         kkt_tol: float = 1e-6, kkt_patience: int = 10, hessian: str = "gauss-newton") -> OptimizeResult:
     """Run SQP on ``mesh`` (unchanged); the result's ``multipliers`` are those of the last KKT solve.
 
