@@ -427,7 +427,7 @@ def scaling(args):
 def linalg(args):
     import scipy.sparse as sp
 
-    from optimize.api import normalization
+    from optimize.measures import normalization
     from optimize.fairness import fairness_matrix_parts
     from optimize.formulation import Formulation
     from optimize.guided import _embed

@@ -47,11 +47,6 @@ def resolve_formulation(target: str, formulation: str) -> str:
     return "vertices" if target == "conical" else "auxiliary"
 
 
-def normalization(mesh: Mesh) -> tuple[np.ndarray, float]:
-    """Centre ``(3,)`` and scale (mean edge length) that map ``mesh`` to unit edges."""
-    return mesh.V.mean(axis=0), float(measures.edge_lengths(mesh).mean())
-
-
 def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DEFAULTS.method,
                   reference: Mesh | None = None, fixed=None, glide_boundary: bool = DEFAULTS.glide_boundary,
                   fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness,
@@ -135,7 +130,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
             raise ConfigError(f"linear_solver: 'pardiso' needs Intel MKL, which did not load "
                               f"({pardiso.load_error()}); install the 'mkl' package or use 'auto' / 'superlu'")
     t0 = time.perf_counter()
-    centre, h = normalization(mesh)
+    centre, h = measures.normalization(mesh)
     norm = mesh.with_vertices((mesh.V - centre) / h)
     ref_mesh = reference if reference is not None else mesh
     ref_norm = ref_mesh.with_vertices((ref_mesh.V - centre) / h) if reference is not None else norm

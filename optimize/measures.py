@@ -37,6 +37,12 @@ def _unit(V: np.ndarray) -> tuple[np.ndarray, int]:
     return (np.ldexp(V, -e) if e else V), e
 
 
+def normalization(mesh: Mesh) -> tuple[np.ndarray, float]:
+    """Centre ``(3,)`` and scale (mean edge length) that map ``mesh`` to unit edges: every solver
+    works in these coordinates, so its weights mean the same at every scale."""
+    return mesh.V.mean(axis=0), float(edge_lengths(mesh).mean())
+
+
 def corner_angles(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(c,) float: interior angle at every corner (radians), topology corner order (:mod:`optimize.corners`)."""
     V = _unit(mesh.V if V is None else V)[0]

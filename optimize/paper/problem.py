@@ -64,8 +64,7 @@ class Problem:
         if self.w_fair < 0 or self.w_close < 0:
             from ..errors import ConfigError
             raise ConfigError(f"fairness={fairness}, closeness={closeness}: weights must be >= 0")
-        self.center = mesh.V.mean(axis=0)
-        self.h = float(measures.edge_lengths(mesh).mean())
+        self.center, self.h = measures.normalization(mesh)
         n = mesh.n_vertices
         self.fixed = resolve(mesh, fixed)
         mask = np.ones(3 * n, dtype=bool)
@@ -301,7 +300,7 @@ class Problem:
     def result(self, x: np.ndarray, *, status: str, nit: int, history: list, timings: dict,
                method: str, message: str, multipliers: np.ndarray | None = None) -> OptimizeResult:
         """Build the :class:`OptimizeResult` for the final scaled vector ``x``."""
-        V = self.positions(x)
+        V = self.positions(x) if nit else self.mesh.V.copy()  # no step taken: bit-exact input
         if len(self.fixed):
             V[self.fixed] = self.mesh.V[self.fixed]  # exactly where they were
         out = self.mesh.with_vertices(V, name=f"{self.mesh.name}+{method}-{self.target}")
