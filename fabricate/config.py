@@ -84,7 +84,7 @@ def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
 
 
 class ShapeInput(Section):
-    """A built-in design of :mod:`optimize.designs` with its parameters (checked by
+    """A built-in design of :mod:`optimize.modelling.designs` with its parameters (checked by
     :func:`fabricate.config_design.check_design`)."""
 
     name: str

@@ -35,7 +35,7 @@ def stage_input(ctx) -> str:
     kind = inp.kind
     plan: dict[str, Any] = {"kind": kind, "levels": 0, "scheme": "catmull_clark", "target": "conical"}
     if kind == "shape":
-        from optimize.designs import DESIGNS
+        from optimize.modelling.designs import DESIGNS
 
         design = DESIGNS[inp.shape.name](**inp.shape.params)  # parameters checked with the config
         mesh = design.mesh
@@ -44,14 +44,14 @@ def stage_input(ctx) -> str:
                     params=_plain(design.params), units=design.units)
         factor = UNIT_TO_MM[design.units] * cfg.scale  # designs carry their units; `units` is for files
     else:
-        from optimize.io import read_mesh
+        from optimize.mesh.io import read_mesh
 
         path = getattr(inp, kind)
         mesh = read_mesh(path, layer=inp.layer, name=inp.object)  # layer/object: .3dm only
         plan.update(source=str(path), units=cfg.units, levels=2 if kind == "control" else 0)
         factor = cfg.mm_per_unit
         if kind == "surface":
-            from optimize.remesh import remesh
+            from optimize.remesh.quads import remesh
 
             ctx.values["surface"] = mesh  # the optimizer's reference: the user's surface, not the quads
             mesh, rep = remesh(mesh, inp.edge_length, radius=inp.radius, side=inp.side,
@@ -78,7 +78,7 @@ def stage_input(ctx) -> str:
 
 # -- optimize ------------------------------------------------------------------
 def stage_optimize(ctx) -> str:
-    """Subdivide and perturb to the target (``optimize.hierarchy.subdivide_and_perturb``;
+    """Subdivide and perturb to the target (``optimize.modelling.hierarchy.subdivide_and_perturb``;
     ``levels = 0`` optimizes the input itself, target ``"none"`` only subdivides)."""
     cfg, plan = ctx.config, ctx["plan"]
     mesh = ctx["input_mesh"]
@@ -93,7 +93,7 @@ def stage_optimize(ctx) -> str:
         ctx.progress.advance("optimize", 1, f"iteration {iteration[0]}"
                              + (f", planarity {p:.2e}" if isinstance(p, float) else ""))
 
-    from optimize.hierarchy import subdivide_and_perturb
+    from optimize.modelling.hierarchy import subdivide_and_perturb
 
     kwargs = dict(method=opt.method, fixed=_fixed(opt.fixed), glide_boundary=opt.glide_boundary,
                   fairness=opt.fairness, closeness=opt.closeness, tol=cfg.tolerances.to_tolerances(),
@@ -108,7 +108,7 @@ def stage_optimize(ctx) -> str:
     result = hier.levels[-1].result
     mesh = hier.mesh
     if cfg.input.kind == "mesh" and cfg.input.remesh != "never" and levels == 0 and result is not None:
-        from optimize.routes import optimize_routes  # input.remesh: the remeshed route too
+        from optimize.remesh.routes import optimize_routes  # input.remesh: the remeshed route too
 
         kwargs.pop("callback")
         chosen, routes = optimize_routes(ctx["input_mesh"], target, remesh=cfg.input.remesh,
@@ -242,7 +242,7 @@ def stage_exports(ctx) -> str:
     import yaml
 
     from optimize.atomic import atomic_open
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     cfg, out = ctx.config, ctx.workdir
     with atomic_open(out / "config.yaml") as fh:

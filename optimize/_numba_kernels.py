@@ -17,7 +17,7 @@ def _cross(a0, a1, a2, b0, b1, b2):
 
 @njit(cache=True)
 def angles(V, vid, jac):
-    """``phi (c,)`` and ``G (c, 9)`` of :func:`optimize.corners.angle_local` at ``V[vid]``.
+    """``phi (c,)`` and ``G (c, 9)`` of :func:`optimize.mesh.corners.angle_local` at ``V[vid]``.
 
     V : (n, 3) float.  vid : (c, 3) int (corner, next, previous).  Without ``jac``
     ``G`` is empty ``(0, 9)``."""
@@ -49,7 +49,7 @@ def angles(V, vid, jac):
 
 @njit(cache=True)
 def dets(V, quads, jac):
-    """``D (q, 4)`` and ``G (q, 4, 12)`` of :func:`optimize.paper.det.det_local` at ``V[quads]``.
+    """``D (q, 4)`` and ``G (q, 4, 12)`` of :func:`optimize.solvers.paper.det.det_local` at ``V[quads]``.
 
     Without ``jac`` ``G`` is empty ``(0, 4, 12)``."""
     q = quads.shape[0]
@@ -295,7 +295,7 @@ def ldl_solve(L, b, ext):
 
 @njit(cache=True)
 def quad_planarity_max(V, quads):
-    """``optimize.measures.quad_planarity(V[quads]).max(initial=0)``: the largest
+    """``optimize.mesh.measures.quad_planarity(V[quads]).max(initial=0)``: the largest
     diagonal-line distance / mean diagonal length over the quads ``quads (q, 4)``."""
     out = 0.0
     for f in range(quads.shape[0]):

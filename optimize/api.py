@@ -1,8 +1,8 @@
 """``optimize_mesh``: make a mesh PQ, conical or circular, fair and close to a reference.
 
-The default method is the regularized Gauss-Newton of :mod:`optimize.guided`
-on the quadratic formulation of :mod:`optimize.formulation`.  The paper's own
-methods (``"penalty"``, ``"sqp"``, ``"hybrid"``) live in ``optimize.paper`` and
+The default method is the regularized Gauss-Newton of :mod:`optimize.solvers.guided`
+on the quadratic formulation of :mod:`optimize.terms.formulation`.  The paper's own
+methods (``"penalty"``, ``"sqp"``, ``"hybrid"``) live in ``optimize.solvers.paper`` and
 are imported only when asked for.
 """
 from __future__ import annotations
@@ -12,19 +12,18 @@ import time
 
 import numpy as np
 
-from . import measures
+from .errors import ConfigError
+from .mesh import Mesh, measures
+from .options import DEFAULTS, FORMULATIONS, METHODS, OptimizeOptions  # noqa: F401 (re-exported)
 from .proximity.curve import BoundaryCurve
 from .proximity.surface import Reference
-from .constraints import fixed as fixed_mod
-from .errors import ConfigError
-from .options import DEFAULTS, FORMULATIONS, METHODS, OptimizeOptions  # noqa: F401 (re-exported)
-from .formulation import Formulation, fit_axes
-from .conjugacy import record_net
-from .constraints import convexity
-from . import guided
-from .guided import Convex, Glide, solve
-from .mesh import Mesh
+from .remesh.conjugacy import record_net
 from .result import OptimizeResult, check_folds, record_shape
+from .solvers import guided
+from .solvers.guided import Convex, Glide, solve
+from .terms import convexity
+from .terms import fixed as fixed_mod
+from .terms.formulation import Formulation, fit_axes
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
@@ -41,7 +40,7 @@ GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half i
 
 def resolve_formulation(target: str, formulation: str) -> str:
     """The unknowns ``"auto"`` stands for: positions only for ``conical`` (3x smaller
-    factors, fewer iterations; see ``optimize.formulation``), auxiliary otherwise."""
+    factors, fewer iterations; see ``optimize.terms.formulation``), auxiliary otherwise."""
     if formulation != "auto":
         return formulation
     return "vertices" if target == "conical" else "auxiliary"
@@ -61,14 +60,14 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
         around every interior valence-4 vertex tangent to one cone) |
         ``"circular"`` (PQ, and every quad has a circumcircle).
     method : ``"default"`` (regularized Gauss-Newton) | ``"penalty"`` | ``"sqp"`` |
-        ``"hybrid"`` (the paper's methods, ``optimize.paper``).
+        ``"hybrid"`` (the paper's methods, ``optimize.solvers.paper``).
     reference : Mesh or None.  Surface the vertices stay close to (the input
         when None); triangulated inside.
     fixed : None | "none" | "boundary" | "corners" | (k,) int vertex indices that do not move.
     glide_boundary : keep free boundary vertices on the reference's boundary curve
         (corner vertices, with one face, are then fixed); boundary edges at
         gliding vertices keep at least ``GLIDE_EDGE_FLOOR`` of their start
-        length (a one-sided row, :mod:`optimize.constraints.edgefloor`), so a
+        length (a one-sided row, :mod:`optimize.terms.edgefloor`), so a
         vertex cannot slide onto its neighbour or into a corner.
     fairness, closeness : weights of the scale-free fairness and tangent-plane
         closeness energies relative to the constraints (halved every iteration; the
@@ -94,7 +93,7 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
         Where no fold-free mesh is near, the run ends ``stalled`` / ``max_iter`` and
         ``defects["convexity"]`` names the faces held at their convexity floor.
     options : extras of the paper's methods (``mu``, ``kkt_tol``, ...), passed on
-        to ``optimize.paper.run_paper_method``; none for the default method.
+        to ``optimize.solvers.paper.run_paper_method``; none for the default method.
 
     Returns :class:`OptimizeResult` (``success`` only when every tolerance is met).
     Raises :class:`ConfigError` for unknown target, method, fixed or solver values.
@@ -113,7 +112,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     """Optimize ``mesh`` with the settings ``opts`` (:class:`optimize.options.OptimizeOptions`).
 
     reference, fixed, callback : as in :func:`optimize_mesh`.  The default method runs
-    here; the paper's methods in ``optimize.paper`` (imported only then).
+    here; the paper's methods in ``optimize.solvers.paper`` (imported only then).
     """
     if opts.method != "default":
         return _paper(mesh, opts.target, method=opts.method, reference=reference, fixed=fixed,
@@ -272,10 +271,10 @@ def _node_axes(form: Formulation, x: np.ndarray, normals: np.ndarray) -> tuple[n
 
 
 def _paper(mesh, target, **kwargs) -> OptimizeResult:
-    """Dispatch to ``optimize.paper.run_paper_method`` (teammate H3), imported lazily."""
+    """Dispatch to ``optimize.solvers.paper.run_paper_method`` (teammate H3), imported lazily."""
     try:
-        from . import paper
+        from .solvers import paper
     except ImportError as exc:
-        raise ConfigError(f"method: {kwargs['method']!r} needs optimize.paper (the paper's penalty "
+        raise ConfigError(f"method: {kwargs['method']!r} needs optimize.solvers.paper (the paper's penalty "
                           f"and SQP methods), which is not available: {exc}") from exc
     return paper.run_paper_method(mesh, target, **kwargs)

@@ -7,19 +7,19 @@ arithmetic in one compiled call each:
 
 - :func:`angles` and :func:`dets`: corner angles ``(c,)`` with gradients
   ``(c, 9)`` and the four strip determinants ``(q, 4)`` with gradients
-  ``(q, 4, 12)``, the formulas of :func:`optimize.corners.angle_local`
-  and :func:`optimize.paper.det.det_local`;
+  ``(q, 4, 12)``, the formulas of :func:`optimize.mesh.corners.angle_local`
+  and :func:`optimize.solvers.paper.det.det_local`;
 - :func:`closest_candidates`: the closest point among each query point's
   candidate triangles (:class:`optimize.proximity.Footpoints`), the
   case analysis of :func:`optimize.proximity.surface.closest_on_triangles`;
 - :func:`scan_triangles`: new candidates for points that moved, every
   triangle tested (box, then exact distance);
 - :func:`interpolated_normals`: ``optimize.proximity.surface.Reference._interpolated_normals``;
-- :func:`quad_planarity_max`: the largest of ``optimize.measures.quad_planarity``;
+- :func:`quad_planarity_max`: the largest of ``optimize.mesh.measures.quad_planarity``;
 - :func:`scatter_rows`: a term's Jacobian values summed into CSR data;
 - :func:`csr_matvec`: ``M @ x`` for CSR ``M`` (:func:`matvec` falls back to SciPy);
 - :func:`group_gram`: the Gram entries of groups of CSR rows with equal
-  columns, summed into the band of :class:`optimize.paper.assembly.GramBand`;
+  columns, summed into the band of :class:`optimize.solvers.paper.assembly.GramBand`;
 - :func:`ldl_factor`, :func:`ldl_solve`: ``L D L^T`` of a symmetric band
   without pivoting: the penalty method's positive definite normal equations
   (in place of LAPACK's banded Cholesky, a little faster and without the

@@ -1,7 +1,7 @@
 """The optimizer's settings and their defaults, in one frozen object.
 
 :class:`OptimizeOptions` is the one place the defaults live: ``optimize_mesh``,
-the paper's solvers (``optimize.paper``) and the command line take their
+the paper's solvers (``optimize.solvers.paper``) and the command line take their
 defaults from :data:`DEFAULTS`, and a configuration schema can be derived from
 :func:`dataclasses.fields` of it (names, types, defaults, the allowed values in
 :data:`CHOICES`).  Constructing an instance checks every value and raises
@@ -33,7 +33,7 @@ LINEAR_SOLVERS = ("auto", "pardiso", "superlu", "eliminate")
 Intel MKL loads, else SuperLU."""
 FORMULATIONS = ("auto", "auxiliary", "vertices")
 PAPER_EXTRAS = ("mu", "kkt_tol", "kkt_patience", "hessian", "switch", "penalty_iter")
-"""Settings only the paper's methods have (which method takes which: ``optimize.paper.run_paper_method``)."""
+"""Settings only the paper's methods have (which method takes which: ``optimize.solvers.paper.run_paper_method``)."""
 MAX_ITER_LIMIT = 100_000
 
 CHOICES: Mapping[str, tuple] = MappingProxyType({
@@ -59,7 +59,7 @@ class OptimizeOptions:
     convex : keep every corner convex in the input convex (default method).
     glide_boundary : free boundary vertices glide on the reference's boundary curve.
     paper : extras of the paper's methods, names from :data:`PAPER_EXTRAS` (which method takes
-        which is checked by ``optimize.paper.run_paper_method``); read-only mapping.
+        which is checked by ``optimize.solvers.paper.run_paper_method``); read-only mapping.
     """
 
     target: str = "pq"
@@ -118,6 +118,18 @@ class OptimizeOptions:
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["tol"], out["paper"] = self.tol.as_dict(), dict(self.paper)
         return out
+
+
+def resolve_optimizer(optimizer=None):
+    """The optimizer a modelling or remeshing step calls: ``optimizer`` (a callable with the
+    signature of :func:`optimize.api.optimize_mesh`), or that function when None, imported
+    here on first use: ``optimize.modelling`` and ``optimize.remesh`` receive the optimizer
+    and never import the api themselves."""
+    if optimizer is not None:
+        return optimizer
+    from .api import optimize_mesh
+
+    return optimize_mesh
 
 
 DEFAULTS = OptimizeOptions()

@@ -41,7 +41,7 @@ from pydantic import BaseModel
 
 from fabricate.batch import parse_sets
 from fabricate.config import RunConfig, load_config
-from optimize.designs import DESIGNS
+from optimize.modelling.designs import DESIGNS
 from optimize.errors import ConfigError
 
 REPO = Path(__file__).resolve().parents[1]

@@ -4,9 +4,10 @@ import json
 import numpy as np
 import pytest
 
-from optimize import Mesh, shapes
-from optimize import measures as M
-from optimize.io import read_mesh
+from optimize import Mesh
+from optimize.modelling import shapes
+from optimize.mesh import measures as M
+from optimize.mesh.io import read_mesh
 
 
 def _planar_star(directions_deg):

@@ -12,9 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from optimize import shapes
+from optimize.modelling import shapes
 from optimize.api import optimize_mesh
-from optimize.designs import trefoil_band_mesh
+from optimize.modelling.designs import trefoil_band_mesh
 from optimize.options import DEFAULT_TARGETS, PAPER_METHODS
 
 CASES = [("default", t) for t in DEFAULT_TARGETS] + [(m, t) for m in PAPER_METHODS

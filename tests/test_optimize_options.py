@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from optimize import shapes
+from optimize.modelling import shapes
 from optimize.api import optimize_mesh
 from optimize.errors import ConfigError
-from optimize.io import write_mesh
+from optimize.mesh.io import write_mesh
 from optimize.options import DEFAULTS, LINEAR_SOLVERS, OptimizeOptions
 
 
@@ -21,7 +21,7 @@ def _defaults_of(fn) -> dict:
 
 @pytest.mark.parametrize("where", ["api", "run_paper_method", "penalty", "sqp", "hybrid", "Problem"])
 def test_every_entry_point_takes_its_defaults_from_the_options(where):
-    from optimize.paper import hybrid, penalty, problem, sqp
+    from optimize.solvers.paper import hybrid, penalty, problem, sqp
 
     fn = {"api": optimize_mesh, "run_paper_method": hybrid.run_paper_method, "penalty": penalty.penalty,
           "sqp": sqp.sqp, "hybrid": hybrid.hybrid, "Problem": problem.Problem}[where]
@@ -92,3 +92,35 @@ def test_cli_pardiso_without_mkl_exits_2_with_one_line(tmp_path):
     lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
     assert len(lines) == 1 and "pardiso" in lines[0] and "Traceback" not in p.stderr, p.stderr
     assert not (tmp_path / "out.obj").exists()
+
+
+def test_modelling_and_remeshing_receive_the_optimizer():
+    from optimize.modelling.hierarchy import subdivide_and_perturb
+
+    calls = []
+
+    def spy(mesh, target, **kw):
+        calls.append((mesh.n_faces, target, kw["max_iter"]))
+        return optimize_mesh(mesh, target, **kw)
+
+    control = shapes.perturbed(shapes.grid(4, 4, height=lambda x, y: 0.2 * x * x + 0.1 * y * y), 0.02, seed=4)
+    hier = subdivide_and_perturb(control, 1, target="pq", optimizer=spy, max_iter=30)
+    assert calls == [(36, "pq", 30)] and hier.levels[-1].result.success
+    # and no module of theirs imports the api back (the default optimizer is resolved in optimize.options)
+    root = Path(__file__).resolve().parents[1] / "optimize"
+    back = [str(p.relative_to(root)) for sub in ("modelling", "remesh") for p in (root / sub).glob("*.py")
+            if "import optimize_mesh" in p.read_text() or ".api import" in p.read_text()]
+    assert back == []
+
+
+def test_raise_for_status_raises_convergence_error_naming_the_defects():
+    from optimize.errors import ConvergenceError
+
+    mesh = shapes.perturbed(shapes.revolution(shapes.dome_profile(k=5), 10), 0.2, seed=2)
+    res = optimize_mesh(mesh, "conical", max_iter=1)
+    assert res.status == "max_iter"
+    with pytest.raises(ConvergenceError, match=r"default/conical ended max_iter after 1 iteration.*conical \S+ > 1e-06"):
+        res.raise_for_status()
+    assert ConvergenceError.exit_code == 3
+    ok = optimize_mesh(shapes.perturbed(shapes.grid(4, 4), 0.02, seed=3), "pq")
+    assert ok.raise_for_status() is ok

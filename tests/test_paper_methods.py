@@ -3,12 +3,13 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from optimize import measures, shapes
+from optimize.mesh import measures
+from optimize.modelling import shapes
 from optimize.errors import ConfigError, MeshError
-from optimize.paper import run_paper_method
+from optimize.solvers.paper import run_paper_method
 from optimize.linalg.spd import SPDSolver, solve
-from optimize.paper.problem import Problem
-from optimize.paper.sqp import kkt_matrix, kkt_residual, kkt_step, objective
+from optimize.solvers.paper.problem import Problem
+from optimize.solvers.paper.sqp import kkt_matrix, kkt_residual, kkt_step, objective
 from optimize.tolerances import Tolerances
 
 TOL = Tolerances()
@@ -131,7 +132,7 @@ def test_near_singular_systems_fall_back_to_least_squares():
 
 
 def test_banded_cholesky_matches_sparse_lu():
-    from optimize.designs import trefoil_band_mesh as trefoil_band
+    from optimize.modelling.designs import trefoil_band_mesh as trefoil_band
     m = trefoil_band(60, 0.4)
     p = Problem(m, "strip")
     c, A, _ = p.constraints(p.x0())

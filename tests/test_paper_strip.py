@@ -2,12 +2,13 @@
 import numpy as np
 import pytest
 
-from optimize import measures, shapes
+from optimize.mesh import measures
+from optimize.modelling import shapes
 from optimize.errors import ConfigError, MeshError
-from optimize.paper import check_strip, run_paper_method
-from optimize.paper.det import det_local
-from optimize.designs import trefoil_band_mesh as trefoil_band
-from optimize.strips import strip_mesh
+from optimize.solvers.paper import check_strip, run_paper_method
+from optimize.solvers.paper.det import det_local
+from optimize.modelling.designs import trefoil_band_mesh as trefoil_band
+from optimize.modelling.strips import strip_mesh
 
 
 def rails(m=8):

@@ -282,8 +282,8 @@ def test_outcome_precedence_names_every_failure(check_pass, tol_pass, expected):
 # -- file modes follow the umask (#14) -------------------------------------------------------------
 @pytest.mark.parametrize("mask", [0o022, 0o027])
 def test_written_files_and_folders_follow_the_umask(tmp_path, mask):
-    from optimize import shapes
-    from optimize.io import write_mesh
+    from optimize.modelling import shapes
+    from optimize.mesh.io import write_mesh
 
     old = os.umask(mask)
     try:

@@ -31,14 +31,14 @@ def test_import_errors_loads_nothing_heavy():
 
 @pytest.mark.parametrize("target", ["pq", "conical"])
 def test_default_run_loads_neither_the_paper_stack_nor_numba(target):
-    """An ordinary run (default method, closeness on) imports no ``optimize.paper``, numba,
+    """An ordinary run (default method, closeness on) imports no ``optimize.solvers.paper``, numba,
     matplotlib or CAD kernel: checked in ``sys.modules`` of a fresh interpreter, so an eager
     import anywhere on the path would show."""
     code = ("from optimize import optimize_mesh, shapes\n"
             "m = shapes.perturbed(shapes.grid(4, 4, height=lambda u, v: 0.3 * u * v), 0.02, seed=1)\n"
             f"res = optimize_mesh(m, {target!r})\n"
             "assert res.nit > 0, res.message")
-    assert _loaded_after(code, HEAVY + ("optimize.paper",)) == {"scipy"}
+    assert _loaded_after(code, HEAVY + ("optimize.solvers.paper",)) == {"scipy"}
 
 
 def test_fabricate_help_loads_nothing_heavy():
@@ -51,7 +51,7 @@ def test_fabricate_help_loads_nothing_heavy():
 def test_measure_loads_nothing_heavy(cylinder_path):
     code = ("import contextlib, io\nfrom fabricate.cli import main\n"
             f"with contextlib.redirect_stdout(io.StringIO()):\n    assert main(['measure', {str(cylinder_path)!r}]) == 0")
-    assert _loaded_after(code) == set()  # components in NumPy (optimize.components)
+    assert _loaded_after(code) == set()  # components in NumPy (optimize.mesh.components)
 
 
 @pytest.mark.parametrize("name", ["optimize_mesh", "Mesh", "MeshError", "Tolerances", "OptimizeResult"])

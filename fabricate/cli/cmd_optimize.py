@@ -61,7 +61,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from optimize import ConfigError, Tolerances, optimize_mesh
     from optimize.atomic import atomic_open
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     from ..quads import CLI_HINT, require_quads
     from .units import read_mm, to_file_units
@@ -77,7 +77,7 @@ def run(args) -> int:
     require_quads(mesh, str(args.mesh), hint=CLI_HINT)
     reference = read_mm(args.reference, args.units) if args.reference else None
     if args.target != "strip":  # said before optimizing: is a fold-free mesh likely near?
-        from optimize.conjugacy import net_defect
+        from optimize.remesh.conjugacy import net_defect
 
         print(f"{mesh.name}: {net_defect(mesh).line(args.target)}")
     kwargs = dict(method=args.method, fixed=None if args.fix == "none" else args.fix,
@@ -91,7 +91,7 @@ def run(args) -> int:
         if args.remesh == "never" or args.target == "strip":
             res = optimize_mesh(mesh, args.target, reference=reference, callback=callback, **kwargs)
         else:
-            from optimize.routes import optimize_routes
+            from optimize.remesh.routes import optimize_routes
 
             chosen, routes = optimize_routes(mesh, args.target, remesh=args.remesh, reference=reference, **kwargs)
             res = chosen.result

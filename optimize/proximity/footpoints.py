@@ -50,7 +50,7 @@ class Footpoints:
 
     ref : Reference.  compiled : use the numba kernels where available (False: the
     NumPy path, which needs no compile/load time).  margin : ``M`` above, in the units of the reference
-    (``optimize.paper.problem.Problem`` uses ``FOOT_MARGIN`` = 0.3 mean edge lengths, the default solver 0.1).
+    (``optimize.solvers.paper.problem.Problem`` uses ``FOOT_MARGIN`` = 0.3 mean edge lengths, the default solver 0.1).
     Counters ``queries`` and ``rebuilt`` (points given new candidates) for the record.
     """
 

@@ -82,7 +82,7 @@ class Reference:
         self.radius = float(radii.max())
         nrm = np.cross(self._B - self._A, self._C - self._A)
         length = np.linalg.norm(nrm, axis=1)
-        from ..measures import face_normals
+        from ..mesh.measures import face_normals
 
         fallback = face_normals(mesh)[self.triangle_face]
         ok = length > 1e-14 * max(self.radius, 1e-300) ** 2
