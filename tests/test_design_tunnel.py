@@ -1,4 +1,4 @@
-"""The built-in design ``tunnel`` (optimize/design_tunnel.py) and the mesh shipped from it."""
+"""The built-in design ``tunnel`` (optimize/modelling/design_tunnel.py) and the mesh shipped from it."""
 import numpy as np
 import pytest
 

@@ -17,6 +17,18 @@ from ..mesh import Mesh
 from .angles import angle_rows
 from .variables import Layout
 
+SIGNS = np.array([1.0, -1.0, 1.0, -1.0])
+
+
+def rows(mesh: Mesh, which: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rows as corner sets: ``C (p, 4)`` star corners of the interior valence-4 vertices
+    (``which`` picks positions in ``interior_valence4``), signs ``(4,)`` and offsets ``(p,)``;
+    row ``i`` is ``sum_s signs[s] angle(C[i, s]) - offset[i]`` (both methods build on this)."""
+    t = mesh.topology
+    cv = t.interior_valence4 if which is None else t.interior_valence4[which]
+    C = t.star_corners[cv, :4]
+    return C, SIGNS, np.zeros(len(C))
+
 
 def terms(x: np.ndarray, layout: Layout, mesh: Mesh, parts: bool = False,
           which: np.ndarray | None = None):
@@ -25,8 +37,4 @@ def terms(x: np.ndarray, layout: Layout, mesh: Mesh, parts: bool = False,
 
     which : (p',) int positions in ``interior_valence4`` to restrict the rows to.
     """
-    t = mesh.topology
-    cv = t.interior_valence4 if which is None else t.interior_valence4[which]
-    C = t.star_corners[cv, :4]
-    return angle_rows(x, layout, mesh, C, np.array([1.0, -1.0, 1.0, -1.0]), np.zeros(len(C)),
-                              parts=parts)
+    return angle_rows(x, layout, mesh, *rows(mesh, which), parts=parts)

@@ -15,11 +15,15 @@ from .angles import angle_rows
 from .variables import Layout
 
 
+def rows(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rows as corner sets: ``C (2q, 2)`` (rows ``2 i``: corners 0, 2 of quad ``i``;
+    ``2 i + 1``: corners 1, 3), signs ``(2,)`` and offsets ``(2q,)`` (pi); row ``i`` is
+    ``sum_s signs[s] angle(C[i, s]) - offset[i]`` (both methods build on this)."""
+    base = mesh.topology.offsets[np.nonzero(mesh.face_sizes == 4)[0]]
+    C = np.stack([base, base + 2, base + 1, base + 3], axis=1).reshape(-1, 2)  # quad-major
+    return C, np.ones(2), np.full(len(C), np.pi)
+
+
 def terms(x: np.ndarray, layout: Layout, mesh: Mesh) -> tuple[np.ndarray, sp.csr_matrix]:
     """Residual ``(2q,)`` and Jacobian ``(2q, layout.size)``."""
-    t = mesh.topology
-    Q = np.nonzero(mesh.face_sizes == 4)[0]
-    C = t.offsets[Q][:, None] + np.arange(4)[None, :]  # (q, 4) corners in face order
-    pairs = np.concatenate([C[:, [0, 2]], C[:, [1, 3]]], axis=0)  # (2q, 2): quad-major below
-    order = np.stack([np.arange(len(Q)), len(Q) + np.arange(len(Q))], axis=1).ravel()
-    return angle_rows(x, layout, mesh, pairs[order], np.ones(2), np.full(2 * len(Q), np.pi))
+    return angle_rows(x, layout, mesh, *rows(mesh))

@@ -11,16 +11,15 @@ import scipy.sparse as sp
 
 from ...mesh import Mesh
 from ...mesh.corners import corner_angle_gradients
+from ...terms import anglebalance
 from .combine import combine
-
-SIGNS = np.array([1.0, -1.0, 1.0, -1.0])
 
 
 def balance_rows(mesh: Mesh):
-    """Row spec ``(corners (p, 4), signs (4,), const (p,))`` for :func:`optimize.solvers.paper.combine.combine`."""
-    t = mesh.topology
-    corners = t.star_corners[t.interior_valence4, :4]
-    return corners, SIGNS, np.zeros(len(corners))
+    """Row spec ``(corners (p, 4), signs (4,), const (p,))`` for :func:`optimize.solvers.paper.combine.combine`:
+    the corner sets of :func:`optimize.terms.anglebalance.rows` (the default method's)."""
+    corners, signs, offset = anglebalance.rows(mesh)
+    return corners, signs, -offset
 
 
 def angle_balance(mesh: Mesh, V: np.ndarray, terms=None) -> tuple[np.ndarray, sp.csr_matrix]:

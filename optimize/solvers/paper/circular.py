@@ -12,6 +12,7 @@ import scipy.sparse as sp
 
 from ...mesh import Mesh
 from ...mesh.corners import corner_angle_gradients
+from ...terms import anglesum
 from .combine import combine
 
 
@@ -22,9 +23,8 @@ def circular_quads(mesh: Mesh) -> np.ndarray:
 
 def circular_rows(mesh: Mesh):
     """Row spec ``(corners (2 q, 2), signs, const (2 q,))`` for :func:`optimize.solvers.paper.combine.combine`."""
-    base = mesh.topology.offsets[circular_quads(mesh)]
-    corners = np.stack([base, base + 2, base + 1, base + 3], axis=1).reshape(-1, 2)  # (2q, 2)
-    return corners, 1.0, np.full(len(corners), -np.pi)
+    corners, signs, offset = anglesum.rows(mesh)  # the default method's corner pairs
+    return corners, 1.0, -offset
 
 
 def circular_angles(mesh: Mesh, V: np.ndarray, terms=None) -> tuple[np.ndarray, sp.csr_matrix]:
