@@ -134,13 +134,10 @@ def target_defects(form: Formulation, V: np.ndarray) -> dict[str, np.ndarray]:
 def _score(defects: dict, tol: Tolerances) -> float:
     """log10 of the worst defect / tolerance ratio (<= 0 means converged).
 
-    ``glide`` (distance of gliding vertices to the boundary curve / mean edge
-    length) and ``short_edge`` (how far an edge at a gliding vertex fell below
-    its floor / mean edge length) are held to the planarity tolerance.
+    Each defect is held to ``tol.for_defect(name)`` (``glide``, ``short_edge`` to the
+    planarity tolerance, ``node_cone``, ``beam`` to the conical one: ``tolerances.HELD_TO``).
     """
-    limit = {"glide": tol.planarity, "short_edge": tol.planarity, "node_cone": tol.conical, "beam": tol.conical}
-    worst = [max(float(d.max(initial=0.0)), 1e-300) / limit.get(k, getattr(tol, k, None) or 1.0)
-             for k, d in defects.items()]
+    worst = [max(float(d.max(initial=0.0)), 1e-300) / tol.for_defect(k) for k, d in defects.items()]
     return float(np.log10(max(worst)))
 
 

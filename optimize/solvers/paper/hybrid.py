@@ -29,7 +29,7 @@ from ...result import OptimizeResult
 from ...tolerances import DEFAULT, Tolerances
 from .cache import problem_for
 from .penalty import penalty, run_penalty
-from .sqp import check_hessian, run_sqp, sqp
+from .sqp import KKT_PATIENCE, KKT_TOL, check_hessian, run_sqp, sqp
 from .targets import default_mu
 
 METHODS = ("penalty", "sqp", "hybrid")
@@ -38,7 +38,7 @@ METHODS = ("penalty", "sqp", "hybrid")
 def hybrid(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=None,
            fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness, tol: Tolerances = DEFAULT,
            max_iter: int = DEFAULTS.max_iter, callback=None, mu: float | None = None, switch: float = 1.0,
-           penalty_iter: int = 30, kkt_tol: float = 1e-6, kkt_patience: int = 10,
+           penalty_iter: int = 30, kkt_tol: float = KKT_TOL, kkt_patience: int = KKT_PATIENCE,
            hessian: str = "gauss-newton") -> OptimizeResult:
     """Penalty then SQP on ``mesh`` (unchanged); parameters as :func:`run_paper_method`."""
     t0 = time.perf_counter()

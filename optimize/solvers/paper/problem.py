@@ -275,8 +275,8 @@ class Problem:
         return out
 
     def tolerance(self, name: str) -> float:
-        """Tolerance of a tested defect (``det`` uses the planarity tolerance)."""
-        return getattr(self.tol, "planarity" if name == "det" else name)
+        """Tolerance of a tested defect (``det`` uses the planarity tolerance: ``Tolerances.for_defect``)."""
+        return self.tol.for_defect(name)
 
     def converged(self, m: dict) -> bool:
         """True when every tested defect in ``m`` is within its tolerance."""

@@ -97,6 +97,7 @@ log = logging.getLogger(__name__)
 
 EPS = 1e-8
 DELTA_START, DELTA_MIN, DELTA_MAX = 1e-3, 1e-10, 1e8
+KKT_TOL, KKT_PATIENCE = 1e-6, 10  # the stationarity test's defaults (module docstring)
 ALPHA_MIN = 1.0 / 64
 
 
@@ -251,8 +252,8 @@ def _adapt(delta: float, alpha: float, trusted: bool = True) -> float:
     return min(delta * (mid if alpha >= 0.25 else up), DELTA_MAX)
 
 
-def run_sqp(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, kkt_tol: float = 1e-6,
-            kkt_patience: int = 10, patience: int = 20, first_iteration: int = 0,
+def run_sqp(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, kkt_tol: float = KKT_TOL,
+            kkt_patience: int = KKT_PATIENCE, patience: int = 20, first_iteration: int = 0,
             y: np.ndarray | None = None, hessian: str = "gauss-newton",
             weights: tuple[float, float] | None = None) -> Run:
     """Iterate from the scaled vector ``x (3 n,)`` (multipliers ``y`` or zeros).
@@ -373,7 +374,7 @@ def check_hessian(hessian: str) -> str:
 def sqp(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=None,
         fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness, tol: Tolerances = DEFAULT,
         max_iter: int = DEFAULTS.max_iter, callback=None, mu: float | None = None,
-        kkt_tol: float = 1e-6, kkt_patience: int = 10, hessian: str = "gauss-newton") -> OptimizeResult:
+        kkt_tol: float = KKT_TOL, kkt_patience: int = KKT_PATIENCE, hessian: str = "gauss-newton") -> OptimizeResult:
     """Run SQP on ``mesh`` (unchanged); the result's ``multipliers`` are those of the last KKT solve.
 
     Multipliers are ordered like the constraint rows: the blocks of
