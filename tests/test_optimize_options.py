@@ -124,3 +124,14 @@ def test_raise_for_status_raises_convergence_error_naming_the_defects():
     assert ConvergenceError.exit_code == 3
     ok = optimize_mesh(shapes.perturbed(shapes.grid(4, 4), 0.02, seed=3), "pq")
     assert ok.raise_for_status() is ok
+
+
+def test_every_defect_a_solver_stops_on_has_one_tolerance():
+    from optimize.tolerances import HELD_TO, Tolerances
+
+    tol = Tolerances(planarity=2e-6, conical=3e-6)
+    assert tol.for_defect("planarity") == 2e-6 and tol.for_defect("circular") == tol.circular
+    assert {k: tol.for_defect(k) for k in HELD_TO} == {"det": 2e-6, "glide": 2e-6, "short_edge": 2e-6,
+                                                       "node_cone": 3e-6, "beam": 3e-6}
+    with pytest.raises(ValueError, match="'flatness' has no tolerance"):
+        tol.for_defect("flatness")
