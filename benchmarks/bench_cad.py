@@ -114,7 +114,7 @@ def run_baseline(panels: int, out: Path) -> dict:
 def run_handoff(panels: int, out: Path) -> dict:
     """The CAD stage with the fabrication hand-off (issue 18): the files of :func:`run_stage` plus
     flat.json, the three schedules, the nested cut files per material and thickness, the layout plan."""
-    from fabricate.config import NestingSection
+    from fabricate.app.config import NestingSection
     from fabricate.export import (write_cut_files, write_flat, write_glass_schedule, write_layout_plan,
                                   write_node_schedule, write_steel_cut_list)
 
@@ -165,8 +165,8 @@ def time_checks(out: Path, export_s: float, occ: bool) -> dict:
 
 def check_railway(out: Path, occ: bool) -> dict:
     """configs/railway_station.yaml run with the check off; its exports stage time is the export."""
-    from fabricate.config import load_config
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.config import load_config
+    from fabricate.app.pipeline import run_pipeline
 
     cfg = load_config(ROOT / "configs" / "railway_station.yaml", overrides={"outputs.check": "off"})
     summary = run_pipeline(cfg, out)

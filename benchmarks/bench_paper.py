@@ -98,7 +98,7 @@ def slow_paths():
     SQP factors its KKT matrix by SuperLU; footpoints come from
     ``Reference.closest`` directly.
     """
-    from optimize.solvers.paper import kernels
+    from optimize import kernels
     from optimize.solvers.paper import cache
     from optimize.solvers.paper.problem import Problem
 

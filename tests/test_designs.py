@@ -7,7 +7,7 @@ import inspect
 import numpy as np
 import pytest
 
-from fabricate.cli import main
+from fabricate.app.cli import main
 from optimize import ConfigError
 from optimize.mesh import measures
 from optimize.modelling.designs import DESIGNS, describe, parse_params

@@ -82,7 +82,7 @@ def test_cli_pardiso_without_mkl_exits_2_with_one_line(tmp_path):
     write_mesh(path, shapes.perturbed(shapes.grid(4, 4), 0.05, seed=3))
     code = ("import sys\nfrom optimize.linalg import pardiso\n"
             "pardiso.available = lambda: False\n"
-            "from fabricate.cli import main\n"
+            "from fabricate.app.cli import main\n"
             f"sys.exit(main(['optimize', {str(path)!r}, '-o', {str(tmp_path / 'out.obj')!r}, "
             "'--linear-solver', 'pardiso']))")
     repo = str(Path(__file__).resolve().parents[1])
