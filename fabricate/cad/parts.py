@@ -84,6 +84,8 @@ class PartGroup:
         several groups, one per member, each naming what it is in the unit
         (``"ply 1"``, ``"web"``, ``"top flange +"``); their ids are
         ``<unit id>.<k>`` (``P0001.1``, ``B0012.3``, k from 1), see :func:`unit_id`.
+    material : ``""`` for the kind's material (panel glass, beam and node steel), else what the
+        solids are made of (a glass unit's interlayer: ``PVB``, ``SGP``); see ``PartSpec.group_density``.
     """
 
     kind: str
@@ -112,6 +114,7 @@ class PartGroup:
     residual_mm: np.ndarray
     neighbours: tuple[tuple[str, ...], ...]
     member: str = ""
+    material: str = ""
 
     def __len__(self) -> int:
         return len(self.ids)
