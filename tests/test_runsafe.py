@@ -12,7 +12,6 @@ import time
 
 import pytest
 
-import fabricate.app.stages as stages
 from fabricate.app.pipeline import outcome, run_pipeline
 from fabricate.app.runfolder import MARKER, run_lock
 from optimize.atomic import PART_OWNER, atomic_dir, atomic_open, part_dir

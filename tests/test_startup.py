@@ -34,7 +34,8 @@ def test_default_run_loads_neither_the_paper_stack_nor_numba(target):
     """An ordinary run (default method, closeness on) imports no ``optimize.solvers.paper``, numba,
     matplotlib or CAD kernel: checked in ``sys.modules`` of a fresh interpreter, so an eager
     import anywhere on the path would show."""
-    code = ("from optimize import optimize_mesh, shapes\n"
+    code = ("from optimize import optimize_mesh\n"
+            "from optimize.modelling import shapes\n"
             "m = shapes.perturbed(shapes.grid(4, 4, height=lambda u, v: 0.3 * u * v), 0.02, seed=1)\n"
             f"res = optimize_mesh(m, {target!r})\n"
             "assert res.nit > 0, res.message")

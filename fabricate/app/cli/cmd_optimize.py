@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 import sys
 
+from optimize.options import DEFAULTS
+
 from .units import add_units
 
 TARGETS = ("pq", "conical", "circular", "strip")
@@ -47,11 +49,15 @@ def register(sub) -> None:
                    help="vertices that must not move (default none)")
     p.add_argument("--glide", action="store_true", help="boundary vertices glide on the boundary curve")
     p.add_argument("--reference", help="reference surface to stay close to (default: the input)")
-    p.add_argument("--fairness", type=float, default=1e-3, metavar="W", help="fairness weight (1e-3)")
-    p.add_argument("--closeness", type=float, default=1e-2, metavar="W", help="closeness weight (1e-2)")
+    p.add_argument("--fairness", type=float, default=DEFAULTS.fairness, metavar="W",
+                   help=f"fairness weight ({DEFAULTS.fairness:g})")
+    p.add_argument("--closeness", type=float, default=DEFAULTS.closeness, metavar="W",
+                   help=f"closeness weight ({DEFAULTS.closeness:g})")
     p.add_argument("--tol", type=float, default=None, metavar="T",
-                   help="tolerance for planarity and the conical/circular defect (default 1e-6)")
-    p.add_argument("--max-iter", type=int, default=200, metavar="N", help="iteration budget (200)")
+                   help="tolerance for planarity and the conical/circular defect "
+                        f"(default {DEFAULTS.tol.planarity:g})")
+    p.add_argument("--max-iter", type=int, default=DEFAULTS.max_iter, metavar="N",
+                   help=f"iteration budget ({DEFAULTS.max_iter})")
     p.add_argument("--report", metavar="JSON", help="write the run report (defects, history, timings)")
     p.add_argument("--progress", choices=("auto", "on", "off"), default="auto",
                    help="a progress line per iteration on stderr (auto: when stderr is a terminal)")
