@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from .check import beam_table, check_structure, report
-from .outputs import structure_measures
 
 
 def check_run(opt, structure, spec) -> tuple:
