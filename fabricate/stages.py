@@ -203,7 +203,9 @@ def stage_cad(ctx) -> str:
         ctx.notes.append(msg)
         return f"skipped: optimization {result.status}, parts cannot be built"
     ctx.values["parts"] = parts
-    counts = {k: sum(len(g) for g in parts.of_kind(k)) for k in ("panel", "beam", "node")}
+    from .cad.parts import unit_id
+
+    counts = {k: len({unit_id(i) for g in parts.of_kind(k) for i in g.ids}) for k in ("panel", "beam", "node")}
     return ", ".join(f"{n} {k}s" for k, n in counts.items())
 
 

@@ -8,7 +8,8 @@ full precision: ``fabricate check`` compares the STEP solids with it),
 bounding rectangle of the flat outline and bevel), ``planarity_mm`` (how far
 the source polygon was from the plane the part was built in),
 ``residual_mm`` (construction round-off), ``neighbours`` (ids in contact,
-space separated).
+space separated), ``member`` (which plate, ply or hub piece of a unit of several solids:
+``web``, ``top flange +``, ``tube``; empty for a part of one solid).
 """
 from __future__ import annotations
 
@@ -20,7 +21,7 @@ from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
 COLUMNS = ("id", "kind", "element", "mesh_vertices", "area_m2", "length_mm", "thickness_mm", "volume_mm3",
-           "weight_kg", "rect_w_mm", "rect_h_mm", "planarity_mm", "residual_mm", "neighbours")
+           "weight_kg", "rect_w_mm", "rect_h_mm", "planarity_mm", "residual_mm", "neighbours", "member")
 
 
 def _mesh_vertices(group, mesh) -> list[str]:
@@ -57,7 +58,8 @@ def write_bom(parts, path, *, mesh=None) -> dict:
                     w.writerow((pid, g.kind, int(g.element[i]), verts[i], f"{g.area_mm2[i] * 1e-6:.6f}",
                                 f"{g.length_mm[i]:.3f}", f"{g.thickness_mm[i]:.3f}", repr(float(g.volume_mm3[i])),
                                 f"{weight[i]:.3f}", f"{g.rect[i, 0]:.3f}", f"{g.rect[i, 1]:.3f}",
-                                f"{g.planarity_mm[i]:.3g}", f"{g.residual_mm[i]:.3g}", " ".join(g.neighbours[i])))
+                                f"{g.planarity_mm[i]:.3g}", f"{g.residual_mm[i]:.3g}", " ".join(g.neighbours[i]),
+                                g.member))
                     rows += 1
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the bill of materials ({exc.strerror or exc})") from None

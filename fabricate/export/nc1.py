@@ -1,5 +1,9 @@
 """DSTV NC1 files for steel CNC lines: one ``<id>.nc1`` per beam plate, in a ``nc1/`` folder.
 
+A beam welded from plates (tee, I, RHS) gets one file per plate (``B0012.1.nc1`` the web ...): a
+plate line cuts each from flat stock with its own contour and end cuts; the steel cut list says
+which beam and member each is.
+
 Written from the DSTV standard ("Standard Description for Information
 Exchange in Steel Construction", NC data interface), ASCII, one value per
 line, millimetres and degrees:
@@ -68,7 +72,7 @@ def nc1_text(group, i: int, *, order: str, grade: str, density: float, angles: d
     head = [order, "conical-fab", "1", pid, grade, "1", f"PL{t:g}", "B"]
     numbers = [length, height, 0.0, 0.0, t, 0.0, weight / (length * 1e-3), paint, web[0], web[1],
                bevel[0], bevel[1]]
-    texts = [order, group.kind, f"mesh edge {int(group.element[i])}", " ".join(group.neighbours[i])[:60]]
+    texts = [order, group.member or group.kind, f"mesh edge {int(group.element[i])}", " ".join(group.neighbours[i])[:60]]
     lines = ["ST", f"** {pid}.nc1 written by conical-fab"]
     lines += [f"  {v}" for v in head] + ["  " + NUM.format(v).strip() for v in numbers] + [f"  {v}" for v in texts]
     lines.append("AK")
