@@ -111,20 +111,26 @@ def write_layout_plan(parts, path) -> dict:
     for name, colour in (("PANELS", 4), ("BEAMS", 8), ("IDS", 5)):
         doc.layers.add(name, color=colour)
     msp = doc.modelspace()
+    from fabricate.cad.parts import unit_id
+
+    from .schedules import beam_units
+
+    units = {id(g) for g in beam_units(parts)}
     n = 0
     for g in parts.groups:
-        if g.kind not in MATERIAL or not len(g):
-            continue
+        if g.kind not in MATERIAL or not len(g) or (g.kind == "beam" and id(g) not in units):
+            continue                                       # a beam once (its first plate), not per plate
         P = g.vertices[:, list(g.ring)][..., :2]
         if g.kind == "beam":
-            P = P[:, :2]                                   # the glass-side edge A0 B0
+            C = g.centre_line if g.centre_line is not None else g.vertices[:, :4]
+            P = C[:, :2, :2]                               # the glass-side edge A0 B0
         size = np.linalg.norm(P.max(axis=1) - P.min(axis=1), axis=1)
         h = np.clip(0.06 * size, 20.0, 400.0)
         centre = P.mean(axis=1)
         layer = "PANELS" if g.kind == "panel" else "BEAMS"
         for i, pid in enumerate(g.ids):  # ezdxf entities per part (a plan, not a cut file)
             msp.add_lwpolyline(P[i].tolist(), close=g.kind == "panel", dxfattribs={"layer": layer})
-            msp.add_text(pid, height=float(h[i]) * (0.5 if g.kind == "beam" else 1.0),
+            msp.add_text(unit_id(pid) if g.kind == "beam" else pid, height=float(h[i]) * (0.5 if g.kind == "beam" else 1.0),
                          dxfattribs={"layer": "IDS"}).set_placement(tuple(centre[i]),
                                                                     align=ezdxf.enums.TextEntityAlignment.MIDDLE_CENTER)
             n += 1

@@ -121,7 +121,7 @@ class StructureSection(Section):
     buckling_length_factor: float = Field(default=1.0, gt=0, le=10.0)  # buckling length / beam length
     elastic_modulus: float = Field(default=210000.0, gt=0, le=1e6)   # MPa
     shear_modulus: float = Field(default=81000.0, gt=0, le=1e6)      # MPa
-    section: SectionOption | None = None   # null: the parts' plate, parts.beam_width x the layer span
+    section: SectionOption | None = None   # null: the section the parts are welded from (parts.beam, the layer span)
     connections: Literal["rigid", "pinned"] = "rigid"
     supports: Literal["lowest", "boundary", "outline"] | list[int] = "lowest"
     support_tolerance: float | None = Field(default=None, ge=0, le=1e6)  # mm above the lowest ('lowest'); null: 5% of the height

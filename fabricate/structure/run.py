@@ -12,6 +12,7 @@ import numpy as np
 
 from .check import beam_table, check_structure, report
 from .outputs import structure_measures
+from .sections import built_section
 
 
 def check_run(ctx) -> str:
@@ -26,11 +27,11 @@ def check_run(ctx) -> str:
     chk = check_structure(ctx["structure"], opt, spec)
     rep = report(chk)
     d0, d1 = ctx["structure"].beam_span
-    built = f"plate {spec.beam_width:g}x{abs(d1 - d0):g}"
+    built = built_section(spec, abs(d1 - d0)).name
     notes = []
     if chk.section.name != built:
         notes.append(f"checked section {chk.section.name} (structure.section); the CAD stage cut the beams as "
-                     f"{built} (parts.beam_width x the layer span): the cut list's weights are those of the plates")
+                     f"{built} (parts.beam and the layer span): the cut list's weights are those of the plates")
     over = int((chk.results.utilization > 1.0).sum())
     if over and opt.check == "report":
         notes.append(f"{over} beam(s) exceed utilization 1 (max {chk.max_utilization:.3g}); not enforced "
