@@ -63,7 +63,8 @@ def parts_summary(parts) -> dict[str, Any] | None:
         groups = parts.of_kind(kind)
         vol = float(sum(float(np.sum(g.volume_mm3)) for g in groups))
         density = parts.spec.density(kind)
-        out[kind + "s"] = {"count": int(sum(len(g) for g in groups)), "volume_mm3": vol,
+        out[kind + "s"] = {"count": int(sum(len(g) for g in groups)),    # solids (plates, plies, hub pieces)
+                           "units": len({i.split(".", 1)[0] for g in groups for i in g.ids}), "volume_mm3": vol,
                            "mass_kg": vol * 1e-9 * density, "density_kg_m3": density}
     out["total"] = {"count": len(parts), "mass_kg": sum(v["mass_kg"] for v in out.values())}
     out["edge_mode"] = parts.edge_mode
