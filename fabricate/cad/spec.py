@@ -84,7 +84,7 @@ class Limits:
     """What the shops can make (mm, degrees, kg); parts beyond them are flagged by id.
 
     min_corner_deg : smallest panel corner a glass supplier cuts without a special order.
-    min_edge_mm : shortest panel or beam outline edge.
+    min_edge_mm : shortest panel or beam outline edge (of a flange plate: its edges along the beam).
     sheet_mm : the largest glass sheet (jumbo / PLF 6000 x 3210): a panel's stock rectangle must fit.
     max_panel_kg : heaviest panel the site can lift into place.
     """
