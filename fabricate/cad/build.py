@@ -108,7 +108,8 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
         else:  # a plate touches its unit's other plates, the panel on its side, the unit's neighbours
             sibs = tuple(f".{j}" for j in range(1, len(members) + 1) if j != k)
             which = (0 if "+" in member else 1) if member != "web" else None
-            glass = member == "web" or member.startswith("top flange")  # what the glass bears on
+            # what the glass bears on: the top flanges, and the web when it reaches under the panels
+            glass = (member == "web" and web > spec.joint_gap) or member.startswith("top flange")
             near = [(tuple(pid[sorted({f for f in side[i] if f >= 0} if which is None else
                                       {f for f in side[i, which:which + 1] if f >= 0})]) if glass else ())
                     + tuple(bid[i] + s for s in sibs) + row[len(set(beams["faces"][i].tolist())):]

@@ -32,12 +32,15 @@ separately from this writer, from the same description.
 """
 from __future__ import annotations
 
+import contextlib
+import os
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from optimize.atomic import atomic_open
+from optimize.atomic import umask
 from optimize.errors import ExportError
 
 NUM = "{:10.3f}"
@@ -84,6 +87,20 @@ def nc1_text(group, i: int, *, order: str, grade: str, density: float, angles: d
     return "\n".join(lines)
 
 
+def _write_atomic(target: Path, data: bytes, mode: int) -> None:
+    """``data`` to a temporary file beside ``target``, then renamed to it (removed on failure)."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            os.fchmod(fh.fileno(), mode)
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
 def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -> dict:
     """One NC1 file per beam in ``folder`` (created; each file atomic).  ``grade``: default the parts'
     ``steel_grade``.  Returns facts: ``folder, files, bytes, seconds``."""
@@ -95,15 +112,16 @@ def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -
     files, size = 0, 0
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        mode = 0o666 & ~umask()                 # read once: thousands of small files
         for g in parts.of_kind("beam"):
             density = parts.spec.density(g.kind)
             angles = beam_angles(g)
             for i, pid in enumerate(g.ids):
                 text = nc1_text(g, i, order=order, grade=grade, density=density, angles=angles)
-                with atomic_open(folder / f"{pid}.nc1", "w", encoding="ascii", newline="\r\n") as fh:
-                    fh.write(text)
+                data = text.replace("\n", "\r\n").encode("ascii")
+                _write_atomic(folder / f"{pid}.nc1", data, mode)
                 files += 1
-                size += len(text)
+                size += len(data)
     except OSError as exc:
         raise ExportError(f"{folder}: cannot write the NC1 files ({exc.strerror or exc})") from None
     return {"file": folder.name + "/", "files": files, "bytes": size, "seconds": time.perf_counter() - t0}

@@ -124,8 +124,11 @@ def write_glass_schedule(parts, path) -> dict:
     flags = _flags(parts)
     from fabricate.cad.parts import unit_id
 
-    beam_panels = {unit_id(pid): [n for n in g.neighbours[i] if n[0] == "P"]
-                   for g in beam_units(parts) for i, pid in enumerate(g.ids)}
+    beam_panels: dict[str, list[str]] = {}   # the panels each beam carries (on any of its plates)
+    for g in parts.of_kind("beam"):
+        for i, pid in enumerate(g.ids):
+            got = beam_panels.setdefault(unit_id(pid), [])
+            got += [n for n in g.neighbours[i] if n[0] == "P" and n not in got]
     build_up = build_up_text(parts.spec)
     mesh = parts.mesh
 
