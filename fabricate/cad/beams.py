@@ -13,8 +13,12 @@ The beam is a plate cut from flat stock: the polyhedron bounded by ten planes:
   bisector planes, through the node axis, between this beam and its angular
   neighbour on each side (so neighbouring beams meet in one plane and never
   overlap; a side with no neighbour within 180 degrees gets a square end);
-  with nodes, one plane normal to the beam, set back from the axis by the
-  node radius or more (enough that neighbours cannot touch).
+  with square ends (a hub, ``parts.node.connection: none``), one plane normal
+  to the beam, set back from the axis by the hub radius or gap or more
+  (enough that neighbours as wide as the section's flanges cannot touch).
+
+The flanges and the second web of a section (:mod:`fabricate.cad.sections`)
+are cut from the same planes (returned as ``planes``).
 
 The centre line corners are the quad's own corners, on the node axes: the
 end planes are hinged on the node axis itself (the same line, computed from
