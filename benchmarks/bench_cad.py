@@ -121,7 +121,7 @@ def run_baseline(panels: int, out: Path) -> dict:
 def run_handoff(panels: int, out: Path) -> dict:
     """The CAD stage with the fabrication hand-off (issue 18): the files of :func:`run_stage` plus
     flat.json, the three schedules, the nested cut files per material and thickness, the layout plan."""
-    from fabricate.config import NestingSection
+    from fabricate.app.config import NestingSection
     from fabricate.export import (write_cut_files, write_flat, write_glass_schedule, write_layout_plan,
                                   write_node_schedule, write_steel_cut_list)
 
@@ -172,8 +172,8 @@ def time_checks(out: Path, export_s: float, occ: bool) -> dict:
 
 def check_railway(out: Path, occ: bool) -> dict:
     """configs/railway_station.yaml run with the check off; its exports stage time is the export."""
-    from fabricate.config import load_config
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.config import load_config
+    from fabricate.app.pipeline import run_pipeline
 
     cfg = load_config(ROOT / "configs" / "railway_station.yaml", overrides={"outputs.check": "off"})
     summary = run_pipeline(cfg, out)
@@ -215,8 +215,8 @@ def sections_railway(variant: str, out: Path) -> dict:
     """configs/railway_station.yaml with ``variant``'s beams and nodes: the run's CAD and exports stage
     times (structure check, pictures and the file check off), then the full file check on its files."""
     from fabricate.check_fast import run_check
-    from fabricate.config import load_config
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.config import load_config
+    from fabricate.app.pipeline import run_pipeline
 
     over = {"outputs.check": "off", "outputs.pictures": False, "outputs.html": False, "structure.check": "off",
             **_spec_overrides(variant)}
@@ -237,7 +237,7 @@ def sections_dome(variant: str, panels: int, out: Path) -> dict:
     plan, NC1), then the full file check on those files."""
     from fabricate.cad import PartSpec, build_parts
     from fabricate.check_fast import run_check
-    from fabricate.config import NestingSection
+    from fabricate.app.config import NestingSection
     from fabricate.export import (write_3mf, write_bom, write_cut_files, write_dxf, write_flat,
                                   write_glass_schedule, write_layout_plan, write_node_schedule, write_step,
                                   write_steel_cut_list, write_stl, write_svg)

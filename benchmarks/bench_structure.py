@@ -40,8 +40,8 @@ def line(name: str, beams: int, s: dict, cad: float, extra: dict | None = None) 
 
 
 def railway_station() -> dict:
-    from fabricate.config import load_config
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.config import load_config
+    from fabricate.app.pipeline import run_pipeline
 
     cfg = load_config(ROOT / "configs" / "railway_station.yaml")
     with tempfile.TemporaryDirectory() as tmp:
@@ -57,7 +57,7 @@ def railway_station() -> dict:
 
 def dome(beams: int = 10000) -> dict:
     from fabricate.cad import PartSpec, build_parts
-    from fabricate.config import parse_config
+    from fabricate.app.config import parse_config
     from fabricate.offset import offset_structure
     from fabricate.structure.check import check_structure
     from optimize import shapes

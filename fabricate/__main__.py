@@ -2,7 +2,7 @@
 import sys
 
 try:
-    from .cli import main
+    from .app.cli import main
 
     code = main()
 except KeyboardInterrupt:  # Ctrl-C while the command line itself was still loading

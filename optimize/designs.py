@@ -77,7 +77,7 @@ MAX_NOISE = 1.0
 MAX_COUNT = 300
 """Largest quad count along one direction of a design (300 x 300 = 90,000 quads, built in well
 under a second): the counts are bounded so that checking a config, which builds the design, stays
-cheap; the subdivided size is bounded by the config (``fabricate.config.MAX_FACES``)."""
+cheap; the subdivided size is bounded by the config (``fabricate.app.config.MAX_FACES``)."""
 
 
 def _pos(design: str, key: str, value, zero: bool = False, hi: float = MAX_SIZE_MM) -> float:

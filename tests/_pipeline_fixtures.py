@@ -56,7 +56,7 @@ NO_FILES = {"step": False, "stl": False, "3mf": False, "dxf": False, "svg": Fals
 
 def tiny_config(folder: Path, name: str = "tiny", *, outputs: dict | None = None, **sections):
     """A validated config of a 12-quad noisy dome (``sections`` override whole sections)."""
-    from fabricate.config import parse_config
+    from fabricate.app.config import parse_config
 
     data = {"name": name,
             "input": {"shape": {"name": "dome", "params": {"radius": 5000, "rise": 2000, "meridians": 6,

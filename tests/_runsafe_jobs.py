@@ -4,7 +4,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from fabricate.batch import Job
+from fabricate.app.batch import Job
 
 
 class DyingJob(Job):

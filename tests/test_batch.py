@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from fabricate.batch import (Job, expand_jobs, exit_code, make_executor, parse_sets, run_batch, split_values,
+from fabricate.app.batch import (Job, expand_jobs, exit_code, make_executor, parse_sets, run_batch, split_values,
                             write_csv)
-from fabricate.pipeline import RunSummary
+from fabricate.app.pipeline import RunSummary
 from optimize.errors import ConfigError
 
 REPO = Path(__file__).resolve().parents[1]
@@ -109,7 +109,7 @@ def test_batch_of_three_with_one_broken(tmp_path):
 
 def test_worker_exception_is_one_row(tmp_path, monkeypatch):
     """A job whose pipeline raises an unexpected error is reported; the others still run."""
-    import fabricate.batch as batch
+    import fabricate.app.batch as batch
 
     cfg = small_config(tmp_path, "fine")
     jobs = expand_jobs([cfg]) + [Job("ghost", "ghost.yaml", error="ghost.yaml: input: required key is missing")]

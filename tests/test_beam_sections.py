@@ -198,7 +198,7 @@ def test_built_section_properties_equal_the_closed_forms():
 
 
 def test_structure_check_uses_the_built_section():
-    from fabricate.config import StructureSection
+    from fabricate.app.config import StructureSection
     from fabricate.structure.check import configured_section
 
     structure = dome_structure(n_around=6, k=3)
@@ -227,7 +227,7 @@ def test_bad_sections_and_connections_name_the_key_and_value(beam, node, words):
 
 
 def test_config_file_errors_name_the_line(tmp_path):
-    from fabricate.config import load_config
+    from fabricate.app.config import load_config
 
     path = tmp_path / "job.yaml"
     path.write_text("name: job\ninput: {shape: {name: dome}}\nparts:\n  beam:\n    section: tee\n"

@@ -11,7 +11,8 @@ from fabricate.cad.geometry import polygon_area_2d, volumes
 from fabricate.export.verify import Solid, intersections
 from fabricate.offset import offset_structure
 from optimize import shapes
-from optimize.errors import ConfigError
+from fabricate.cad.errors import PartError
+from optimize.errors import ConfigError, MeshError
 from optimize.measures import face_areas
 
 
@@ -225,7 +226,7 @@ def test_twisted_beams_carry_their_panels():
 
 
 def test_a_plate_thinner_than_its_twist_is_refused_naming_the_twist():
-    with pytest.raises(ConfigError, match=r"beam B\d{4} .*quad twists: corners up to 1.5 mm off"):
+    with pytest.raises(PartError, match=r"beam B\d{4} .*quad twists: corners up to 1.5 mm off"):
         build_parts(_twisted_structure(), PartSpec(beam_width=2.0, joint_gap=1.0))
 
 
@@ -234,18 +235,19 @@ def test_a_panel_too_narrow_for_the_joint_names_the_gap_that_works():
     a = np.stack([x, np.zeros(4), 1e-4 * (x - 1500.0) ** 2], axis=1)
     b = np.stack([np.zeros(3), [0.0, 1200.0, 2400.0], np.zeros(3)], axis=1)
     structure = offset_structure(shapes.translational(a, b), (0.0, -200.0))
-    with pytest.raises(ConfigError) as info:
+    with pytest.raises(PartError) as info:
         build_parts(structure, PartSpec(joint_gap=10.0))
     msg = str(info.value)
+    assert isinstance(info.value, MeshError) and (info.value.part, info.value.element) == ("P0003", 2)
     assert msg.startswith("panel P0003 (face 2)") and "2 panels fail (P0003, P0004)" in msg
     assert "width 8.0 mm" in msg
     fits = float(msg.split("parts.joint_gap <= ")[1].split(" mm")[0])
     assert 5.0 < fits < 8.0  # the tilted sides (edge axis) of the 10 mm glass narrow it further
     parts = build_parts(structure, PartSpec(joint_gap=fits, beam_width=fits + 0.5))  # the gap it names builds
     assert all(np.all(g.volume_mm3 > 0) for g in parts.groups)
-    with pytest.raises(ConfigError, match="panel P0003"):
+    with pytest.raises(PartError, match="panel P0003"):
         build_parts(structure, PartSpec(joint_gap=fits + 0.2, beam_width=fits + 0.7))
-    with pytest.raises(ConfigError, match=r"beam B\d{4} .*end trims"):  # 60 mm beams on an 8 mm quad: no
+    with pytest.raises(PartError, match=r"beam B\d{4} .*end trims"):  # 60 mm beams on an 8 mm quad: no
         build_parts(structure, PartSpec(joint_gap=fits))
 
 
@@ -254,18 +256,18 @@ def test_a_folded_mesh_face_is_named_as_such():
     mesh = shapes.grid(4, 4, size=(3000.0, 3000.0))
     V = mesh.V.copy()
     V[5, :2] = [1800.0, 1800.0]  # inside the triangle of the opposite corners of face 4
-    with pytest.raises(ConfigError, match=r"panel P0005 \(face 4\): the mesh face itself is folded"):
+    with pytest.raises(PartError, match=r"panel P0005 \(face 4\): the mesh face itself is folded"):
         build_parts(offset_structure(mesh.with_vertices(V), (0.0, -200.0)), PartSpec())
 
 
 def test_a_joint_gap_that_swallows_a_panel_is_refused(dome):
-    with pytest.raises(ConfigError, match=r"panel P\d{4} .*joint_gap"):
+    with pytest.raises(PartError, match=r"panel P\d{4} .*joint_gap"):
         build_parts(dome, PartSpec(joint_gap=3000.0, beam_width=4000.0))
 
 
 def test_beams_shorter_than_their_trims_are_refused():
     mesh = dome_mesh(n_around=40, k=3)
-    with pytest.raises(ConfigError, match=r"beam B\d{4}"):
+    with pytest.raises(PartError, match=r"beam B\d{4}"):
         build_parts(offset_structure(mesh, (0.0, -200.0)), PartSpec(beam_width=900.0))
 
 

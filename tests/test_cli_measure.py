@@ -3,7 +3,7 @@ import json
 
 import pytest
 
-from fabricate.cli import main
+from fabricate.app.cli import main
 from optimize.io import read_mesh
 from optimize.measures import summary
 

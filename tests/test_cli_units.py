@@ -6,9 +6,9 @@ import json
 import numpy as np
 import pytest
 
-from fabricate.cli import main
-from fabricate.cli.units import UNIT_TO_MM, UNITS
-from fabricate.config import UNIT_TO_MM as CONFIG_UNITS
+from fabricate.app.cli import main
+from fabricate.app.cli.units import UNIT_TO_MM, UNITS
+from fabricate.app.config import UNIT_TO_MM as CONFIG_UNITS
 from fabricate.offset import offset_structure
 from fabricate.offset.turnover import area_quadratic, focal_limits, turned_faces
 from optimize import shapes
@@ -131,7 +131,7 @@ def test_optimize_refuses_a_triangle_mesh_at_once(tmp_path, capsys, target):
 
 
 def test_run_input_stage_refuses_a_triangle_mesh(tmp_path):
-    from fabricate.quads import RUN_HINT, require_quads
+    from fabricate.app.quads import RUN_HINT, require_quads
     from optimize.errors import MeshError
 
     m = read_mesh(_triangles(tmp_path))
@@ -196,7 +196,7 @@ def test_run_with_a_layer_past_the_focal_distance_is_marked_and_builds_no_parts(
     sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
     from _pipeline_fixtures import tiny_config
 
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.pipeline import run_pipeline
 
     cfg = tiny_config(tmp_path, offset={"distances": [0, -9000]})
     s = run_pipeline(cfg, tmp_path / "out")
@@ -211,12 +211,11 @@ def test_run_with_a_layer_past_the_focal_distance_is_marked_and_builds_no_parts(
 
 def test_a_too_deep_beam_says_to_reduce_the_depth(tmp_path):
     """9 m deep beams under a cap of a 12 m sphere: the advice is the depth, not the beam width."""
-    from fabricate.cad import PartSpec, build_parts
-    from optimize.errors import ConfigError
+    from fabricate.cad import PartError, PartSpec, build_parts
 
     s = offset_structure(_dome(1000.0), (0.0, -9000.0))
     assert s.report["turned_over"]["ok"]  # not past the focal distance: the beams fold at their ends
-    with pytest.raises(ConfigError, match="reduce parts.beam_depth") as err:
+    with pytest.raises(PartError, match="reduce parts.beam_depth") as err:
         build_parts(s, PartSpec(beam_depth=9000.0, beam_width=200.0))
     assert "beam_width" not in str(err.value)
 

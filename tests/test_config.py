@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from fabricate.config import RunConfig, TolerancesSection, load_config, parse_config
+from fabricate.app.config import RunConfig, TolerancesSection, load_config, parse_config
 from optimize import shapes
 from optimize.errors import ConfigError
 from optimize.io import write_mesh
@@ -68,6 +68,25 @@ def test_as_run_dict_round_trips(folder):
     assert again.as_dict() == cfg.as_dict()
 
 
+def _holds(got, written, where, key=()):
+    """``got`` (a config as run, ``as_dict``) holds every value of ``written`` (its YAML data)."""
+    if isinstance(written, dict):
+        assert isinstance(got, dict), (where, key)
+        for k, v in written.items():
+            assert k in got, (where, key + (k,))
+            _holds(got[k], v, where, key + (k,))
+    elif isinstance(written, list):
+        assert isinstance(got, list) and len(got) == len(written), (where, key)
+        for i, (g, w) in enumerate(zip(got, written)):
+            _holds(g, w, where, key + (i,))
+    elif key[:1] == ("input",) and key[-1] in ("mesh", "control", "surface"):  # paths are resolved against the file's folder
+        assert Path(got) == (where.parent / written).resolve(), (where, key)
+    elif isinstance(written, bool) and isinstance(got, str):  # YAML's off/on, kept as the key's word
+        assert got in (("on", "yes", "true") if written else ("off", "no", "false")), (where, key, got)
+    else:
+        assert got == written and type(got) in (type(written), float), (where, key, got, written)
+
+
 def test_every_example_config_is_valid():
     paths = sorted((REPO / "configs").glob("*.yaml"))
     names = {p.stem for p in paths}
@@ -75,7 +94,10 @@ def test_every_example_config_is_valid():
             "freeform_canopy"} <= names, names
     for path in paths:
         cfg = load_config(path)
-        assert isinstance(cfg, RunConfig)
+        raw = yaml.safe_load(path.read_text()) or {}
+        # every value the file writes is the value the run takes (nothing dropped, coerced or renamed)
+        _holds(cfg.as_dict(), raw, path)
+        assert cfg.name == raw.get("name", path.stem)
         for key in ("mesh", "control", "surface"):  # every file a config reads is in the repository
             file = getattr(cfg.input, key, None)
             if file is not None:
@@ -202,7 +224,7 @@ def test_override_errors_name_the_set_option(folder):
 
 def test_reference_config_states_every_range():
     """Every key with a range has it on its line of configs/reference.yaml, as the messages write it."""
-    from fabricate.config_errors import field_range
+    from fabricate.app.config_errors import field_range
     lines = (REPO / "configs" / "reference.yaml").read_text().splitlines()
     checked = 0
     for section, field in RunConfig.model_fields.items():

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from fabricate.batch import parse_sets
-from fabricate.config import MAX_FACES, load_config, override_values, parse_config, takes_list
-from fabricate.config_yaml import MAX_BYTES, MAX_DEPTH, MAX_NODES, load_yaml
+from fabricate.app.batch import parse_sets
+from fabricate.app.config import MAX_FACES, load_config, override_values, parse_config, takes_list
+from fabricate.app.config_yaml import MAX_BYTES, MAX_DEPTH, MAX_NODES, load_yaml
 from optimize.errors import ConfigError
 
 DOME = "input: {shape: {name: dome, params: {meridians: 6, rings: 3}}}\n"
@@ -199,7 +199,7 @@ def test_yaml_12_numbers_and_words(tmp_path):
 
 
 def test_off_is_accepted_for_every_word_key_with_off():
-    from fabricate.config import OutputsSection
+    from fabricate.app.config import OutputsSection
     assert OutputsSection.model_validate({"check": False}).check == "off"
     with pytest.raises(Exception):
         OutputsSection.model_validate({"check": True})  # 'on' is not one of its words
@@ -220,7 +220,7 @@ def test_comma_list_is_the_list_for_a_list_key(tmp_path):
 
 
 def test_run_takes_the_comma_list_and_refuses_a_sweep(tmp_path, capsys):
-    from fabricate.cli import main
+    from fabricate.app.cli import main
     path = tmp_path / "a.yaml"
     path.write_text(DOME)
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q", "--set", "parts.glass_thickness=8,10"]) == 2
@@ -248,7 +248,7 @@ def test_design_params_name_their_own_line(tmp_path):
 
 # -- advice names the right key ----------------------------------------------------------
 def test_too_deep_beams_are_told_to_reduce_beam_depth(tmp_path, capsys):
-    from fabricate.cli import main
+    from fabricate.app.cli import main
     path = tmp_path / "deep.yaml"
     path.write_text("input: {shape: {name: dome, params: {radius: 6000, rise: 2500, meridians: 12, rings: 4}}}\n"
                     "optimize: {target: none}\nparts: {beam_depth: 6000}\n"
@@ -292,7 +292,7 @@ def test_a_folder_or_a_device_as_mesh_path_is_named_as_such(tmp_path):
 
 
 def test_shapes_refined_is_bounded_like_a_config(capsys):
-    from fabricate.cli import main
+    from fabricate.app.cli import main
     assert main(["shapes", "railway_station", "--refined", "--param", "nu=300", "--param", "nv=300"]) == 2
     assert f"more than {MAX_FACES:,}" in capsys.readouterr().err
 

@@ -4,7 +4,7 @@ import pytest
 from cad_fixtures import dome_structure
 
 from fabricate.cad import PartSpec, build_parts
-from fabricate.config import NestingSection
+from fabricate.app.config import NestingSection
 from fabricate.export import write_cut_files, write_layout_plan, write_stl_parts
 from fabricate.export.dxf import read_outlines
 from fabricate.export.stl import read_stl

@@ -7,7 +7,7 @@ import inspect
 import numpy as np
 import pytest
 
-from fabricate.cli import main
+from fabricate.app.cli import main
 from optimize import ConfigError, measures
 from optimize.designs import DESIGNS, describe, parse_params
 from optimize.hierarchy import TARGETS, subdivide_and_perturb

@@ -173,7 +173,7 @@ def test_3dm_with_only_surfaces_says_how_to_mesh_them(tmp_path):
 def test_a_3dm_quad_mesh_runs_through_fabricate_run_to_cut_files(tmp_path):
     """A Rhino user's roof: a quad mesh on a layer of a .3dm file in metres, picked by layer and name,
     goes to cut files, IFC and .3dm (exit 0), every part in both exchange files."""
-    from fabricate.cli import main
+    from fabricate.app.cli import main
     from fabricate.export.ifc import read_ifc
     from fabricate.export.rhino import read_3dm_parts
     from optimize import shapes

@@ -1,5 +1,5 @@
 """Every failure maps to its exit code and one line (issue #15 section 3): one table
-(fabricate.cli.exits.classify) for every command, checked on the exceptions users met and
+(fabricate.app.cli.exits.classify) for every command, checked on the exceptions users met and
 through the real command line."""
 from __future__ import annotations
 
@@ -10,10 +10,10 @@ import sys
 
 import pytest
 
-from fabricate.batch import exit_code, expand_jobs
-from fabricate.cli import main
-from fabricate.cli.exits import classify
-from fabricate.pipeline import RunSummary
+from fabricate.app.batch import exit_code, expand_jobs
+from fabricate.app.cli import main
+from fabricate.app.cli.exits import classify
+from fabricate.app.pipeline import RunSummary
 from optimize.errors import ConfigError, ConvergenceError, ExportError, MeshError
 
 from _pipeline_fixtures import REPO
@@ -46,7 +46,7 @@ def test_each_kind_of_failure_has_its_code_and_one_line(exc, code, fragment):
 
 
 def test_a_bug_is_an_internal_error_with_its_traceback_in_a_log(monkeypatch, capsys, tmp_path):
-    import fabricate.cli.cmd_shapes as cmd_shapes
+    import fabricate.app.cli.cmd_shapes as cmd_shapes
 
     def bug(args):
         raise TypeError("unsupported operand type(s) for +: 'int' and 'str'")
@@ -99,7 +99,7 @@ def test_paths_that_cannot_be_used_are_bad_input(tmp_path, capsys):
 def test_a_job_name_too_long_for_a_folder_is_a_bad_job(tmp_path):
     cfg = tmp_path / "c.yaml"
     cfg.write_text("name: " + "x" * 120 + "\ninput:\n  shape: {name: dome}\n")
-    from fabricate.batch import parse_sets
+    from fabricate.app.batch import parse_sets
 
     jobs = expand_jobs([cfg], parse_sets(["parts.glass_thickness=8,10", "parts.beam_width=60,80",
                                           "parts.beam_depth=150,200", "parts.joint_gap=10,12",

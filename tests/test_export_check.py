@@ -8,7 +8,7 @@ from cad_fixtures import dome_parts
 
 from fabricate.cad import PartSpec, build_parts
 from fabricate.check import check_outputs
-from fabricate.cli import main
+from fabricate.app.cli import main
 from fabricate.export import write_3mf, write_bom, write_dxf, write_flat, write_step, write_stl, write_svg
 
 FILES = (("model.step", write_step), ("model.stl", write_stl), ("model.3mf", write_3mf),

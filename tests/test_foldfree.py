@@ -105,7 +105,7 @@ def test_unmeetable_fixed_set_is_refused_before_iterating():
 
 
 def test_cli_optimize_prints_distance_fairness_and_folds(tmp_path, capsys):
-    from fabricate.cli import main
+    from fabricate.app.cli import main
     from optimize.io import write_mesh
 
     src = tmp_path / "in.obj"
@@ -171,7 +171,7 @@ def test_remesh_route_finds_a_fold_free_pq_mesh_where_the_input_lines_cannot():
 
 
 def test_config_input_remesh_is_for_mesh_inputs(tmp_path):
-    from fabricate.config import load_config
+    from fabricate.app.config import load_config
     from optimize.errors import ConfigError
     from optimize.io import write_mesh
 
@@ -189,8 +189,8 @@ def test_config_input_remesh_is_for_mesh_inputs(tmp_path):
 def test_fabricate_run_with_input_remesh_reports_both_routes(tmp_path):
     import json
 
-    from fabricate.config import load_config
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.config import load_config
+    from fabricate.app.pipeline import run_pipeline
     from optimize.io import write_mesh
 
     mesh = hypar(8)

@@ -16,7 +16,7 @@ Four classes of input:
   the designs' parameter names, and hostile values;
 - ``text``: arbitrary short text and bytes;
 - ``set``: ``--set`` items (random key paths and value texts, comma lists) on a
-  shipped config, through ``fabricate.batch.parse_sets``.
+  shipped config, through ``fabricate.app.batch.parse_sets``.
 
 CI runs a fixed seed and :data:`EXAMPLES` examples per class (a few seconds);
 a longer campaign: ``FUZZ_CONFIG_EXAMPLES=2000 pytest -s tests/test_fuzz_config.py``
@@ -39,8 +39,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from pydantic import BaseModel
 
-from fabricate.batch import parse_sets
-from fabricate.config import RunConfig, load_config
+from fabricate.app.batch import parse_sets
+from fabricate.app.config import RunConfig, load_config
 from optimize.designs import DESIGNS
 from optimize.errors import ConfigError
 

@@ -119,7 +119,7 @@ def test_a_run_with_rhs_beams_and_tube_hubs_passes_its_checks(tmp_path):
     from _pipeline_fixtures import tiny_config
 
     from fabricate.check import check_outputs
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.pipeline import run_pipeline
 
     outputs = {"step": True, "stl": True, "3mf": True, "dxf": True, "svg": False, "bom": True, "pictures": False,
                "html": False, "ifc": False, "3dm": False, "nc1": True, "gltf": False, "check": "off"}

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from fabricate.cli import main
+from fabricate.app.cli import main
 from fabricate.offset import offset_structure
 from optimize import shapes
 from optimize.io import read_mesh, write_mesh
@@ -46,7 +46,7 @@ def test_conical_mesh_writes_every_file_and_layers_round_trip(dome_file, tmp_pat
     assert "status: conical" in stdout
     names = {p.name for p in out.iterdir()}
     assert names == {"layer_0.obj", "layer_20.obj", "layer_120.obj", "axes.obj", "axes.json",
-                     "beams.obj", "beams.json", "focal.json", "offset_report.json"}
+                     "beams.obj", "beams.json", "focal.json", "offset_report.json", ".conical-fab-run.json"}
     mesh = read_mesh(dome_file)
     s = offset_structure(mesh, (0, 20, 120))
     for i, text in enumerate(("0", "20", "120")):
@@ -117,23 +117,39 @@ def test_bad_distances_exit_2(dome_file, tmp_path, capsys, text, pattern):
 
 def test_output_folder_is_atomic_and_a_foreign_folder_is_not_replaced(dome_file, tmp_path, capsys,
                                                                       monkeypatch):
+    """-o DIR follows the run-folder rules: a marker, --replace to replace, never a foreign file."""
+    from fabricate.app.runfolder import MARKER
+
     foreign = tmp_path / "mine"
     foreign.mkdir()
     (foreign / "thesis.tex").write_text("keep me")
-    assert main(["offset", str(dome_file), "--distances", "0,20", "-o", str(foreign)]) == 2
+    assert main(["offset", str(dome_file), "--distances", "0,20", "-o", str(foreign), "--replace"]) == 2
     assert (foreign / "thesis.tex").read_text() == "keep me"
-    assert "not an offset output folder" in capsys.readouterr().err
-    # an earlier offset output is replaced as a whole, and only when the new one is complete
+    assert "is not a run folder of conical-fab" in capsys.readouterr().err
     out = tmp_path / "out"
     assert main(["offset", str(dome_file), "--distances", "0,20", "-o", str(out)]) == 0
+    assert (out / MARKER).is_file()
     before = {p.name: p.read_bytes() for p in out.iterdir()}
+    # an earlier offset output is replaced only when asked
+    assert main(["offset", str(dome_file), "--distances", "0,5,10", "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "holds an earlier run" in err and "rerun with --replace" in err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    # ... as a whole, and only when the new one is complete
     import fabricate.offset.files as files
 
     def broken(path, data):
         raise OSError("disk full")
 
-    monkeypatch.setattr(files, "write_json", broken)
-    with pytest.raises(OSError):
-        main(["--debug", "offset", str(dome_file), "--distances", "0,5,10", "-o", str(out)])
+    with monkeypatch.context() as m:
+        m.setattr(files, "write_json", broken)
+        with pytest.raises(OSError):
+            main(["--debug", "offset", str(dome_file), "--distances", "0,5,10", "-o", str(out), "--replace"])
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+    assert main(["offset", str(dome_file), "--distances", "0,5,10", "-o", str(out), "--replace"]) == 0
+    assert (out / "layer_10.obj").is_file() and not (out / "layer_20.obj").exists()
+    # a file a person added is never replaced, --replace or not
+    (out / "notes.txt").write_text("mine")
+    assert main(["offset", str(dome_file), "--distances", "0,20", "-o", str(out), "--replace"]) == 2
+    assert "notes.txt (added)" in capsys.readouterr().err and (out / "notes.txt").read_text() == "mine"

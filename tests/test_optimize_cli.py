@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 
-from fabricate.cli import main
+from fabricate.app.cli import main
 from optimize import measures, shapes
 from optimize.io import read_mesh, write_mesh
 

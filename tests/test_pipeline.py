@@ -12,10 +12,10 @@ import zipfile
 
 import pytest
 
-import fabricate.stages as stages
-from fabricate.config import load_config
-from fabricate.pipeline import STAGES, run_pipeline
-from fabricate.progress import RecordingProgress
+import fabricate.app.stages as stages
+from fabricate.app.config import load_config
+from fabricate.app.pipeline import STAGES, run_pipeline
+from fabricate.app.progress import RecordingProgress
 from optimize.errors import ConfigError, ExportError, MeshError
 from optimize.io import read_mesh
 
@@ -167,8 +167,8 @@ def test_failed_output_check_is_exit_4_written_and_marked(tmp_path, monkeypatch)
 def test_failure_in_a_stage_leaves_no_folder(tmp_path, monkeypatch, stage, error):
     original = getattr(stages, f"stage_{stage}")
 
-    def fail_after(ctx):
-        original(ctx)  # the stage has written its files into the temporary folder
+    def fail_after(*args, **kwargs):
+        original(*args, **kwargs)  # the stage has written its files into the temporary folder
         raise error("injected")
 
     monkeypatch.setattr(stages, f"stage_{stage}", fail_after)
@@ -181,7 +181,7 @@ def test_rerun_replaces_only_when_complete(tmp_path, monkeypatch):
     out = tmp_path / "out"
     first = run_pipeline(tiny_config(tmp_path), out)
     before = (out / "tiny" / "report.json").read_text()
-    monkeypatch.setattr(stages, "stage_report", lambda ctx: (_ for _ in ()).throw(RuntimeError("late")))
+    monkeypatch.setattr(stages, "stage_report", lambda run: (_ for _ in ()).throw(RuntimeError("late")))
     with pytest.raises(RuntimeError):
         run_pipeline(tiny_config(tmp_path), out, force=True)
     assert (out / "tiny" / "report.json").read_text() == before  # the previous result is untouched
@@ -196,9 +196,9 @@ def test_sigterm_during_a_run_leaves_no_folder(tmp_path):
     """``kill`` of a running ``fabricate run`` unwinds like Ctrl-C: the temporary folder is removed."""
     cfg = tmp_path / "slow.yaml"
     cfg.write_text("name: slow\ninput:\n  shape: {name: dome, params: {meridians: 6, rings: 3}}\n")
-    driver = ("import sys, time\nimport fabricate.stages as s\n"
-              "def slow(ctx):\n    print('IN CAD', flush=True)\n    time.sleep(120)\n"
-              "s.stage_cad = slow\nfrom fabricate.cli import main\n"
+    driver = ("import sys, time\nimport fabricate.app.stages as s\n"
+              "def slow(*args, **kwargs):\n    print('IN CAD', flush=True)\n    time.sleep(120)\n"
+              "s.stage_cad = slow\nfrom fabricate.app.cli import main\n"
               f"sys.exit(main(['run', {str(cfg)!r}, '--out', {str(tmp_path / 'out')!r}, '-q']))\n")
     proc = subprocess.Popen([sys.executable, "-c", driver], cwd=REPO, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
@@ -235,7 +235,7 @@ def test_folded_panels_write_no_cut_file_and_end_marked(tmp_path, capsys):
     """Planar to tolerance but dented: z = x y meshed along its rulings, noisy boundary fixed.
     The optimizer says "folded"; no panel or beam is built and no cut file written, but the mesh,
     the layers and the report are, marked as a missed tolerance (exit 3), with the faces named."""
-    from fabricate.cli import main
+    from fabricate.app.cli import main
     from optimize import optimize_mesh, shapes
     from optimize.io import write_mesh
 
@@ -385,7 +385,7 @@ def test_check_off_and_auto(tmp_path):
     assert summary.status == "ok" and summary.exit_code == 0
     check = json.loads((tmp_path / "out" / "off" / "report.json").read_text())["check"]
     assert check["mode"] == "off" and check["pass"] is None and check["checks"] == {}
-    from fabricate.config import CHECK_AUTO_MAX_PARTS
+    from fabricate.app.config import CHECK_AUTO_MAX_PARTS
 
     auto = tiny_config(tmp_path, outputs=CAD_FILES).outputs
     assert auto.check == "auto"

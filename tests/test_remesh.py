@@ -123,7 +123,7 @@ def test_chain_from_triangles_to_a_conical_mesh_meets_the_tolerances(waist):
 
 
 def test_cli_remesh_writes_a_mesh(tmp_path, roof):
-    from fabricate.cli import main
+    from fabricate.app.cli import main
     from optimize.io import read_mesh, write_mesh
 
     src = tmp_path / "roof.obj"

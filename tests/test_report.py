@@ -22,25 +22,48 @@ from _pipeline_fixtures import finished_run  # noqa: F401 - a fixture
 
 
 # -- GLB -------------------------------------------------------------------------
-def test_glb_round_trip_keeps_geometry(revolution):
+_GLTF_DTYPES = {5121: np.uint8, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
+_GLTF_WIDTH = {"SCALAR": 1, "VEC3": 3, "VEC4": 4}
+
+
+def _pygltf_accessor(doc, blob, index):
+    """An accessor's array, read with pygltflib's document (the glTF 2.0 layout, not the project's code)."""
+    acc = doc.accessors[index]
+    view = doc.bufferViews[acc.bufferView]
+    width = _GLTF_WIDTH[acc.type]
+    data = np.frombuffer(blob, _GLTF_DTYPES[acc.componentType], acc.count * width,
+                         (view.byteOffset or 0) + (acc.byteOffset or 0))
+    return data.reshape(acc.count, width) if width > 1 else data
+
+
+def test_glb_round_trip_keeps_geometry(revolution, tmp_path):
+    """model.glb read back by pygltflib (an independent reader): names, positions in metres y-up,
+    triangles, bounds and the edge lines."""
+    import pygltflib
+
     mesh = revolution.with_vertices(revolution.V * 1000.0)  # planar quads, in mm
     scene = build_scene(mesh, measures.planarity(mesh), tolerance=1e-6)
-    doc, binary = read_glb(glb_bytes(scene))
-    assert doc["asset"]["version"] == "2.0"
-    assert [m["name"] for m in doc["meshes"]] == [m.name for m in scene]
-    design = doc["meshes"][0]["primitives"][0]
-    P = read_accessor(doc, binary, design["attributes"]["POSITION"])
-    T = read_accessor(doc, binary, design["indices"]).reshape(-1, 3)
+    (tmp_path / "model.glb").write_bytes(glb_bytes(scene))
+    doc = pygltflib.GLTF2().load(str(tmp_path / "model.glb"))
+    blob = doc.binary_blob()
+    assert doc.asset.version == "2.0"
+    assert [m.name for m in doc.meshes] == [m.name for m in scene]
+    design = doc.meshes[0].primitives[0]
+    P = _pygltf_accessor(doc, blob, design.attributes.POSITION).astype(float)
+    T = _pygltf_accessor(doc, blob, design.indices).reshape(-1, 3)
     expected = scene[0].positions @ Z_UP_TO_Y_UP.T * 1e-3  # mm, z up -> m, y up
     np.testing.assert_allclose(P, expected, rtol=1e-6, atol=1e-9)
     np.testing.assert_array_equal(T, scene[0].indices)
-    acc = doc["accessors"][design["attributes"]["POSITION"]]
-    np.testing.assert_allclose(acc["min"], P.min(axis=0), rtol=1e-6)
+    acc = doc.accessors[design.attributes.POSITION]
+    np.testing.assert_allclose(acc.min, P.min(axis=0), rtol=1e-6)
     # the triangles cover the planar faces: same total area (m^2 = mm^2 * 1e-6)
     tri_area = 0.5 * np.linalg.norm(np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]), axis=1).sum()
     assert tri_area == pytest.approx(measures.face_areas(mesh).sum() * 1e-6, rel=1e-3)
-    edges = doc["meshes"][1]["primitives"][0]
-    assert edges["mode"] == 1 and doc["accessors"][edges["indices"]]["count"] == 2 * len(mesh.topology.edges)
+    edges = doc.meshes[1].primitives[0]
+    assert edges.mode == 1 and doc.accessors[edges.indices].count == 2 * len(mesh.topology.edges)
+    ours, binary = read_glb(glb_bytes(scene))  # the project's reader (the report check uses it) agrees
+    np.testing.assert_array_equal(read_accessor(ours, binary, ours["meshes"][0]["primitives"][0]["indices"])
+                                  .reshape(-1, 3), T)
 
 
 def test_glb_layout_is_aligned_and_checked():

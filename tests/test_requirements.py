@@ -2,8 +2,8 @@
 import numpy as np
 
 from fabricate.offset import offset_structure
-from fabricate.pipeline import outcome
-from fabricate.requirements import apply_requirements, default_requirements, warnings
+from fabricate.app.pipeline import outcome
+from fabricate.app.requirements import apply_requirements, default_requirements, warnings
 from optimize import shapes
 
 
@@ -11,11 +11,6 @@ def _twisted():
     a = np.stack([np.linspace(0, 6000, 5), np.zeros(5), 2000 * np.sin(np.linspace(0, 2, 5))], axis=1)
     b = np.stack([np.zeros(4), np.linspace(0, 4500, 4), 2000 * np.cos(np.linspace(0, 2, 4))], axis=1)
     return offset_structure(shapes.translational(a, b), (0.0, -200.0))
-
-
-class _Ctx(dict):
-    def get(self, key, default=None):
-        return super().get(key, default)
 
 
 def _measures():
@@ -33,20 +28,20 @@ def test_a_millimetre_of_beam_twist_fails_the_run_by_default():
     s = _twisted()
     m = apply_requirements(_measures(), s, None, "pq", 1.0)
     assert m["beam_twist"]["max"] == np.abs(s.beam_twist_mm).max() > 1.0 and m["beam_twist"]["enforced"]
-    out = outcome(_Ctx(measures=m))
-    assert out["exit_code"] == 3 and "beam_twist" in out["failed"]
+    out = outcome(m)
+    assert out.exit_code == 3 and "beam_twist" in out.failed
     assert m["circular"]["role"] == "reported" and m["closeness"]["role"] == "information"
 
 
 def test_information_beyond_its_tolerance_is_a_warning_with_its_value_in_mm():
     m = apply_requirements(_measures(), _twisted(), ["planarity"], "pq", 1.0)
-    out = outcome(_Ctx(measures=m))
-    assert out["exit_code"] == 0 and out["status"] == "ok"
+    out = outcome(m)
+    assert out.exit_code == 0 and out.status == "ok"
     lines = warnings(m)
     assert any(w.startswith("closeness 72 mm") for w in lines)
     assert not any(w.startswith("circular") for w in lines)  # a pq run did not ask for circles
     assert any(w.startswith("beam_twist ") and " mm " in w for w in lines)
-    assert "warning(s)" in out["message"] and "every requirement met" in out["message"]
+    assert "warning(s)" in out.message and "every requirement met" in out.message
 
 
 def test_the_headline_has_no_red_fail_under_a_green_banner():

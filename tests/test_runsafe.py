@@ -12,9 +12,9 @@ import time
 
 import pytest
 
-import fabricate.stages as stages
-from fabricate.pipeline import outcome, run_pipeline
-from fabricate.runfolder import MARKER, run_lock
+import fabricate.app.stages as stages
+from fabricate.app.pipeline import outcome, run_pipeline
+from fabricate.app.runfolder import MARKER, run_lock
 from optimize.atomic import PART_OWNER, atomic_dir, atomic_open, part_dir
 from optimize.errors import ConfigError
 
@@ -120,7 +120,7 @@ def test_a_failing_rerun_is_written_beside_the_passing_result(tmp_path, passing)
 HOLDER = """
 import sys, time
 from pathlib import Path
-from fabricate.runfolder import run_lock
+from fabricate.app.runfolder import run_lock
 with run_lock(Path(sys.argv[1])):
     print("LOCKED", flush=True)
     time.sleep(60)
@@ -193,13 +193,13 @@ def test_temporary_folders_of_dead_runs_are_removed_and_named(tmp_path):
 # -- Ctrl-C at any moment --------------------------------------------------------------------------
 STUCK_IN_NATIVE_CODE = """
 import hashlib, sys
-import fabricate.stages as s
-def stuck(ctx):
+import fabricate.app.stages as s
+def stuck(*args, **kwargs):
     print("IN CAD", flush=True)
     # one C call that never looks at signals, like a long OpenCASCADE call
     hashlib.pbkdf2_hmac("sha256", b"x", b"y", 2 ** 31 - 1)
 s.stage_cad = stuck
-from fabricate.cli import main
+from fabricate.app.cli import main
 sys.argv = ["fabricate", "run", sys.argv[1], "--out", sys.argv[2], "-q"]
 sys.exit(main())
 """
@@ -239,9 +239,10 @@ def test_unconverged_mesh_whose_parts_cannot_be_built_is_exit_3_written(tmp_path
     """The CAD stage refuses the stalled mesh (as it does a folding panel): the run still writes the
     mesh, the layers and the report, marked, and ends 3 (it used to end 2 with nothing)."""
     import fabricate.cad as cad
+    from fabricate.cad.errors import PartError
 
     def folds(structure, spec):
-        raise ConfigError("panel P0007 (face 6): the glass inset by parts.joint_gap / 2 = 5 mm folds")
+        raise PartError("panel P0007 (face 6): the glass inset by parts.joint_gap / 2 = 5 mm folds", "P0007", 6)
 
     monkeypatch.setattr(cad, "build_parts", folds)
     cfg = tiny_config(tmp_path, "stall", optimize={"target": "conical", "max_iter": 1},
@@ -257,26 +258,21 @@ def test_unconverged_mesh_whose_parts_cannot_be_built_is_exit_3_written(tmp_path
     assert report["exit_code"] == 3
     # a converged mesh whose parts cannot be built is the design's fault: bad input, nothing written
     good = tiny_config(tmp_path, "good")
-    with pytest.raises(ConfigError, match="P0007"):
+    with pytest.raises(PartError, match="P0007"):
         run_pipeline(good, tmp_path / "out")
     assert not (tmp_path / "out" / "good").exists()
-
-
-class Ctx(dict):
-    get = dict.get
 
 
 @pytest.mark.parametrize("check_pass,tol_pass,expected", [
     (False, False, ("export_failed", 4)), (False, True, ("export_failed", 4)),
     (True, False, ("tolerance_not_reached", 3)), (True, True, ("ok", 0))])
 def test_outcome_precedence_names_every_failure(check_pass, tol_pass, expected):
-    ctx = Ctx(measures={"planarity": {"enforced": True, "pass": tol_pass, "max": 2e-3, "tolerance": 1e-6}},
-              check={"pass": check_pass, "checks": {"stl": {"pass": check_pass}}})
-    out = outcome(ctx)
-    assert (out["status"], out["exit_code"]) == expected
-    assert ("output check failed: stl" in out["message"]) == (not check_pass)
-    assert ("planarity 0.002 > 1e-06" in out["message"]) == (not tol_pass)
-    assert ("check:stl" in out["failed"]) == (not check_pass) and ("planarity" in out["failed"]) == (not tol_pass)
+    out = outcome({"planarity": {"enforced": True, "pass": tol_pass, "max": 2e-3, "tolerance": 1e-6}},
+                  {"pass": check_pass, "checks": {"stl": {"pass": check_pass}}})
+    assert (out.status, out.exit_code) == expected
+    assert ("output check failed: stl" in out.message) == (not check_pass)
+    assert ("planarity 0.002 > 1e-06" in out.message) == (not tol_pass)
+    assert ("check:stl" in out.failed) == (not check_pass) and ("planarity" in out.failed) == (not tol_pass)
 
 
 # -- file modes follow the umask (#14) -------------------------------------------------------------
@@ -361,7 +357,7 @@ def test_killing_the_command_kills_its_work_too(tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
-    from fabricate.runfolder import clean_stale_parts
+    from fabricate.app.runfolder import clean_stale_parts
 
     notes = clean_stale_parts(out, "slow")
     assert notes and notes[0].startswith(f"removed {part}") and list(out.iterdir()) == []

@@ -28,14 +28,14 @@ def test_import_errors_loads_nothing_heavy():
 
 
 def test_fabricate_help_loads_nothing_heavy():
-    code = ("import contextlib, io\nfrom fabricate.cli import main\n"
+    code = ("import contextlib, io\nfrom fabricate.app.cli import main\n"
             "with contextlib.redirect_stdout(io.StringIO()):\n"
             "    try:\n        main(['--help'])\n    except SystemExit:\n        pass")
     assert _loaded_after(code) == set()
 
 
 def test_measure_loads_nothing_heavy(cylinder_path):
-    code = ("import contextlib, io\nfrom fabricate.cli import main\n"
+    code = ("import contextlib, io\nfrom fabricate.app.cli import main\n"
             f"with contextlib.redirect_stdout(io.StringIO()):\n    assert main(['measure', {str(cylinder_path)!r}]) == 0")
     assert _loaded_after(code) == set()  # components in NumPy (optimize.components)
 

@@ -16,7 +16,7 @@ import pytest
 
 from _pipeline_fixtures import NO_FILES, REPO, tiny_config
 from fabricate.cad import PartSpec
-from fabricate.config import parse_config
+from fabricate.app.config import parse_config
 from fabricate.offset import offset_structure
 from fabricate.structure.check import check_structure, report
 from fabricate.structure.loads import panel_area_vectors
@@ -95,7 +95,7 @@ def test_a_frame_on_pinned_joints_is_a_mechanism_naming_the_key(dome):
 
 
 def test_a_run_writes_the_structure_table_columns_and_pictures(tmp_path):
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.pipeline import run_pipeline
 
     outs = dict(NO_FILES, bom=True, pictures=True)
     cfg = tiny_config(tmp_path, "st", outputs=outs, structure={"check": "report"})
@@ -118,7 +118,7 @@ def test_a_run_writes_the_structure_table_columns_and_pictures(tmp_path):
 
 
 def test_enforce_with_a_section_far_too_small_is_exit_3(tmp_path):
-    from fabricate.pipeline import run_pipeline
+    from fabricate.app.pipeline import run_pipeline
 
     cfg = tiny_config(tmp_path, "weak", structure={"check": "enforce",
                                                    "section": {"shape": "plate", "depth": 200, "width": 0.5}})
@@ -159,7 +159,7 @@ def test_reference_config_lists_every_structure_key():
     assert set(data) == set(StructureSection.allowed_keys())
     assert set(data["loads"]) == set(LoadsOption.allowed_keys())
     assert set(data["sizing"]) == set(SizingOption.allowed_keys())
-    from fabricate.config import load_config
+    from fabricate.app.config import load_config
 
     assert load_config(REPO / "configs" / "reference.yaml").structure.check == "off"  # YAML's bare off
 

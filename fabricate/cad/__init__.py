@@ -9,6 +9,7 @@ _EXPORTS = {
     "COLOURS": ".parts", "KINDS": ".parts", "Part": ".parts", "PartGroup": ".parts", "Parts": ".parts",
     "part_ids": ".parts",
     "PartSpec": ".spec",
+    "PartError": ".errors",
 }
 __all__ = sorted(_EXPORTS)
 __getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())

@@ -4,8 +4,8 @@ Every part is a planar-faced solid built from planes (see ``panels``,
 ``beams``, ``nodes``); here the batches become :class:`PartGroup` objects
 with ids, analytic volumes, flat outlines, neighbours, and are validated:
 every face must be convex and turn the right way about its outward normal,
-every volume positive.  A part that fails raises :class:`ConfigError` naming
-the part, its mesh element, the face and the setting to change.
+every volume positive.  A part that fails raises :class:`fabricate.cad.errors.PartError`
+(a mesh fault: bad input) naming the part, its mesh element, the face and the setting to change.
 """
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ import numpy as np
 from optimize.errors import ConfigError, MeshError
 
 from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, RING, _face_centroids, beam_planes, beam_solids
+from .errors import PartError
 from .diagnose import CONVEX_MIN, beam_hint, min_turn, panel_failure
 from .flat import flat_data
 from .limits import check_limits
@@ -180,8 +181,8 @@ def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thi
     bad = vol <= 0
     if bad.any():
         i = int(np.argmax(bad))
-        raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): volume {vol[i]:.6g} mm3, "
-                          "expected a positive volume; check the parts dimensions")
+        raise PartError(f"{kind} {ids[i]} (element {int(element[i])}): volume {vol[i]:.6g} mm3, "
+                        "expected a positive volume; check the parts dimensions", str(ids[i]), int(element[i]))
     residual = np.zeros(len(V))
     for fi, face in enumerate(faces):  # loop over the faces of one combinatorial type
         h = dot(V[:, list(face)], normals[:, fi][:, None, :])
@@ -207,22 +208,23 @@ HINTS = {"panel": "parts.joint_gap may be too large for this face, or the face i
 
 
 def _validate(kind, ids, element, V, faces, normals, hint=None) -> None:
-    """Raise ConfigError at the worst folded, reversed or collapsed face of the batch.
+    """Raise PartError at the worst folded, reversed or collapsed face of the batch.
 
     hint : None (the kind's :data:`HINTS`) or ``hint(i) -> str`` for solid ``i``.
     """
     if not np.all(np.isfinite(V)):
         i = int(np.argwhere(~np.isfinite(V))[0, 0])
-        raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): a corner is not finite "
-                          f"(parallel planes); {hint(i) if hint else HINTS[kind]}")
+        raise PartError(f"{kind} {ids[i]} (element {int(element[i])}): a corner is not finite "
+                        f"(parallel planes); {hint(i) if hint else HINTS[kind]}", str(ids[i]), int(element[i]))
     turn, where = min_turn(V, faces, normals)
     if (turn < CONVEX_MIN).any():
         i = int(np.argmin(turn))
         fi = int(where[i])
         name = (FACE_NAMES[fi] if len(faces) == len(FACE_NAMES) else BOX_NAMES[fi]) if kind == "beam" else ("lower" if fi == 0 else "upper" if fi == 1
                                                       else f"side {fi - 2}")
-        raise ConfigError(f"{kind} {ids[i]} (element {int(element[i])}): face {name} is folded or "
-                          f"collapsed (corner turn {turn[i]:.3g}, expected > 0); {hint(i) if hint else HINTS[kind]}")
+        raise PartError(f"{kind} {ids[i]} (element {int(element[i])}): face {name} is folded or "
+                        f"collapsed (corner turn {turn[i]:.3g}, expected > 0); {hint(i) if hint else HINTS[kind]}",
+                        str(ids[i]), int(element[i]))
 
 
 def _check_panels(batches, pid, mesh, structure_normals, P0, spec, mode, build) -> None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.errors import ConfigError
+from .errors import PartError
 
 from .geometry import convexity, dot
 
@@ -69,7 +69,7 @@ def largest_gap(build, gap: float, faces: np.ndarray, mode: str) -> float | None
 
 
 def panel_failure(ids, faces_index, face_name: str, turn: float, P: np.ndarray, normal: np.ndarray, spec,
-                  mode: str, build) -> ConfigError:
+                  mode: str, build) -> PartError:
     """The error for panels that fold.
 
     ids : (q,) str part ids of every failing panel, worst first; faces_index : (q,) their mesh faces;
@@ -80,11 +80,11 @@ def panel_failure(ids, faces_index, face_name: str, turn: float, P: np.ndarray, 
     own = max(float(convexity(P, normal[None])[0]), float(convexity(P, -normal[None])[0]))  # either way round
     listed = f"{', '.join(ids[:8])}{', ...' if len(ids) > 8 else ''}"
     if not own >= CONVEX_MIN:  # the mesh face itself turns inside out: no setting of the parts helps
-        return ConfigError(
+        return PartError(
             f"panel {ids[0]} (face {int(faces_index[0])}): the mesh face itself is folded (a self-intersecting "
             f"or non-convex polygon, corner turn {own:.3g}, expected > 0); {len(ids)} panel(s) fail ({listed}). "
             "No glass can be cut from it: the optimized mesh is not valid there (see mesh.obj and the "
-            "optimizer's report); check the input and the optimize settings")
+            "optimizer's report); check the input and the optimize settings", str(ids[0]), int(faces_index[0]))
     shortest, width = face_widths(P)
     gap = spec.joint_gap
     other = "perpendicular" if mode == "axis" else "axis"
@@ -103,9 +103,10 @@ def panel_failure(ids, faces_index, face_name: str, turn: float, P: np.ndarray, 
         fix = f"{they} {do} not build even without a joint gap (the face is degenerate)"
     if other_ok:
         fix += f", or with parts.edge: {other}"
-    return ConfigError(f"{head}{more}; {fix}. Faces this narrow come from the design (a squeezed quad, or a "
+    return PartError(f"{head}{more}; {fix}. Faces this narrow come from the design (a squeezed quad, or a "
                        "developable strip whose singular curve comes near the strip): a design that keeps its "
-                       "quads regular (design parameters, optimize.fairness) avoids them")
+                     "quads regular (design parameters, optimize.fairness) avoids them", str(ids[0]),
+                     int(faces_index[0]))
 
 
 def beam_hint(planarity_mm: float, width: float, shrink: float = 1.0, depth: float = 0.0) -> str:

@@ -8,7 +8,7 @@ import math
 import platform
 from importlib import metadata
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -37,7 +37,7 @@ def versions() -> dict[str, str | None]:
 
 def jsonable(value: Any) -> Any:
     """A JSON-ready copy: numpy to Python, NaN and infinities to None, paths to strings."""
-    if isinstance(value, dict):
+    if isinstance(value, Mapping):  # dicts and the records' read-only views
         return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [jsonable(v) for v in value]
@@ -72,45 +72,50 @@ def parts_summary(parts) -> dict[str, Any] | None:
     return out
 
 
-def build_report(ctx, pictures: dict[str, str]) -> dict[str, Any]:
-    """The report dict of a finished run (``ctx``: :class:`fabricate.pipeline.RunContext`)."""
-    cfg = ctx.config
-    result = ctx.get("result")
-    structure = ctx.get("structure")
-    mesh = ctx.get("mesh")
-    out = ctx["outcome"]
+def build_report(run, pictures: dict[str, str], own_files: Mapping[str, Mapping] | None = None) -> dict[str, Any]:
+    """The report dict of a finished run, from ``run`` (:class:`fabricate.app.records.RunRecord`) alone;
+    ``pictures`` and ``own_files`` are what the report stage itself wrote (captions, facts)."""
+    cfg = run.config
+    result = run.optimize.result
+    structure = run.offset.structure
+    mesh = run.optimize.mesh
+    out = run.outcome
+    known = {**run.exports.files, **(own_files or {})}
     files = {}
-    for p in sorted(ctx.workdir.rglob("*")):
+    for p in sorted(run.workdir.rglob("*")):
         if p.is_file() and p.name not in ("report.json", "report.html"):
-            rel = p.relative_to(ctx.workdir).as_posix()
-            files[rel] = dict(ctx.files.get(rel, {}), bytes=p.stat().st_size)
+            rel = p.relative_to(run.workdir).as_posix()
+            files[rel] = dict(known.get(rel, {}), bytes=p.stat().st_size)
+    facts = dict(run.input.facts)
+    if run.optimize.routes:
+        facts["routes"] = list(run.optimize.routes)
     report = {
         "schema": SCHEMA,
         "name": cfg.name,
-        "status": out["status"],
-        "exit_code": out["exit_code"],
-        "message": out["message"],
-        "failed": out["failed"],
+        "status": out.status,
+        "exit_code": out.exit_code,
+        "message": out.message,
+        "failed": list(out.failed),
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "config_file": str(cfg.source) if cfg.source else None,
         "config": cfg.as_dict(),
-        "input": ctx.get("plan"),
+        "input": facts,
         "result_mesh": None if mesh is None else {
             "faces": mesh.n_faces, "vertices": mesh.n_vertices, "edges": int(len(mesh.topology.edges)),
             "bbox_diagonal_mm": mesh.bbox_diagonal()},
         "versions": versions(),
-        "timings_s": dict(ctx.timings),
-        "measures": ctx.get("measures", {}),
+        "timings_s": dict(run.timings),
+        "measures": run.measures,
         "optimization": result.report() if result is not None else None,
-        "levels": ctx.get("levels", []),
+        "levels": list(run.optimize.levels),
         "offset": getattr(structure, "report", None),
-        "totals": client_totals(ctx.get("parts")),
-        "parts": parts_summary(ctx.get("parts")),
-        "structure": ctx.get("statics_report"),
-        "check": ctx.get("check"),
+        "totals": client_totals(run.parts.parts),
+        "parts": parts_summary(run.parts.parts),
+        "structure": run.structure.report,
+        "check": run.exports.check,
         "files": files,
         "pictures": pictures,
-        "notes": list(ctx.notes),
+        "notes": list(run.notes),
     }
     return jsonable(report)
 

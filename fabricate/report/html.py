@@ -126,7 +126,7 @@ def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: boo
     """The page as a string (``pictures``: file name -> caption)."""
     name = escape(report["name"])
     ok = report["status"] == "ok"
-    from fabricate.requirements import warnings
+    from .measures import warnings
 
     warn = warnings(report.get("measures", {}), ((report.get("parts") or {}).get("cad_report") or {}).get("limits"))
     head = "OK: every requirement met" if not warn else f"OK with {len(warn)} warning(s): every requirement met"

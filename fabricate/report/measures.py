@@ -1,6 +1,6 @@
 """Every measure of a run with its tolerance, pass/fail and worst elements, relative and in mm.
 
-``collect_measures(ctx)`` returns ``{name: entry}``; an entry has ``unit``,
+``collect_measures(cfg, input, optimize, offset)`` returns ``{name: entry}``; an entry has ``unit``,
 ``max``, ``mean``, ``tolerance``, ``pass``, ``enforced`` (a failing enforced
 measure makes the run "tolerance not reached", exit 3), ``worst`` (the five
 worst elements with their index and value) and, where it means something,
@@ -68,12 +68,12 @@ def entry(values: np.ndarray, tolerance: float | None, unit: str, element: str, 
     return out
 
 
-def collect_measures(ctx) -> dict[str, dict]:
-    """All measures of the run in ``ctx`` (a :class:`fabricate.pipeline.RunContext`)."""
-    cfg = ctx.config
+def collect_measures(cfg, inp, opt, off) -> dict[str, dict]:
+    """All measures of a run: ``cfg`` its RunConfig, ``inp``, ``opt``, ``off`` the records of its input,
+    optimize and offset stages (:mod:`fabricate.app.records`)."""
     tol = cfg.tolerances.to_tolerances()
-    mesh: Mesh = ctx["mesh"]
-    target = ctx["plan"]["target"]
+    mesh: Mesh = opt.mesh
+    target = inp.target
     topo = mesh.topology
     out: dict[str, dict] = {}
 
@@ -89,9 +89,9 @@ def collect_measures(ctx) -> dict[str, dict]:
     out["circular"] = entry(cir, tol.circular, "rad", "face", ids=np.nonzero(mesh.face_sizes == 4)[0],
                             enforced=target == "circular", extra={"deg": np.degrees(cir)},
                             what="max(|phi1 + phi3 - pi|, |phi2 + phi4 - pi|) per quad")
-    result = ctx.get("result")
+    result = opt.result
     if result is not None:
-        diag = _reference_diagonal(ctx)
+        diag = inp.mesh.bbox_diagonal()  # the reference: the input in mm
         out["closeness"] = {
             "what": "max distance of a vertex to the reference surface / its bounding-box diagonal",
             "unit": "relative", "count": mesh.n_vertices, "tolerance": tol.closeness, "enforced": False,
@@ -107,13 +107,8 @@ def collect_measures(ctx) -> dict[str, dict]:
                 "max": float(count), "mean": None,
                 "worst": [{"face": int(f), "value": 1.0} for f in folded["faces"][:N_WORST]],
                 "pass": count == 0}
-    out.update(_offset_measures(ctx, tol, enforce=target == "conical"))
+    out.update(_offset_measures(off.structure, mesh, tol, enforce=target == "conical"))
     return out
-
-
-def _reference_diagonal(ctx) -> float:
-    ref = ctx.get("input_mesh")
-    return (ref if ref is not None else ctx["mesh"]).bbox_diagonal()
 
 
 def _turned_entry(t: dict) -> dict:
@@ -135,8 +130,7 @@ def _range(r) -> str:
     return f"{'-inf' if lo is None else mm(lo)} .. {'+inf' if hi is None else mm(hi, '+')} mm"
 
 
-def _offset_measures(ctx, tol, enforce: bool) -> dict[str, dict]:
-    s = ctx.get("structure")
+def _offset_measures(s, mesh: Mesh, tol, enforce: bool) -> dict[str, dict]:
     if s is None:
         return {}
     out = {}
@@ -153,7 +147,7 @@ def _offset_measures(ctx, tol, enforce: bool) -> dict[str, dict]:
         rel = M.quad_planarity(np.asarray(s.beam_quads, dtype=float))
         deg = np.asarray(s.beam_twist_deg, dtype=float)
         edges = np.asarray(s.edges)
-        at_boundary = ctx["mesh"].topology.is_boundary_vertex[edges].any(axis=1)
+        at_boundary = mesh.topology.is_boundary_vertex[edges].any(axis=1)
         for key, sel, enforced, what in (
                 ("beam_planarity", ~at_boundary, enforce,
                  "flatness (torsion) of the beams between interior nodes: diagonal distance / mean diagonal"),
@@ -170,4 +164,24 @@ def _offset_measures(ctx, tol, enforce: bool) -> dict[str, dict]:
     if axis.size:
         out["axis_defect"] = entry(axis, None, "rad", "vertex", extra={"deg": np.degrees(axis)},
                                    what="spread of the angle between the node axis and the face normals")
+    return out
+
+
+def warnings(measures: dict, limits: dict | None = None) -> list[str]:
+    """One line per information measure beyond its tolerance, with its value in mm where it has one
+    (not the defect of a target the run did not ask for: ``role`` reported), and per shop limit
+    (``parts.report["limits"]``) some part breaks, with the ids."""
+    out = []
+    for name, m in measures.items():
+        if m.get("enforced") or m.get("pass") is not False or m.get("role") == "reported":
+            continue
+        mm = next((m[k] for k in ("max_mm", "max_twist_mm") if m.get(k) is not None), None)
+        deg = m.get("max_deg")
+        value = (f"{mm:.3g} mm" if mm is not None else f"{deg:.3g} deg" if deg is not None
+                 else f"{m['max']:.3g} {m.get('unit', '')}".strip())
+        out.append(f"{name} {value} (max {m['max']:.3g} {m.get('unit', '')} > tolerance {m['tolerance']:.3g})")
+    for key, v in (limits or {}).items():
+        if v.get("count"):
+            ids = ", ".join(v["ids"][:12]) + (" ..." if v["count"] > 12 else "")
+            out.append(f"{v['count']} part(s) beyond the {key} limit ({v['limit']}): {ids}")
     return out

@@ -20,12 +20,13 @@ log = logging.getLogger(__name__)
 MARKERS = {"tolerance_not_reached": "TOLERANCE_NOT_REACHED.txt", "export_failed": "CHECK_FAILED.txt"}
 
 
-def histories(ctx) -> list[tuple[str, list[dict]]]:
-    """``[(label, history)]``: one per subdivision level, or the single optimization's."""
-    levels = ctx.get("level_results") or []
+def histories(opt) -> list[tuple[str, list[dict]]]:
+    """``[(label, history)]`` of ``opt`` (OptimizeRecord): one per subdivision level, or the single
+    optimization's."""
+    levels = opt.level_results
     if levels:
         return [(f"level {i + 1}", r.history) for i, r in enumerate(levels) if r is not None]
-    result = ctx.get("result")
+    result = opt.result
     return [("", result.history)] if result is not None else []
 
 
@@ -37,9 +38,9 @@ def part_outlines(parts) -> list[tuple[str, np.ndarray]]:
             for pid, flat in zip(g.ids, g.flat)]
 
 
-def write_pictures(ctx) -> dict[str, str]:
-    """The PNG pictures; returns ``{file name: caption}``."""
-    out, cfg, mesh = ctx.workdir, ctx.config, ctx["mesh"]
+def write_pictures(run) -> dict[str, str]:
+    """The PNG pictures of ``run`` (RunRecord); returns ``{file name: caption}``."""
+    out, cfg, mesh = run.workdir, run.config, run.optimize.mesh
     tol = cfg.tolerances.to_tolerances()
     name = cfg.name
     pics: dict[str, str] = {}
@@ -50,48 +51,50 @@ def write_pictures(ctx) -> dict[str, str]:
     picture_defect(mesh, M.conical_defect(mesh), out / "conical.png", title=f"{name}: conical defect",
                    label="conical defect (rad)", tolerance=tol.conical, vertices=t.interior_valence4)
     pics["conical.png"] = "conical defect at the interior valence-4 vertices (log scale)"
-    s = ctx.get("structure")
+    s = run.offset.structure
     if s is not None:
         picture_layers(list(s.layers), np.asarray(s.edges), np.asarray(s.beam_quads), out / "layers.png",
                        title=f"{name}: offset layers and beams", distances=tuple(s.distances))
         pics["layers.png"] = "the offset layers with the beams between the first and the last"
-    picture_history(histories(ctx), out / "history.png", title=f"{name}: optimization history",
+    picture_history(histories(run.optimize), out / "history.png", title=f"{name}: optimization history",
                     tolerances={"planarity": tol.planarity, "conical": tol.conical, "circular": tol.circular})
     pics["history.png"] = "max defects against iteration (log scale), tolerances dashed"
-    if ctx.get("statics") is not None:  # the structural check's frame pictures
-        from fabricate.structure.run import write_pictures
+    if run.structure.check is not None:  # the structural check's frame pictures
+        from fabricate.structure.run import write_pictures as structure_pictures
 
-        pics.update(write_pictures(ctx))
-    outlines = part_outlines(ctx.get("parts"))
+        pics.update(structure_pictures(run.structure.check, out, name))
+    outlines = part_outlines(run.parts.parts)
     if outlines:
         picture_outlines(outlines, out / "outlines.png", title=f"{name}: flat outlines ({len(outlines)} parts)")
         pics["outlines.png"] = "a sheet of the flat outlines with their part ids"
     return pics
 
 
-def write_report(ctx) -> list[str]:
-    """Every report file of the run in ``ctx`` (:class:`fabricate.pipeline.RunContext`); their names."""
-    out, cfg, mesh = ctx.workdir, ctx.config, ctx["mesh"]
+def write_report(run) -> list[str]:
+    """Every report file of ``run`` (:class:`fabricate.app.records.RunRecord`, the only input) into its
+    work folder; their names."""
+    out, cfg, mesh = run.workdir, run.config, run.optimize.mesh
     written: list[str] = []
-    pictures = write_pictures(ctx) if cfg.outputs.pictures else {}
+    own: dict[str, dict] = {}  # facts of the files the report writes itself
+    pictures = write_pictures(run) if cfg.outputs.pictures else {}
     written += list(pictures)
     if cfg.outputs.html:
         scene = build_scene(mesh, M.planarity(mesh), tolerance=cfg.tolerances.planarity,
-                            structure=ctx.get("structure"), parts=ctx.get("parts"))
+                            structure=run.offset.structure, parts=run.parts.parts)
         glb = glb_bytes(scene, generator=f"conical-fab report of {cfg.name}")
         (out / "model.glb").write_bytes(glb)  # the folder itself is renamed into place atomically
-        ctx.files["model.glb"] = {"what": "the 3D view's model (glTF binary, metres, y up)", "meshes": len(scene)}
+        own["model.glb"] = {"what": "the 3D view's model (glTF binary, metres, y up)", "meshes": len(scene)}
         written += ["model.glb"] + copy_viewer(out, glb)
-    outcome = ctx["outcome"]
-    marker = MARKERS.get(outcome["status"])
+    outcome = run.outcome
+    marker = MARKERS.get(outcome.status)
     if marker:
-        why = ("do not meet the tolerances (see report.json, measures)" if outcome["status"] == "tolerance_not_reached"
+        why = ("do not meet the tolerances (see report.json, measures)" if outcome.status == "tolerance_not_reached"
                else "failed the output check (see report.json, check)")
         with atomic_open(out / marker) as fh:
-            fh.write(f"{cfg.name}: {outcome['message']}\nThe results in this folder were written but {why}; "
-                     f"status {outcome['status']!r}, exit code {outcome['exit_code']}.\n")
+            fh.write(f"{cfg.name}: {outcome.message}\nThe results in this folder were written but {why}; "
+                     f"status {outcome.status!r}, exit code {outcome.exit_code}.\n")
         written.append(marker)
-    report = build_report(ctx, pictures)
+    report = build_report(run, pictures, own)
     write_report_json(report, out / "report.json")
     written.append("report.json")
     if cfg.outputs.html:

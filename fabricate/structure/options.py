@@ -8,10 +8,14 @@ characteristic ones for the deflections.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, fields
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
+
+from fabricate.app.config_section import Section, section_base  # the strict base (no import of app.config)
+from fabricate.app.options import option
 
 from .sections import SectionProperties, section
 
@@ -21,16 +25,6 @@ ALPHA = {"a0": 0.13, "a": 0.21, "b": 0.34, "c": 0.49, "d": 0.76}
 """Imperfection factor of each flexural buckling curve (EN 1993-1-1 Table 6.1)."""
 GRADES = {"S235": 235.0, "S275": 275.0, "S355": 355.0, "S460": 460.0}
 """Yield strength f_y (MPa) of the structural steel grades (EN 10025-2, t <= 40 mm)."""
-
-
-class Section(BaseModel):
-    """A config section (as :class:`fabricate.config.Section`, kept here so config.py can import this module)."""
-
-    model_config = ConfigDict(extra="forbid", validate_default=True, populate_by_name=True)
-
-    @classmethod
-    def allowed_keys(cls) -> list[str]:
-        return [f.alias or name for name, f in cls.model_fields.items()]
 
 
 class SectionOption(Section):
@@ -57,15 +51,20 @@ class SectionOption(Section):
         return section(self.shape, depth=self.depth, width=self.width, web=self.web, flange=self.flange, key=key)
 
 
-class LoadsOption(Section):
+@dataclass(frozen=True)
+class LoadsOptions:
     """Characteristic loads: unit weights kN/m3, area loads kN/m2 (>= 0; wind signs are in the case)."""
 
-    steel_unit_weight: float = Field(default=78.5, gt=0)   # EN 1991-1-1 Table A.4
-    glass_unit_weight: float = Field(default=25.0, gt=0)   # EN 1991-1-1 Table A.4 (glass in sheets)
-    finishes: float = Field(default=0.0, ge=0)             # permanent, per m2 of glass (fixings, gaskets)
-    snow: float = Field(default=0.8, ge=0)                 # s = mu_i C_e C_t s_k, per m2 of plan
-    wind_pressure: float = Field(default=0.5, ge=0)        # w_e toward the structure, normal to the panels
-    wind_suction: float = Field(default=0.5, ge=0)         # w_e away from the structure (uplift)
+    steel_unit_weight: float = option(78.5, gt=0, unit="kN/m3", help="EN 1991-1-1 Table A.4")
+    glass_unit_weight: float = option(25.0, gt=0, unit="kN/m3", help="EN 1991-1-1 Table A.4 (glass in sheets)")
+    finishes: float = option(0.0, ge=0, unit="kN/m2", help="permanent, per m2 of glass (fixings, gaskets)")
+    snow: float = option(0.8, ge=0, unit="kN/m2", help="s = mu_i C_e C_t s_k, per m2 of plan")
+    wind_pressure: float = option(0.5, ge=0, unit="kN/m2", help="w_e toward the structure, normal to the panels")
+    wind_suction: float = option(0.5, ge=0, unit="kN/m2", help="w_e away from the structure (uplift)")
+
+
+class LoadsOption(section_base(LoadsOptions)):
+    """The ``structure.loads`` section (defaults: :class:`LoadsOptions`)."""
 
 
 class CombinationOption(Section):
@@ -111,32 +110,49 @@ class SizingOption(Section):
     max_rounds: int = Field(default=6, ge=1, le=50)
 
 
-class StructureSection(Section):
-    """The structural check of the beam frame (``fabricate.structure``); ``check: off`` skips it."""
+@dataclass(frozen=True)
+class StructureOptions:
+    """The keys of the ``structure`` section besides its nested sections (section, loads,
+    combinations, sizing)."""
 
-    check: Literal["off", "report", "enforce"] = "off"
-    grade: Literal["S235", "S275", "S355", "S460"] = "S355"
-    gamma_m0: float = Field(default=1.0, ge=1.0, le=2.0)
-    buckling_curve: Literal["a0", "a", "b", "c", "d"] = "c"   # EN 1993-1-1 Table 6.1 (c: tees, plates, cold-formed RHS)
-    buckling_length_factor: float = Field(default=1.0, gt=0, le=10.0)  # buckling length / beam length
-    elastic_modulus: float = Field(default=210000.0, gt=0, le=1e6)   # MPa
-    shear_modulus: float = Field(default=81000.0, gt=0, le=1e6)      # MPa
-    section: SectionOption | None = None   # null: the section the parts are welded from (parts.beam, the layer span)
-    connections: Literal["rigid", "pinned"] = "rigid"
-    supports: Literal["lowest", "boundary", "outline"] | list[int] = "lowest"
-    support_tolerance: float | None = Field(default=None, ge=0, le=1e6)  # mm above the lowest ('lowest'); null: 5% of the height
-    support_kind: Literal["pinned", "fixed"] = "pinned"
-    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    deflection_limit: float = Field(default=200.0, gt=0, le=10000.0)   # span / n, beams and whole structure
-    span: float | None = Field(default=None, gt=0, le=1e7)         # mm; null: the shorter side of the plan
-    loads: LoadsOption = Field(default_factory=LoadsOption)
-    combinations: list[CombinationOption] | None = None   # null: DEFAULT_COMBINATIONS
-    sizing: SizingOption = Field(default_factory=SizingOption)
+    check: Literal["off", "report", "enforce"] = option("off", help="off skips the check; enforce fails the run")
+    grade: Literal["S235", "S275", "S355", "S460"] = option("S355", help="steel grade (EN 10025-2)")
+    gamma_m0: float = option(1.0, ge=1.0, le=2.0, help="partial factor of the cross-section resistance")
+    buckling_curve: Literal["a0", "a", "b", "c", "d"] = option(
+        "c", help="EN 1993-1-1 Table 6.1 (c: tees, plates, cold-formed RHS)")
+    buckling_length_factor: float = option(1.0, gt=0, le=10.0, help="buckling length / beam length")
+    elastic_modulus: float = option(210000.0, gt=0, le=1e6, unit="MPa")
+    shear_modulus: float = option(81000.0, gt=0, le=1e6, unit="MPa")
+    connections: Literal["rigid", "pinned"] = option("rigid")
+    supports: Literal["lowest", "boundary", "outline"] | tuple[int, ...] = option(
+        "lowest", help="the supported nodes: a rule or vertex indices")
+    support_tolerance: float | None = option(None, ge=0, le=1e6, unit="mm",
+                                             help="above the lowest ('lowest'); null: 5% of the height")
+    support_kind: Literal["pinned", "fixed"] = option("pinned")
+    up: tuple[float, float, float] = option((0.0, 0.0, 1.0), help="the up direction of the loads")
+    deflection_limit: float = option(200.0, gt=0, le=10000.0, help="span / n, beams and whole structure")
+    span: float | None = option(None, gt=0, le=1e7, unit="mm", help="null: the shorter side of the plan")
 
-    @field_validator("check", mode="before")
+
+_NESTED = {
+    "section": (SectionOption | None, Field(default=None)),  # null: the section the parts are welded from (parts.beam)
+    "loads": (LoadsOption, Field(default_factory=LoadsOption)),
+    "combinations": (list[CombinationOption] | None, Field(default=None)),  # null: DEFAULT_COMBINATIONS
+    "sizing": (SizingOption, Field(default_factory=SizingOption)),
+}
+_KEYS = [f.name for f in fields(StructureOptions)]
+
+
+class StructureSection(section_base(StructureOptions, extra=_NESTED, order=[
+        *_KEYS[:_KEYS.index("shear_modulus") + 1], "section", *_KEYS[_KEYS.index("shear_modulus") + 1:],
+        "loads", "combinations", "sizing"])):
+    """The structural check of the beam frame (``fabricate.structure``); ``check: off`` skips it
+    (defaults: :class:`StructureOptions`, :class:`LoadsOptions`)."""
+
+    @field_validator("up", mode="before")
     @classmethod
-    def _yaml_off(cls, v):
-        return "off" if v is False else v  # YAML 1.1 reads a bare `off` as false
+    def _up_list(cls, v):  # YAML gives a list; the strict tuple takes it converted
+        return tuple(v) if isinstance(v, list) else v
 
     @field_validator("supports")
     @classmethod

@@ -8,7 +8,7 @@ supervisor: it forwards SIGINT / SIGTERM / SIGHUP to the child (which turns
 the first into KeyboardInterrupt and unwinds, removing its temporary folders;
 a batch stops its workers), and when the group has not ended :data:`GRACE` seconds later it kills
 it (batch workers included) and removes the temporary folders the killed
-processes left (:func:`fabricate.runfolder.clean_stale_parts`).
+processes left (:func:`fabricate.app.runfolder.clean_stale_parts`).
 Ctrl-Z stops the whole group and ``fg`` resumes it.
 """
 from __future__ import annotations
@@ -149,60 +149,13 @@ def _watch(pid: int, folders: Callable[[], Iterable[Path]]) -> int:
     return os.WEXITSTATUS(status) if os.WIFEXITED(status) else 1
 
 
-PART_OWNER = ".conical-fab-part.json"
-"""= optimize.atomic.PART_OWNER (not imported: ``optimize`` takes a second to import, and this runs
-while the user waits for Ctrl-C to finish)."""
-
-
-def _gone(pid: int) -> bool:
-    """No such process, or only its zombie (killed, not yet reaped)."""
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[-1].split()[0]
-    except (OSError, IndexError):
-        return not _exists(pid)
-    return state in ("Z", "X")
-
-
-def _exists(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def _clean(folders: Callable[[], Iterable[Path]]) -> list[str]:
     """Remove the temporary folders under ``folders`` whose owner process (on this host) is gone,
-    and the lock files no process holds; the removed folders."""
-    import fcntl
-    import json
-    import shutil
-    import socket
+    waiting a second for killed ones to go, and the lock files no process holds; the removed
+    folders (:func:`fabricate.app.runfolder.remove_dead_parts`, the one owner-record check)."""
+    from fabricate.app.runfolder import remove_dead_parts  # light: no solver, no CAD kernel
 
-    removed, host = [], socket.gethostname()
+    removed: list[str] = []
     for folder in folders():
-        for path in sorted(Path(folder).glob(".*.part")):
-            try:
-                rec = json.loads((path / PART_OWNER).read_text())
-                pid = int(rec["pid"])
-                if rec.get("host") != host or pid <= 0:
-                    continue
-            except (OSError, ValueError, KeyError, TypeError):
-                continue
-            deadline = time.monotonic() + 1.0  # killed processes take a moment to go
-            while not _gone(pid) and time.monotonic() < deadline:
-                time.sleep(0.02)
-            if _gone(pid):
-                shutil.rmtree(path, ignore_errors=True)
-                removed.append(str(path))
-        for path in sorted(Path(folder).glob(".*.lock")):
-            with contextlib.suppress(OSError):
-                fd = os.open(path, os.O_RDWR)
-                try:
-                    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                    os.unlink(path)  # held by nobody: a killed run's
-                finally:
-                    os.close(fd)
+        removed += remove_dead_parts(Path(folder), wait=1.0)
     return removed

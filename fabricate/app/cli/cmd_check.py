@@ -65,7 +65,7 @@ def require_run_folder(outdir) -> None:
     bom.csv): a wrong path is bad input, not a failed check."""
     from pathlib import Path
 
-    from fabricate.runfolder import MARKER
+    from fabricate.app.runfolder import MARKER
     from optimize.errors import ConfigError
 
     path = Path(outdir)

@@ -8,7 +8,7 @@ import time
 import traceback
 from pathlib import Path
 
-from . import __version__
+from .. import __version__
 
 
 def crash_log(exc: BaseException, what: str = "") -> Path | None:

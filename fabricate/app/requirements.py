@@ -20,7 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from fabricate.config import MEASURE_NAMES as MEASURES  # noqa: F401  (the names requirements accepts)
+from fabricate.app.config import MEASURE_NAMES as MEASURES  # noqa: F401  (the names requirements accepts)
+from fabricate.report.measures import warnings  # noqa: F401 - re-exported (the headline's warning lines)
 
 
 def default_requirements(target: str) -> tuple[str, ...]:
@@ -51,23 +52,3 @@ def apply_requirements(measures: dict, structure, requirements, target: str, bea
         m["role"] = ("requirement" if name in wanted else "reported" if name in other_target
                      else "information")
     return measures
-
-
-def warnings(measures: dict, limits: dict | None = None) -> list[str]:
-    """One line per information measure beyond its tolerance, with its value in mm where it has one
-    (not the defect of a target the run did not ask for: ``role`` reported), and per shop limit
-    (``parts.report["limits"]``) some part breaks, with the ids."""
-    out = []
-    for name, m in measures.items():
-        if m.get("enforced") or m.get("pass") is not False or m.get("role") == "reported":
-            continue
-        mm = next((m[k] for k in ("max_mm", "max_twist_mm") if m.get(k) is not None), None)
-        deg = m.get("max_deg")
-        value = (f"{mm:.3g} mm" if mm is not None else f"{deg:.3g} deg" if deg is not None
-                 else f"{m['max']:.3g} {m.get('unit', '')}".strip())
-        out.append(f"{name} {value} (max {m['max']:.3g} {m.get('unit', '')} > tolerance {m['tolerance']:.3g})")
-    for key, v in (limits or {}).items():
-        if v.get("count"):
-            ids = ", ".join(v["ids"][:12]) + (" ..." if v["count"] > 12 else "")
-            out.append(f"{v['count']} part(s) beyond the {key} limit ({v['limit']}): {ids}")
-    return out

@@ -32,6 +32,7 @@ from optimize.atomic import atomic_open
 from optimize.errors import ConfigError, ConicalFabError
 
 from .config import RunConfig, load_config, override_values
+from .options import COMMAND
 from .pipeline import EXIT_CODES, RunSummary, run_pipeline, worst
 
 log = logging.getLogger(__name__)
@@ -153,7 +154,7 @@ def run_job(job: Job, out_root: str, force: bool = False) -> RunSummary:
 
 
 def make_executor(workers: int, scheduler: str | None = None, *,
-                  timeout: float = 20.0) -> tuple[cf.Executor, Callable[[], None]]:
+                  timeout: float = COMMAND.connect_timeout_s) -> tuple[cf.Executor, Callable[[], None]]:
     """A concurrent.futures executor and its closer: worker processes, or a Dask cluster's
     (``timeout`` seconds to connect)."""
     if scheduler:
@@ -324,7 +325,7 @@ def _sweep(out_root: str, jobs: list[Job]) -> list[str]:
 
 
 def exit_code(summaries: list[RunSummary]) -> int:
-    """0 when every job is ok, else the code of the worst job (:data:`fabricate.pipeline.PRECEDENCE`):
+    """0 when every job is ok, else the code of the worst job (:data:`fabricate.app.pipeline.PRECEDENCE`):
     a lost or crashed job (1) first, then bad input (2), a failed export (4), a missed tolerance (3)."""
     return EXIT_CODES[worst(s.status for s in summaries)] if summaries else 0
 

@@ -1,7 +1,7 @@
 """Config error messages: ``file:line: key.path: value ...: what is allowed``.
 
 Turns a pydantic ``ValidationError`` into one line per problem (sorted by
-line), naming the YAML line of the key (from :mod:`fabricate.config_yaml`),
+line), naming the YAML line of the key (from :mod:`fabricate.app.config_yaml`),
 the dotted key path, the value given (cut to :data:`SHORT` characters), what
 is allowed (a number key's range, from its schema field: :func:`field_range`),
 and a did-you-mean (difflib) for misspelt keys and choices.
@@ -43,7 +43,7 @@ def did_you_mean(word: str, allowed) -> str:
 
 def key_lines(text: str) -> dict[tuple, int]:
     """Map key paths to 1-based line numbers (bounded like every config read: see
-    :mod:`fabricate.config_yaml`); ``{}`` for text that is not a valid config."""
+    :mod:`fabricate.app.config_yaml`); ``{}`` for text that is not a valid config."""
     from optimize.errors import ConfigError
 
     from .config_yaml import load_yaml

@@ -8,7 +8,7 @@ file's unit.
 from __future__ import annotations
 
 UNITS = ("mm", "cm", "m", "in", "ft")
-UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}  # = fabricate.config
+UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}  # = fabricate.app.config
 
 
 def add_units(p, what: str = "the mesh file", default: str | None = "mm") -> None:

@@ -13,7 +13,7 @@ then builds the control mesh, which the design's own ranges keep small
 ...; every length is at most :data:`optimize.designs.MAX_SIZE_MM`), turning
 any arithmetic failure into a ConfigError, and returns the design.
 :func:`subdivided_faces` then bounds what the subdivision will make of it
-(``fabricate.config`` and ``fabricate shapes --refined`` refuse more than
+(``fabricate.app.config`` and ``fabricate shapes --refined`` refuse more than
 :data:`MAX_FACES`).
 """
 from __future__ import annotations

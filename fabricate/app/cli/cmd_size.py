@@ -22,15 +22,11 @@ def register(sub) -> None:
 
 def run(args) -> int:
     import json
-    import tempfile
     from pathlib import Path
 
-    from fabricate import stages
-    from fabricate.batch import parse_sets
-    from fabricate.cad import PartSpec
-    from fabricate.config import load_config
-    from fabricate.pipeline import RunContext
-    from fabricate.progress import NullProgress
+    from fabricate.app import stages
+    from fabricate.app.batch import parse_sets
+    from fabricate.app.config import load_config
     from fabricate.structure.sizing import size_sections
     from optimize.atomic import atomic_open
     from optimize.errors import ConfigError
@@ -43,12 +39,8 @@ def run(args) -> int:
     if not cfg.structure.sizing.sections:
         raise ConfigError(f"{cfg.source}: structure.sizing.sections: empty, expected a list of candidate sections "
                           "(e.g. - {shape: rhs, depth: 200, width: 100, web: 6})")
-    with tempfile.TemporaryDirectory() as tmp:
-        ctx = RunContext(config=cfg, workdir=Path(tmp), progress=NullProgress())
-        for name in ("input", "optimize", "offset"):
-            getattr(stages, f"stage_{name}")(ctx)
-    spec = PartSpec(**cfg.parts.model_dump())
-    sz = size_sections(ctx["structure"], cfg.structure, spec)
+    off = stages.stage_offset(cfg, stages.stage_optimize(cfg, stages.stage_input(cfg)))
+    sz = size_sections(off.structure, cfg.structure, stages.part_spec(cfg))
     d = sz.as_dict()
     print(f"{cfg.name}: sizing {sum(d['beams'].values())} beams ({cfg.structure.grade}, "
           f"{len(cfg.structure.sizing.sections)} candidates, group_by {cfg.structure.sizing.group_by})")

@@ -1,12 +1,13 @@
-"""The whole run: input -> optimize -> offset -> CAD -> exports -> report.
+"""The whole run: input -> optimize -> offset -> CAD -> structure -> exports -> report.
 
-:func:`run_pipeline` drives the stages of :mod:`fabricate.stages` in order and
+:func:`run_pipeline` drives the stages of :mod:`fabricate.app.stages` in order (each a function
+from the config and earlier records to its record, :mod:`fabricate.app.records`) and
 writes everything into ``<out_root>/<name>/``: the files are built in a hidden
 temporary folder beside the target that is renamed into place only after the
 report and the run marker are written, so a failed or interrupted run never
 leaves a folder that looks complete.  What a run may replace (only a finished
 run of this tool, only when asked, and a passing one never by a failing one)
-is :mod:`fabricate.runfolder`'s decision.
+is :mod:`fabricate.app.runfolder`'s decision.
 
 Outcomes (``RunSummary.status`` -> exit code), in this precedence when several
 apply: ``error`` 1 (a bug) > ``bad_input`` 2 > ``export_failed`` 4 (files written
@@ -22,14 +23,16 @@ import logging
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 from optimize.atomic import remove_part
 
 from . import runfolder, stages
 from .config import RunConfig
+from .options import COMMAND
 from .progress import NullProgress
-from .report.measures import collect_measures
+from .records import Outcome, RunRecord, frozen
+from ..report.measures import collect_measures
 from .requirements import apply_requirements, warnings
 
 log = logging.getLogger(__name__)
@@ -67,28 +70,9 @@ class RunSummary:
         return asdict(self)
 
 
-@dataclass
-class RunContext:
-    """What the stages share: the config, the work folder and each stage's results."""
-
-    config: RunConfig
-    workdir: Path
-    progress: Any
-    values: dict[str, Any] = field(default_factory=dict)
-    timings: dict[str, float] = field(default_factory=dict)
-    files: dict[str, dict] = field(default_factory=dict)
-    notes: list[str] = field(default_factory=list)
-
-    def __getitem__(self, key: str) -> Any:
-        return self.values[key]
-
-    def get(self, key: str, default: Any = None) -> Any:
-        return self.values.get(key, default)
-
-
 def run_folder(config: RunConfig, out_root: str | Path | None = None) -> Path:
-    """``<out_root>/<name>`` (``out_root`` default: ``./outputs``)."""
-    root = Path(out_root) if out_root is not None else Path.cwd() / "outputs"
+    """``<out_root>/<name>`` (``out_root`` default: ``./outputs``, :data:`fabricate.app.options.COMMAND`)."""
+    root = Path(out_root) if out_root is not None else Path.cwd() / COMMAND.out_root
     return root / config.name
 
 
@@ -97,9 +81,9 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
     """Run every stage for ``config`` and write ``<out_root>/<config.name>/``.
 
     out_root : parent folder of the run folder (default ``./outputs``).
-    progress : a :class:`fabricate.progress.NullProgress`-like reporter (default: silent).
+    progress : a :class:`fabricate.app.progress.NullProgress`-like reporter (default: silent).
     force : replace an earlier finished run there (also ``outputs.overwrite: true``); see
-        :mod:`fabricate.runfolder` for what a run may replace, and when it writes beside.
+        :mod:`fabricate.app.runfolder` for what a run may replace, and when it writes beside.
 
     Returns the :class:`RunSummary` (exit code 0, 3 or 4; ``out_dir`` is where it was written).
     Raises ConfigError / MeshError (bad input, exit 2: also a folder in the way or busy),
@@ -118,28 +102,22 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
         previous = runfolder.check_target(target, force)
         tmp = runfolder.new_part(target)
         try:
-            ctx = RunContext(config=config, workdir=tmp, progress=progress)
-            for name in STAGES[:-1]:
-                _run_stage(ctx, name)
-            tol = config.tolerances
-            measures = collect_measures(ctx)
-            measures.update(ctx.get("structure_measures") or {})
-            ctx.values["measures"] = apply_requirements(measures, ctx.get("structure"), tol.requirements,
-                                                        ctx["plan"]["target"], tol.beam_twist_mm)
-            ctx.values["outcome"] = outcome(ctx)
-            ctx.timings["before_report"] = time.perf_counter() - t_start
-            _run_stage(ctx, "report")
-            out = ctx["outcome"]
-            runfolder.write_marker(tmp, {"name": config.name, "status": out["status"],
-                                         "exit_code": out["exit_code"],
+            run = run_stages(config, tmp, progress, t_start)
+            progress.start("report")
+            t0 = time.perf_counter()
+            written = stages.stage_report(run)
+            timings = dict(run.timings, report=time.perf_counter() - t0)
+            progress.done("report", f"{len(written)} report files")
+            out = run.outcome
+            runfolder.write_marker(tmp, {"name": config.name, "status": out.status, "exit_code": out.exit_code,
                                          "config_sha256": runfolder.config_hash(config)})
             previous = runfolder.check_target(target, force)  # again: a person may have changed it since
-            dest, beside = runfolder.publish_run(tmp, target, previous, out["exit_code"])
+            dest, beside = runfolder.publish_run(tmp, target, previous, out.exit_code)
         except BaseException:
             remove_part(tmp)
             raise
-    ctx.timings["total"] = time.perf_counter() - t_start
-    summary = _summary(ctx, dest, ctx.timings["total"])
+    timings["total"] = time.perf_counter() - t_start
+    summary = _summary(run, dest, timings)
     summary.notes = notes + ([beside] if beside else [])
     if beside:
         summary.message += f"; {beside}"
@@ -147,13 +125,38 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
     return summary
 
 
-def _run_stage(ctx: RunContext, name: str) -> None:
-    fn = getattr(stages, f"stage_{name}")
-    ctx.progress.start(name)
-    t0 = time.perf_counter()
-    note = fn(ctx) or ""
-    ctx.timings[name] = time.perf_counter() - t0
-    ctx.progress.done(name, note)
+def run_stages(config: RunConfig, workdir: Path, progress=None, t_start: float | None = None) -> RunRecord:
+    """Every stage up to the report, in order, into ``workdir``: the :class:`RunRecord` the report is
+    built from (measures with the requirements applied, the outcome, the timings in s)."""
+    progress = progress or NullProgress()
+    t_start = time.perf_counter() if t_start is None else t_start
+    timings: dict[str, float] = {}
+
+    def stage(name: str, *args, **kwargs):
+        fn = getattr(stages, f"stage_{name}")  # looked up at each run (tests replace a stage)
+        progress.start(name)
+        t0 = time.perf_counter()
+        record = fn(*args, **kwargs)
+        timings[name] = time.perf_counter() - t0
+        progress.done(name, record.line)
+        return record
+
+    inp = stage("input", config)
+    opt = stage("optimize", config, inp, progress=progress)
+    off = stage("offset", config, opt)
+    built = stage("cad", config, opt, off)
+    statics = stage("structure", config, off, built)
+    files = stage("exports", config, workdir, opt, off, built, statics, progress=progress)
+    tol = config.tolerances
+    measures = collect_measures(config, inp, opt, off)
+    measures.update({k: dict(v) for k, v in statics.measures.items()})
+    measures = apply_requirements(measures, off.structure, tol.requirements, inp.target, tol.beam_twist_mm)
+    limits = built.parts.report.get("limits") if built.parts is not None else None
+    result = outcome(measures, files.check, built.skipped, limits)
+    timings["before_report"] = time.perf_counter() - t_start
+    return RunRecord(config=config, workdir=workdir, input=inp, optimize=opt, offset=off, parts=built,
+                     structure=statics, exports=files, measures=frozen(measures), outcome=result,
+                     timings=frozen(timings))
 
 
 PRECEDENCE = ("lost", "error", "bad_input", "export_failed", "tolerance_not_reached", "ok")
@@ -166,21 +169,22 @@ def worst(statuses) -> str:
     return next((s for s in PRECEDENCE if s in present), "ok")
 
 
-def outcome(ctx: RunContext) -> dict[str, Any]:
-    """``{"status", "exit_code", "failed": [measure names, "check:<name>", "parts"], "message"}``.
+def outcome(measures: Mapping[str, Mapping], check: Mapping | None = None, skipped: str | None = None,
+            limits: Mapping | None = None) -> Outcome:
+    """The :class:`Outcome` of a run from its measures (requirements applied), the output check,
+    why no parts were built (None when they were) and the CAD stage's shop limits.
 
     Every failure found is listed and named in the message; the status is the worst of them
     (:data:`PRECEDENCE`): a failed file check (4) before a missed tolerance (3), because files
     that fail their check must not go to a shop even for a trial.
     """
-    measures = ctx.get("measures", {})
+    measures = measures or {}
     tol_failed = [k for k, m in measures.items() if m.get("enforced") and m.get("pass") is False]
-    skipped = ctx.get("cad_skipped")
     if skipped and not tol_failed:
         tol_failed.append("parts")  # no panels or beams could be built: never a pass
-    check = ctx.get("check") or {}
+    check = check or {}
     check_failed = [k for k, v in check.get("checks", {}).items()
-                    if isinstance(v, dict) and v.get("pass") is False]
+                    if isinstance(v, Mapping) and v.get("pass") is False]
     found, parts = [], []
     if check_failed or check.get("pass") is False:
         found.append("export_failed")
@@ -196,25 +200,20 @@ def outcome(ctx: RunContext) -> dict[str, Any]:
     if parts:
         message = "; ".join(parts)
     else:
-        built = ctx.get("parts")
-        warn = warnings(measures, built.report.get("limits") if built is not None else None)
+        warn = warnings(measures, limits)
         message = "every requirement met" + (f"; {len(warn)} warning(s): " + "; ".join(warn)
                                              if warn else ", every tolerance reached")
-    failed = tol_failed + [f"check:{k}" for k in check_failed]
-    return {"status": status, "exit_code": EXIT_CODES[status], "failed": failed, "message": message}
+    failed = tuple(tol_failed + [f"check:{k}" for k in check_failed])
+    return Outcome(status=status, exit_code=EXIT_CODES[status], failed=failed, message=message)
 
 
-def _summary(ctx: RunContext, target: Path, seconds: float) -> RunSummary:
-    out = ctx["outcome"]
-    mesh = ctx.get("mesh")
-    measures = ctx.get("measures", {})
-    parts = ctx.get("parts")
+def _summary(run: RunRecord, target: Path, timings: dict[str, float]) -> RunSummary:
+    out, mesh, measures, parts = run.outcome, run.optimize.mesh, run.measures, run.parts.parts
     return RunSummary(
-        name=ctx.config.name, status=out["status"], exit_code=out["exit_code"], out_dir=str(target),
-        config_file=str(ctx.config.source) if ctx.config.source else None,
-        faces=mesh.n_faces if mesh is not None else None,
-        vertices=mesh.n_vertices if mesh is not None else None,
+        name=run.config.name, status=out.status, exit_code=out.exit_code, out_dir=str(target),
+        config_file=str(run.config.source) if run.config.source else None,
+        faces=mesh.n_faces, vertices=mesh.n_vertices,
         planarity=measures.get("planarity", {}).get("max"),
         conical=measures.get("conical", {}).get("max"),
         parts=stages.count_parts(parts) if parts is not None else None,
-        seconds=seconds, message=out["message"], timings=dict(ctx.timings), failed=list(out["failed"]))
+        seconds=timings["total"], message=out.message, timings=dict(timings), failed=list(out.failed))

@@ -40,7 +40,7 @@ def run(args) -> int:
     design = DESIGNS[args.name](**params)
     mesh = design.mesh
     if args.refined and design.levels:
-        from fabricate.config_design import MAX_FACES, subdivided_faces
+        from fabricate.app.config_design import MAX_FACES, subdivided_faces
         from optimize.subdivision import subdivide
 
         if subdivided_faces(mesh.n_faces, design.scheme, design.levels) > MAX_FACES:

@@ -12,7 +12,7 @@ How each command treats commas (documented in the README and configs/reference.y
 - ``KEY=null`` removes the key: its default applies (``--set parts.beam_depth=null`` while
   sweeping ``offset.distances``).
 
-Values are YAML (:func:`fabricate.config_yaml.parse_value`), as strict as a file's.
+Values are YAML (:func:`fabricate.app.config_yaml.parse_value`), as strict as a file's.
 """
 from __future__ import annotations
 

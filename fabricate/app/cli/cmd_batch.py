@@ -3,6 +3,8 @@ from __future__ import annotations
 
 
 def register(sub) -> None:
+    from fabricate.app.options import COMMAND
+
     p = sub.add_parser(
         "batch", help="run many configs / a parameter sweep in parallel and tabulate them",
         description="One job per config and combination of --set values (e.g. "
@@ -18,12 +20,13 @@ def register(sub) -> None:
                    help="override / sweep a config value (repeatable; the sweep is the product of all); a list "
                         "key's comma list is one list (offset.distances=0,-200), bracket lists to sweep "
                         "them (offset.distances=[0,-200],[0,-300])")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
+    p.add_argument("--workers", type=int, default=COMMAND.workers, metavar="N",
                    help="parallel worker processes (default: one per core, at most one per job)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run on a Dask distributed cluster, e.g. tcp://host:8786 (needs dask[distributed]; "
                         "the workers must see the config and mesh files and the output folder)")
-    p.add_argument("--out", metavar="DIR", default="outputs", help="parent folder of the run folders")
+    p.add_argument("--out", metavar="DIR", default=COMMAND.out_root,
+                   help=f"parent folder of the run folders (default: ./{COMMAND.out_root})")
     p.add_argument("--force", action="store_true",
                    help="replace earlier finished runs in OUT/<name>/ (as fabricate run --force)")
     p.add_argument("--csv", metavar="PATH", default=None,
@@ -36,12 +39,12 @@ def run(args) -> int:
 
     from rich.console import Console
 
-    from fabricate.batch import exit_code, expand_jobs, parse_sets, print_table, run_batch, write_csv
+    from fabricate.app.batch import exit_code, expand_jobs, parse_sets, print_table, run_batch, write_csv
     from optimize.errors import ConfigError
 
     if args.workers is not None and args.workers < 1:
         raise ConfigError(f"--workers {args.workers}: expected a positive number of worker processes")
-    from fabricate.runfolder import make_parent
+    from fabricate.app.runfolder import make_parent
 
     csv_path = Path(args.csv) if args.csv else Path(args.out) / "batch_summary.csv"
     make_parent(Path(args.out) / "x")

@@ -16,13 +16,21 @@ def register(sub) -> None:
                     "written and marked); a PQ mesh that is not conical is offset and the report "
                     "says by how much faces miss their distance and beams twist. A distance past the "
                     "focal distance of a face (the offset face turns over) is reported with the faces "
-                    "named, and exits 3. The output files are in mm whatever --units says.")
+                    "named, and exits 3. The output files are in mm whatever --units says. DIR follows the "
+                    "rules of a run folder (fabricate run): written atomically with a marker; an existing "
+                    "DIR is replaced only when it is an earlier offset output of this tool with no files "
+                    "added or changed, and only with --replace; a result that is not PQ (exit 3) never "
+                    "replaces a passing one (it is written beside it as DIR.failed-<time>/).")
     p.add_argument("mesh", help="mesh file (.obj, .off, .ply), in --units (default mm)")
     p.add_argument("--distances", required=True, metavar="D1,D2,...",
                    help="comma-separated signed distances in mm, e.g. 0,20,120 (use --distances=-20,0 "
                         "for a leading minus); beams span the first and the last")
     p.add_argument("-o", "--output", required=True, metavar="DIR",
-                   help="output folder (written atomically; an existing offset output folder is replaced)")
+                   help="output folder (written atomically, with a marker file; never a folder this tool "
+                        "did not write)")
+    p.add_argument("--replace", action="store_true",
+                   help="replace an earlier offset output in DIR (as fabricate run --force; --force here "
+                        "means offsetting a mesh that is not PQ)")
     p.add_argument("--flip", action="store_true", help="reverse the face normals (offset to the other side)")
     p.add_argument("--force", action="store_true", help="offset a mesh that is not PQ and report (exit 3)")
     p.add_argument("--free-axes", choices=("planar_beams", "min_norm"), default="planar_beams",
@@ -53,30 +61,20 @@ def parse_distances(text: str) -> tuple[list[str], list[float]]:
     return items, values
 
 
-def _check_output(path) -> None:
-    """Refuse to replace a non-empty folder that is not an earlier offset output."""
-    from optimize.errors import ConfigError
-
-    from ..offset.files import REPORT
-
-    if path.exists() and (not path.is_dir() or (any(path.iterdir()) and not (path / REPORT).exists())):
-        raise ConfigError(f"-o {path}: exists and is not an offset output folder (no {REPORT}), "
-                          "expected a new or earlier offset output folder (it is replaced)")
-
-
 def run(args) -> int:
     from pathlib import Path
 
-    from optimize.atomic import atomic_dir
+    from optimize.atomic import remove_part
     from optimize.errors import MeshError
     from optimize.tolerances import Tolerances
 
-    from ..offset import offset_structure, require_pq, write_offset_files
+    from .. import runfolder
+    from ...offset import offset_structure, require_pq, write_offset_files
     from .units import UNIT_TO_MM, read_mm
 
     texts, values = parse_distances(args.distances)
     out = Path(args.output)
-    _check_output(out)
+    runfolder.check_target(out, force=True, flag="--replace")  # said before reading the mesh
     mesh = read_mm(args.mesh, args.units)
     tol = Tolerances()
     if not args.force:
@@ -87,14 +85,29 @@ def run(args) -> int:
     s = offset_structure(mesh, values, flip=args.flip, tol=tol, free_axes=args.free_axes)
     extra = {"input": {"path": str(args.mesh), "forced": bool(args.force), "notes": list(mesh.notes),
                        "units": args.units, "mm_per_unit": UNIT_TO_MM[args.units]}}
-    with atomic_dir(out) as tmp:
-        names = write_offset_files(s, tmp, texts, extra)
     r = s.report
+    code = 3 if not r["is_pq"] or not r["turned_over"]["ok"] else 0
+    runfolder.make_parent(out, "-o")
+    for note in runfolder.clean_stale_parts(out.parent, out.name):
+        print(note)
+    with runfolder.run_lock(out):
+        previous = runfolder.check_target(out, args.replace, flag="--replace")
+        tmp = runfolder.new_part(out)
+        try:
+            names = write_offset_files(s, tmp, texts, extra)
+            runfolder.write_marker(tmp, {"name": out.name, "command": "offset", "status": r["status"],
+                                         "exit_code": code})
+            previous = runfolder.check_target(out, args.replace, flag="--replace")  # changed meanwhile?
+            dest, beside = runfolder.publish_run(tmp, out, previous, code)
+        except BaseException:
+            remove_part(tmp)
+            raise
+    if beside:
+        print(beside)
     print(f"{mesh.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces, bounding-box diagonal "
-          f"{mesh.bbox_diagonal():,.1f} mm (file in {args.units}) -> {out}/ "
+          f"{mesh.bbox_diagonal():,.1f} mm (file in {args.units}) -> {dest}/ "
           f"({len(names)} files in mm: {', '.join(names[:len(texts)])}, axes, beams, offset_report.json)")
     print(f"status: {r['status']}" + (" (forced: the mesh is not PQ)" if not r["is_pq"] else ""))
     for line in r["summary"]:
         print(line)
-    turned = r["turned_over"]
-    return 3 if not r["is_pq"] or not turned["ok"] else 0
+    return code

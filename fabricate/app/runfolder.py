@@ -32,8 +32,8 @@ import time
 from pathlib import Path
 from typing import Iterator
 
-from optimize.atomic import (PART_OWNER, folder_size, owner_record, part_dir, publish_dir, read_owner,
-                             remove_part, stale_parts)
+from optimize.atomic import (PART_OWNER, folder_size, owner_alive, owner_record, part_dir, publish_dir,
+                             read_owner, remove_part, stale_parts)
 from optimize.errors import ConfigError
 
 log = logging.getLogger(__name__)
@@ -62,7 +62,7 @@ def manifest(folder: Path) -> dict[str, list[int]]:
 
 def write_marker(folder: Path, facts: dict) -> None:
     """Write :data:`MARKER` into ``folder`` (last, so the manifest covers every other file)."""
-    from . import __version__
+    from .. import __version__
 
     data = {"tool": "conical-fab", "version": __version__,
             "finished_utc": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), **facts,
@@ -95,9 +95,11 @@ def _listed(items: list[str]) -> str:
     return ", ".join(items[:SHOWN]) + (f" and {len(items) - SHOWN} more" if len(items) > SHOWN else "")
 
 
-def check_target(target: Path, force: bool) -> dict | None:
+def check_target(target: Path, force: bool, flag: str = "--force (or outputs.overwrite: true in the config)",
+                 ) -> dict | None:
     """May a run write ``target``?  The marker of the finished run there (None: nothing there).
 
+    force : replace an earlier finished run (``flag`` names the option that says so, in the message).
     Raises ConfigError (exit 2) naming the folder and why not.
     """
     if not os.path.lexists(target):
@@ -124,8 +126,8 @@ def check_target(target: Path, force: bool) -> dict | None:
     if not force:
         raise ConfigError(f"{target}: holds an earlier run ({marker.get('status')}, exit code "
                           f"{marker.get('exit_code')}, finished {marker.get('finished_utc')}); it is "
-                          "kept and nothing was written: rerun with --force (or outputs.overwrite: true "
-                          "in the config) to replace it, or choose another --out or name")
+                          f"kept and nothing was written: rerun with {flag} to replace it, or choose "
+                          "another --out or name")
     return marker
 
 
@@ -214,7 +216,7 @@ def clean_stale_parts(folder: Path, name: str | None = None) -> list[str]:
         if rec is None and _empty_and_old(path):
             remove_part(path)  # nothing to lose, and no run takes a minute to write its owner record
             continue
-        if rec is not None and alive is False:
+        if rec is not None and alive is not None and owner_gone(rec):
             size = folder_size(path)
             remove_part(path)
             notes.append(f"removed {path} ({size / 1e6:.1f} MB), left by a run that ended without cleaning "
@@ -227,6 +229,40 @@ def clean_stale_parts(folder: Path, name: str | None = None) -> list[str]:
                          "(cannot tell from here whether it still runs)")
     _drop_free_locks(folder)
     return notes
+
+
+def owner_gone(record: dict) -> bool:
+    """Whether the process of an owner record (``optimize.atomic.owner_record``) has ended: no such
+    process on this host, a reused pid, or only its zombie (killed, not yet reaped).  False for a
+    record of another host (cannot tell from here)."""
+    alive = owner_alive(record)
+    if alive is None:
+        return False
+    if not alive:
+        return True
+    try:
+        state = Path(f"/proc/{record['pid']}/stat").read_text().rsplit(")", 1)[-1].split()[0]
+    except (OSError, IndexError):
+        return False
+    return state in ("Z", "X")
+
+
+def remove_dead_parts(folder: Path, wait: float = 0.0) -> list[str]:
+    """Remove the temporary folders in ``folder`` whose owner process on this host is gone (waiting up
+    to ``wait`` seconds for killed ones to go) and the lock files nobody holds; the removed folders.
+    The supervisor of ``fabricate run`` / ``batch`` calls this after it killed its work."""
+    removed = []
+    for path, rec, alive in stale_parts(folder):
+        if rec is None or alive is None:
+            continue  # no owner record, or another host's: not ours to judge
+        deadline = time.monotonic() + wait
+        while not owner_gone(rec) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        if owner_gone(rec):
+            remove_part(path)
+            removed.append(str(path))
+    _drop_free_locks(folder)
+    return removed
 
 
 def _empty_and_old(path: Path, age: float = 60.0) -> bool:

@@ -11,7 +11,7 @@ did-you-mean for misspelt keys::
 
     configs/dome.yaml:7: optimize.targte: unknown key (did you mean 'target'?); allowed: ...
 
-Files are read by :mod:`fabricate.config_yaml` (safe YAML, bounded in size,
+Files are read by :mod:`fabricate.app.config_yaml` (safe YAML, bounded in size,
 nesting and alias expansion, duplicate keys refused); paths in a config are
 resolved relative to the config file's folder.
 
@@ -30,9 +30,10 @@ offset.distances=[0,-200],[0,-300]`` sweeps two lists).
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Any, Literal
 
 from pydantic import (Field, PrivateAttr, ValidationError, ValidationInfo,
                       field_validator, model_validator)
@@ -44,12 +45,13 @@ from optimize.tolerances import Tolerances
 from .config_design import MAX_FACES, DesignParamError, check_design, subdivided_faces
 from .config_errors import format_errors
 from .config_parts import LimitsSection, NestingSection, PartsSection, SheetSection  # noqa: F401 - re-exported
-from .config_section import MAX_MM, Section
+from .config_section import MAX_MM, Section, section_base  # noqa: F401 - MAX_MM re-exported
 from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
 from .config_yaml import MAX_DEPTH, read_config
-from .structure.options import StructureSection
+from .options import (CHECK_AUTO_MAX_PARTS, TOLERANCE_KEYS, UNIT_TO_MM, OffsetOptions,  # noqa: F401 - re-exported
+                      OutputsOptions, RunOptions)
+from ..structure.options import StructureSection
 
-UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
 
 
@@ -85,14 +87,12 @@ def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
 
 class ShapeInput(Section):
     """A built-in design of :mod:`optimize.designs` with its parameters (checked by
-    :func:`fabricate.config_design.check_design`)."""
+    :func:`fabricate.app.config_design.check_design`)."""
 
     name: str
     params: dict[str, Any] = Field(default_factory=dict)
 
-    _faces: int = PrivateAttr(default=0)
-    _levels: int = PrivateAttr(default=0)
-    _scheme: str = PrivateAttr(default="catmull_clark")
+    _design: Any = PrivateAttr(default=None)
 
     @model_validator(mode="after")
     def _known_design(self) -> "ShapeInput":
@@ -104,8 +104,13 @@ class ShapeInput(Section):
         except ImportError as exc:  # the modelling package is not installed
             raise PydanticCustomError("designs", "built-in designs are not available ({err})",
                                       {"err": str(exc)}) from None
-        self._faces, self._levels, self._scheme = design.mesh.n_faces, design.levels, design.scheme
+        self._design = design  # built once: the input stage uses this one
         return self
+
+    @property
+    def design(self):
+        """The :class:`optimize.designs.Design` built while validating (the input stage's mesh)."""
+        return self._design
 
 
 class InputSection(Section):
@@ -202,36 +207,24 @@ class OptimizeSection(Section):
         return v
 
 
-_TOL = Tolerances()
 MEASURE_NAMES = ("planarity", "folded", "conical", "circular", "closeness", "offset_distance", "beam_planarity",
                  "beam_planarity_boundary", "beam_twist", "axis_defect")
-"""What ``tolerances.requirements`` may name (``fabricate.requirements.MEASURES``)."""
+"""What ``tolerances.requirements`` may name (``fabricate.app.requirements.MEASURES``)."""
 
 
-class TolerancesSection(Section):
-    """Thresholds (see :class:`optimize.tolerances.Tolerances`): relative, radians, or mm."""
+class TolerancesSection(section_base(Tolerances, meta=TOLERANCE_KEYS)):
+    """Thresholds (see :class:`optimize.tolerances.Tolerances`, their defaults): relative, radians, or mm;
+    bounds in :data:`fabricate.app.options.TOLERANCE_KEYS`."""
 
-    # relative and angular tolerances: 1e-12 is about what double precision can show; 1 is no test
-    planarity: float = Field(default=_TOL.planarity, ge=1e-12, le=1.0)
-    conical: float = Field(default=_TOL.conical, ge=1e-12, le=1.0)
-    circular: float = Field(default=_TOL.circular, ge=1e-12, le=1.0)
-    offset: float = Field(default=_TOL.offset, ge=1e-12, le=1.0)
-    beam_planarity: float = Field(default=_TOL.beam_planarity, ge=1e-12, le=1.0)
-    cad_linear_mm: float = Field(default=_TOL.cad_linear_mm, ge=1e-7, le=1.0)  # OpenCASCADE: 1e-7 mm
-    closeness: float = Field(default=_TOL.closeness, ge=1e-12, le=1.0)
-    beam_twist_mm: float = Field(default=_TOL.beam_twist_mm, ge=1e-9, le=1000.0)
     requirements: list[Literal[MEASURE_NAMES]] | None = None
 
     def to_tolerances(self) -> Tolerances:
-        return Tolerances(**self.model_dump(exclude={"requirements"}))
+        return self.to_options()
 
 
-class OffsetSection(Section):
-    """Layer distances in mm (signed, along the face normals); ``null``: ``[0, -beam_depth]``."""
-
-    distances: list[Annotated[float, Field(ge=-MAX_MM, le=MAX_MM)]] | None = Field(default=None, min_length=2,
-                                                                                   max_length=32)
-    flip: bool = False
+class OffsetSection(section_base(OffsetOptions)):
+    """Layer distances in mm (signed, along the face normals); ``null``: ``[0, -beam_depth]``
+    (defaults and bounds: :class:`fabricate.app.options.OffsetOptions`)."""
 
     @field_validator("distances")
     @classmethod
@@ -241,42 +234,20 @@ class OffsetSection(Section):
         return v
 
 
-CHECK_AUTO_MAX_PARTS = 3000
-"""``outputs.check: auto`` runs the full check up to this many parts, the fast one above."""
+_OUTPUT_KEYS = [f.name for f in dataclasses.fields(OutputsOptions)]
 
 
-class OutputsSection(Section):
-    """Which files to write (``true``/``false``); report.json is always written.
+class OutputsSection(section_base(OutputsOptions, extra={"nesting": (NestingSection, Field(
+        default_factory=NestingSection))}, order=_OUTPUT_KEYS[:_OUTPUT_KEYS.index("layout_plan") + 1] + ["nesting"]
+        + _OUTPUT_KEYS[_OUTPUT_KEYS.index("layout_plan") + 1:])):
+    """Which files to write (``true``/``false``); report.json is always written (defaults and
+    what each key means: :class:`fabricate.app.options.OutputsOptions`).
 
     ``check``: how the written files are re-validated (``fabricate.check``):
     ``full`` (every check, with OpenCASCADE reading model.step back: about 10 ms
     per part), ``fast`` (the same without the STEP read-back), ``off``, or
     ``auto`` (full up to :data:`CHECK_AUTO_MAX_PARTS` parts, fast above).
     """
-
-    mesh: bool = True
-    layers: bool = True
-    step: bool = True
-    stl: bool = True
-    three_mf: bool = Field(default=True, alias="3mf")
-    dxf: bool = True
-    svg: bool = True
-    flat: bool | None = None
-    schedules: bool | None = None
-    cut_files: bool | None = None
-    stl_parts: bool = False
-    layout_plan: bool | None = None
-    nesting: NestingSection = Field(default_factory=NestingSection)
-    bom: bool = True
-    ifc: bool = True
-    rhino: bool = Field(default=True, alias="3dm")
-    nc1: bool = True
-    gltf: bool = True
-    step_schema: Literal["AP214", "AP242"] = "AP214"
-    pictures: bool = True
-    html: bool = True
-    check: Literal["auto", "full", "fast", "off"] = "auto"
-    overwrite: bool = False  # replace an earlier finished run (as ``fabricate run --force``)
 
     def wanted(self, key: str) -> bool:
         """Whether the file of ``key`` is written: ``flat``, ``cut_files`` and ``layout_plan`` follow
@@ -294,20 +265,21 @@ class OutputsSection(Section):
         return "full" if parts <= CHECK_AUTO_MAX_PARTS else "fast"
 
 
-class RunConfig(Section):
-    """A whole run configuration (one YAML file)."""
+_SECTIONS = {
+    "input": (InputSection, ...),
+    "subdivision": (SubdivisionSection, Field(default_factory=SubdivisionSection)),
+    "optimize": (OptimizeSection, Field(default_factory=OptimizeSection)),
+    "tolerances": (TolerancesSection, Field(default_factory=TolerancesSection)),
+    "offset": (OffsetSection, Field(default_factory=OffsetSection)),
+    "parts": (PartsSection, Field(default_factory=PartsSection)),
+    "outputs": (OutputsSection, Field(default_factory=OutputsSection)),
+    "structure": (StructureSection, Field(default_factory=StructureSection)),
+}
 
-    name: str | None = Field(default=None, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.=+-]*$", max_length=120)
-    input: InputSection
-    subdivision: SubdivisionSection = Field(default_factory=SubdivisionSection)
-    optimize: OptimizeSection = Field(default_factory=OptimizeSection)
-    tolerances: TolerancesSection = Field(default_factory=TolerancesSection)
-    offset: OffsetSection = Field(default_factory=OffsetSection)
-    parts: PartsSection = Field(default_factory=PartsSection)
-    outputs: OutputsSection = Field(default_factory=OutputsSection)
-    structure: StructureSection = Field(default_factory=StructureSection)
-    units: Literal["mm", "cm", "m", "in", "ft"] = "mm"
-    scale: float = Field(default=1.0, ge=1e-6, le=1e6)
+
+class RunConfig(section_base(RunOptions, extra=_SECTIONS, order=["name", *_SECTIONS, "units", "scale"])):
+    """A whole run configuration (one YAML file): the sections and the keys of
+    :class:`fabricate.app.options.RunOptions`."""
 
     _source: Path | None = PrivateAttr(default=None)
 
@@ -338,7 +310,7 @@ class RunConfig(Section):
 
 # -- loading ---------------------------------------------------------------
 def load_config(path: str | Path, overrides: dict[str, Any] | None = None) -> RunConfig:
-    """Read and validate a YAML config file (read by :func:`fabricate.config_yaml.read_config`).
+    """Read and validate a YAML config file (read by :func:`fabricate.app.config_yaml.read_config`).
 
     overrides : ``{"parts.glass_thickness": 8, ...}`` applied to the YAML data
         before validation (the ``--set`` of ``fabricate run`` / ``batch``).
@@ -387,12 +359,13 @@ def _cross_checks(cfg: RunConfig, source: Path, lines: dict[tuple, int]) -> None
                           "(scale still applies)")
     shape = cfg.input.shape
     if shape is not None:
-        levels = shape._levels if cfg.subdivision.levels is None else cfg.subdivision.levels
-        scheme = cfg.subdivision.scheme or shape._scheme
-        faces = subdivided_faces(shape._faces, scheme, levels)
+        design = shape.design
+        levels = design.levels if cfg.subdivision.levels is None else cfg.subdivision.levels
+        scheme = cfg.subdivision.scheme or design.scheme
+        faces = subdivided_faces(design.mesh.n_faces, scheme, levels)
         if faces > MAX_FACES:
             where = _at(source, lines, ("subdivision", "levels"), ("input", "shape"))
-            raise ConfigError(f"{where}: input.shape: design {shape.name} has {shape._faces:,} faces; {levels} "
+            raise ConfigError(f"{where}: input.shape: design {shape.name} has {design.mesh.n_faces:,} faces; {levels} "
                               f"rounds of {scheme} make about {faces:,}, more than {MAX_FACES:,} (the largest "
                               "design run); expected fewer quads (the design's count parameters) or fewer "
                               "subdivision.levels")
@@ -405,7 +378,7 @@ def _cross_checks(cfg: RunConfig, source: Path, lines: dict[tuple, int]) -> None
         raise ConfigError(f"{where}: parts.joint_gap: {parts.joint_gap:g} mm is not "
                           f"below parts.{bkey} {bearing:g} mm; expected a smaller gap so that the "
                           "panels bear on the beams")
-    from .cad.spec import PartSpec
+    from ..cad.spec import PartSpec
 
     try:  # the section and connection rules that join several keys (flange vs web, hub radius)
         PartSpec(**parts.model_dump())
@@ -428,7 +401,7 @@ def _safe_name(stem: str) -> str:
 
 def _copy(data: Any, source: Path | str, depth: int = 0) -> Any:
     """A deep copy of nested dicts and lists (YAML aliases become separate copies), at most
-    :data:`~fabricate.config_yaml.MAX_DEPTH` deep."""
+    :data:`~fabricate.app.config_yaml.MAX_DEPTH` deep."""
     if depth > MAX_DEPTH:
         raise ConfigError(f"{source}: nested deeper than {MAX_DEPTH} levels; expected a config of sections and keys")
     if isinstance(data, dict):

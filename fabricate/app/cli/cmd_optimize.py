@@ -21,7 +21,8 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="optimized mesh to write (.obj, .off, .ply)")
     p.add_argument("--target", choices=TARGETS, default="pq",
                    help="pq: planar faces; conical: PQ + conical vertices (node axes); circular: PQ + "
-                        "circular quads; strip: developable strip (paper methods only). Default pq.")
+                        "circular quads; strip: developable strip (the paper's methods: --method default runs "
+                        "penalty there, as fabricate run does). Default pq.")
     p.add_argument("--method", choices=METHODS, default="default",
                    help="default: regularized Gauss-Newton; penalty/sqp/hybrid: the paper's methods")
     p.add_argument("--formulation", choices=("auto", "auxiliary", "vertices"), default="auto",
@@ -80,7 +81,9 @@ def run(args) -> int:
         from optimize.conjugacy import net_defect
 
         print(f"{mesh.name}: {net_defect(mesh).line(args.target)}")
-    kwargs = dict(method=args.method, fixed=None if args.fix == "none" else args.fix,
+    from ..stages import method_for
+
+    kwargs = dict(method=method_for(args.target, args.method), fixed=None if args.fix == "none" else args.fix,
                   glide_boundary=args.glide, fairness=args.fairness, closeness=args.closeness, tol=tol,
                   max_iter=args.max_iter,
                   **({} if args.method != "default" else

@@ -1,12 +1,12 @@
 """The ``fabricate`` command line.
 
-Each subcommand lives in its own module ``fabricate/cli/cmd_<name>.py`` that
+Each subcommand lives in its own module ``fabricate/app/cli/cmd_<name>.py`` that
 defines ``register(subparsers)``; the parser is assembled from whatever such
 modules exist.  Subcommand modules keep heavy imports inside their handlers so
 that ``fabricate --help`` is instant.
 
 Every exception becomes one line on stderr and an exit code
-(:mod:`fabricate.cli.exits`): 2 bad input, 3 tolerance not reached, 4 export
+(:mod:`fabricate.app.cli.exits`): 2 bad input, 3 tolerance not reached, 4 export
 failed, 1 internal error (traceback in a log file whose path is printed),
 130 interrupted.
 """
@@ -20,7 +20,7 @@ import signal
 import sys
 import threading
 
-from .. import __version__
+from ... import __version__
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -45,7 +45,7 @@ def main(argv: list[str] | None = None) -> int:
     """The ``fabricate`` command: its exit code.
 
     Called with ``argv=None`` (the console script, ``python -m fabricate``) the work runs under
-    :func:`fabricate.cli.supervise.supervise` so that Ctrl-C always ends it within two seconds;
+    :func:`fabricate.app.cli.supervise.supervise` so that Ctrl-C always ends it within two seconds;
     called with a list (tests, scripts) it runs in this process.
     """
     from .supervise import supervise
@@ -78,7 +78,7 @@ def _terminate(signum, frame):
 
 def run_handler(args, supervised: bool = False) -> int:
     """Run the subcommand; every exception becomes one line and its exit code
-    (:func:`fabricate.cli.exits.classify`: the one table from exception classes to codes).
+    (:func:`fabricate.app.cli.exits.classify`: the one table from exception classes to codes).
     With ``--debug`` an internal error is raised on (in-process) or its traceback printed."""
     from .exits import BROKEN_PIPE, classify, quiet_broken_pipe
 

@@ -41,7 +41,7 @@ def classify(exc: BaseException) -> tuple[int, str]:
     if isinstance(exc, UnicodeDecodeError):
         return 2, (f"error: an input file is not UTF-8 text ({exc.reason} at byte {exc.start}); "
                    "save it as UTF-8")
-    from fabricate.crash import internal_error
+    from fabricate.app.crash import internal_error
 
     return 1, f"error: {internal_error(exc)}"
 

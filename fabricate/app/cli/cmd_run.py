@@ -6,6 +6,8 @@ from pathlib import Path
 
 
 def register(sub) -> None:
+    from fabricate.app.options import COMMAND
+
     p = sub.add_parser(
         "run", help="run the whole pipeline for one YAML config",
         description="Input -> subdivide/optimize -> offset -> CAD -> exports -> report, written "
@@ -20,8 +22,8 @@ def register(sub) -> None:
                "TOLERANCE_NOT_REACHED.txt), 4 export failed (when both, 4), 1 internal error, "
                "130 interrupted.")
     p.add_argument("config", help="YAML run configuration (see configs/reference.yaml)")
-    p.add_argument("--out", metavar="DIR", default="outputs",
-                   help="parent folder of the run folder (default: ./outputs)")
+    p.add_argument("--out", metavar="DIR", default=COMMAND.out_root,
+                   help=f"parent folder of the run folder (default: ./{COMMAND.out_root})")
     p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], dest="sets",
                    help="override a config value, e.g. --set parts.glass_thickness=8 (repeatable); a list key "
                         "takes a comma list: --set offset.distances=0,-200")
@@ -35,10 +37,10 @@ def register(sub) -> None:
 def run(args) -> int:
     from rich.console import Console
 
-    from fabricate.batch import parse_sets
-    from fabricate.config import load_config
-    from fabricate.pipeline import STAGES, run_folder, run_pipeline
-    from fabricate.progress import NullProgress, RichProgress
+    from fabricate.app.batch import parse_sets
+    from fabricate.app.config import load_config
+    from fabricate.app.pipeline import STAGES, run_folder, run_pipeline
+    from fabricate.app.progress import NullProgress, RichProgress
     from optimize.errors import ConfigError
 
     sets = parse_sets(args.sets)

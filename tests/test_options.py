@@ -1,0 +1,66 @@
+"""One source of defaults: the config sections are derived from the frozen option objects."""
+import dataclasses
+import sys
+
+import pytest
+from pydantic import ValidationError
+
+from fabricate.app import options
+from fabricate.app.config import OffsetSection, OutputsSection, RunConfig, TolerancesSection
+from fabricate.app.config_section import OPTIONS, Section
+from fabricate.structure.options import LoadsOption, LoadsOptions, StructureOptions, StructureSection
+from optimize.tolerances import Tolerances
+
+
+def _frozen(value):
+    return tuple(value) if isinstance(value, list) else value
+
+
+@pytest.mark.parametrize("section,cls", [(OffsetSection, options.OffsetOptions),
+                                         (OutputsSection, options.OutputsOptions),
+                                         (TolerancesSection, Tolerances), (RunConfig, options.RunOptions),
+                                         (StructureSection, StructureOptions), (LoadsOption, LoadsOptions)])
+def test_every_config_default_is_the_option_objects(section, cls):
+    assert OPTIONS[section.__mro__[1]] is cls  # derived, not written again
+    defaults = cls()
+    for f in dataclasses.fields(cls):
+        key = section.model_fields[f.name]
+        assert _frozen(key.get_default(call_default_factory=True)) == getattr(defaults, f.name), f.name
+        for bound in ("ge", "gt", "le", "lt"):
+            value = f.metadata.get(bound, (options.TOLERANCE_KEYS.get(f.name, {}) if cls is Tolerances else {})
+                                   .get(bound))
+            if value is not None:  # the bound of the option is the key's
+                assert any(getattr(m, bound, None) == value for m in key.metadata), (f.name, bound)
+    if section is not RunConfig:
+        assert section().to_options() == defaults  # and back
+
+
+def test_a_derived_key_keeps_its_bounds_alias_and_strictness():
+    with pytest.raises(ValidationError):
+        TolerancesSection(planarity=2.0)  # le=1 from TOLERANCE_KEYS
+    with pytest.raises(ValidationError):
+        OffsetSection(distances=[0.0, 2 * options.MAX_MM])  # the items' bound
+    with pytest.raises(ValidationError):
+        OutputsSection.model_validate({"mesh": "yes please"})  # strict booleans
+    assert OutputsSection.model_validate({"3mf": False}).three_mf is False  # the alias
+    assert OutputsSection.model_validate({"check": False}).check == "off"  # YAML's off as the word
+    assert OffsetSection(distances=[0, -200]).to_options() == options.OffsetOptions(distances=(0.0, -200.0))
+
+
+def test_the_structure_section_is_on_the_strict_base():
+    assert issubclass(StructureSection, Section) and issubclass(LoadsOption, Section)
+    for bad in ({"loads": {"snow": float("inf")}}, {"loads": {"snow": "0.8"}}, {"gamma_m0": True}):
+        with pytest.raises(ValidationError):
+            StructureSection.model_validate(bad)
+    assert StructureSection.model_validate({"up": [0, 0, 1], "check": False}).up == (0.0, 0.0, 1.0)
+
+
+def test_the_command_line_reads_its_defaults_from_the_option_objects(monkeypatch):
+    from fabricate.app.cli import build_parser
+
+    parser = build_parser()
+    run = parser.parse_args(["run", "x.yaml"])
+    batch = parser.parse_args(["batch", "x.yaml"])
+    assert run.out == batch.out == options.COMMAND.out_root and batch.workers == options.COMMAND.workers
+    monkeypatch.setattr(options, "COMMAND", options.CommandOptions(out_root="elsewhere"))
+    assert build_parser().parse_args(["run", "x.yaml"]).out == "elsewhere"  # read, not written again
