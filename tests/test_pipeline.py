@@ -24,7 +24,7 @@ from _pipeline_fixtures import REPO, finished_run, tiny_config  # noqa: F401 - f
 EXPECTED = ("config.yaml", "mesh.obj", "layer_0.obj", "layer_1.obj", "model.step", "model.stl", "model.3mf",
             "outlines.dxf", "outlines.svg", "bom.csv", "report.json", "report.html", "model.glb",
             "model_glb.js", "assets/three-viewer.min.js", "planarity.png", "conical.png", "layers.png",
-            "history.png", "outlines.png")
+            "history.png", "sheets.png", "layout_plan.png")
 
 
 # -- the README quickstart: python -m fabricate run configs/quickstart.yaml --------------------
@@ -308,8 +308,10 @@ def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
     assert dist == pytest.approx(m["closeness"]["max_mm"], rel=1e-3, abs=1e-3)
     rows = list(csv.DictReader((out / "bom.csv").open()))
     kinds = [r["kind"] for r in rows]
-    beams = {r["id"].split(".")[0] for r in rows if r["kind"] == "beam"}   # one beam of plates per edge
-    assert kinds.count("panel") == mesh.n_faces and len(beams) == len(mesh.topology.edges)
+    units = {r["unit"] for r in rows if r["kind"] == "panel"}  # an insulated unit: 4 solids (plies, PVB)
+    assert len(units) == mesh.n_faces and kinds.count("panel") == 4 * mesh.n_faces
+    beams = {r["unit"] for r in rows if r["kind"] == "beam"}   # one beam of plates (an RHS: six) per edge
+    assert len(beams) == len(mesh.topology.edges) and kinds.count("beam") == 6 * len(beams)
     for name in ("model.step", "model.stl", "outlines.dxf", "outlines.svg", "bom.csv"):
         assert (out / name).stat().st_size > 0
 

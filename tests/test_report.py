@@ -14,8 +14,7 @@ from fabricate.report import GlbMesh, build_scene, glb_bytes, read_accessor, rea
 from fabricate.report.glb import Z_UP_TO_Y_UP
 from fabricate.report.html import ASSETS, VIEWER_FILES, copy_viewer
 from fabricate.report.measures import entry, planarity_scale
-from fabricate.report.pictures import (picture_defect, picture_history, picture_layers, picture_outlines,
-                                       shelf_layout)
+from fabricate.report.pictures import picture_defect, picture_history, picture_layers
 from optimize import measures, shapes
 
 from _pipeline_fixtures import finished_run  # noqa: F401 - a fixture
@@ -128,22 +127,9 @@ def test_pictures_are_real_images(tmp_path, perturbed_revolution):
     picture_history([("level 1", hist), ("level 2", hist)], tmp_path / "h.png",
                     tolerances={"planarity": 1e-6, "conical": 1e-6}, title="h")
     picture_history([], tmp_path / "h0.png", tolerances={}, title="no history")
-    rng = np.random.default_rng(1)
-    picture_outlines([(f"P{i:04d}", rng.random((4, 2)) * 500) for i in range(30)], tmp_path / "o.png", title="o")
-    for name in ("p", "c", "l", "h", "h0", "o"):
+    for name in ("p", "c", "l", "h", "h0"):
         _png_ok(tmp_path / f"{name}.png")
     assert not list(tmp_path.glob(".*"))  # no temporary files left
-
-
-def test_shelf_layout_never_overlaps():
-    rng = np.random.default_rng(3)
-    sizes = rng.random((40, 2)) * [300, 200] + 10
-    corners = shelf_layout(sizes, 1000.0, 5.0)
-    lo, hi = corners, corners + sizes
-    overlap = ((lo[:, None, 0] < hi[None, :, 0]) & (lo[None, :, 0] < hi[:, None, 0])
-               & (lo[:, None, 1] < hi[None, :, 1]) & (lo[None, :, 1] < hi[:, None, 1]))
-    np.fill_diagonal(overlap, False)
-    assert not overlap.any()
 
 
 # -- the viewer assets -------------------------------------------------------------------
@@ -280,11 +266,31 @@ def test_outline_ids_fit_their_parts(tmp_path):
         if f:
             ext = _id_patch([(text, np.zeros(2), f)]).get_path().get_extents()
             assert ext.width <= 0.9 * width and ext.height <= height  # drawn inside its part (pt = mm here)
-    parts = [(f"B{i:04d}", np.array([[0, 0], [1500, 0], [1500, 150], [0, 150]], dtype=float))
-             for i in range(600)] + [(f"P{i:04d}", np.array([[0, 0], [1500, 0], [1500, 1000], [0, 1000]],
-                                                              dtype=float)) for i in range(300)]
-    path = picture_outlines(parts, tmp_path / "outlines.png", title="t")
-    _png_ok(path)
+
+
+def test_sheet_and_plan_pictures_come_from_the_nested_cut_files(tmp_path):
+    """sheets.png draws the real nesting of the cut files (the same Layout the DXF is written from):
+    the fullest glass and steel sheet, every part on it placed inside the sheet's margin."""
+    from cad_fixtures import dome_parts
+    from fabricate.app.config_parts import NestingSection
+    from fabricate.export.cutfiles import nest_cut_files
+    from fabricate.report.shop_pictures import picture_plan, picture_sheets, plan_drawing, sheet_drawings
+
+    parts = dome_parts()
+    batches = nest_cut_files(parts, NestingSection().model_dump())
+    sheets = sheet_drawings(batches)
+    assert [s["material"] for s in sheets] == ["glass", "steel"]
+    for s in sheets:
+        lay = next(b["layout"] for b in batches if b["stem"] + ".dxf" == s["file"])
+        k = int(s["id"].rsplit("-S", 1)[1]) - 1
+        assert s["parts"] == int((lay.sheet == k).sum()) and s["yield"] == pytest.approx(lay.utilisation.max())
+        W, H = s["size"]
+        for _, q in s["outlines"]:
+            assert q.min() >= s["margin"] - 1e-6 and (q.max(axis=0) <= np.array([W, H]) - s["margin"] + 1e-6).all()
+    _png_ok(picture_sheets(sheets, tmp_path / "sheets.png", title="t"))
+    plan = plan_drawing(parts)
+    assert {i for i, _ in plan["panels"]} == {p.id for p in parts.panels}
+    _png_ok(picture_plan(plan, tmp_path / "plan.png", title="t"))
 
 
 def test_report_has_the_clients_totals(finished_run):

@@ -3,9 +3,57 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, field_validator, model_serializer, model_validator
+from pydantic_core import PydanticCustomError
 
 from .config_section import MAX_MM, Section
+
+_tuple = field_validator("plies_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+
+
+class PaneSection(Section):
+    """One pane of an insulated unit: monolithic (``thickness_mm``) or laminated (``plies_mm`` and an
+    interlayer between each two plies)."""
+
+    type: Literal["monolithic", "laminated"] = "monolithic"
+    thickness_mm: float | None = Field(default=None, ge=2.0, le=25.0)
+    plies_mm: tuple[float, ...] | None = None
+    interlayer: Literal["PVB", "SGP"] | None = None
+    interlayer_mm: float | None = Field(default=None, gt=0, le=10.0)
+
+    _plies = _tuple
+
+
+class GlassSection(Section):
+    """The glass build-up (see ``fabricate.cad.glass``): ``monolithic`` (``thickness_mm``),
+    ``laminated`` (``plies_mm``, ``interlayer``, ``interlayer_mm``) or ``insulated`` (``outer`` and
+    ``inner`` panes, ``cavity_mm`` of ``gas``, spacer ``edge_seal_mm``, stepped ``step_mm``)."""
+
+    type: Literal["monolithic", "laminated", "insulated"]
+    thickness_mm: float | None = Field(default=None, ge=2.0, le=25.0)
+    plies_mm: tuple[float, ...] | None = None
+    interlayer: Literal["PVB", "SGP"] | None = None
+    interlayer_mm: float | None = Field(default=None, gt=0, le=10.0)
+    outer: PaneSection | None = None
+    inner: PaneSection | None = None
+    cavity_mm: float | None = Field(default=None, ge=4.0, le=50.0)
+    gas: Literal["argon", "air", "krypton"] | None = None
+    edge_seal_mm: float | None = Field(default=None, ge=5.0, le=50.0)
+    step_mm: float | None = Field(default=None, ge=0.0, le=200.0)
+
+    _plies = _tuple
+
+    @model_validator(mode="after")
+    def _consistent(self) -> "GlassSection":
+        from optimize.errors import ConfigError
+
+        from fabricate.cad.glass import BuildUp
+
+        try:
+            BuildUp.from_config(self.model_dump())
+        except ConfigError as exc:
+            raise PydanticCustomError("glass_build_up", "{err}", {"err": str(exc)}) from None
+        return self
 
 
 class LimitsSection(Section):
@@ -55,6 +103,27 @@ class PartsSection(Section):
     limits: LimitsSection = Field(default_factory=LimitsSection)
     beam: BeamSection = Field(default_factory=BeamSection)
     node: NodeSection = Field(default_factory=NodeSection)
+    glass: GlassSection | None = None
+
+    @model_validator(mode="after")
+    def _one_build_up(self) -> "PartsSection":
+        g = self.glass
+        if g is not None and "glass_thickness" in self.model_fields_set and not (
+                g.type == "monolithic" and g.thickness_mm == self.glass_thickness):
+            raise PydanticCustomError(
+                "glass_build_up", "parts.glass_thickness = {t} and parts.glass (type {kind}) are two build-ups; "
+                "expected one of them (glass_thickness is the shorthand of a monolithic pane)",
+                {"t": f"{self.glass_thickness:g}", "kind": g.type})
+        return self
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        """With a ``glass`` build-up, ``glass_thickness`` is left out of the dump (the config as run
+        stays loadable: giving both is an error)."""
+        data = handler(self)
+        if self.glass is not None:
+            data.pop("glass_thickness", None)
+        return data
 
 
 class SheetSection(Section):

@@ -125,6 +125,9 @@ class ExportsRecord:
     files: Mapping[str, Mapping[str, Any]]
     check: Mapping[str, Any]
     line: str = ""
+    cut_batches: Any = None
+    """The nested sheets of the cut files (:func:`fabricate.export.cutfiles.nest_cut_files`), which the
+    report draws; None when no cut files were written."""
 
 
 @dataclass(frozen=True)

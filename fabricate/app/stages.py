@@ -273,8 +273,10 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
     out = workdir
     files: dict[str, dict] = {}
 
+    cut_batches = None
+
     def done(check: dict, line: str) -> ExportsRecord:
-        return ExportsRecord(files=frozen(files), check=frozen(check), line=line)
+        return ExportsRecord(files=frozen(files), check=frozen(check), line=line, cut_batches=cut_batches)
 
     with atomic_open(out / "config.yaml") as fh:
         fh.write(f"# {cfg.name}: the configuration as run (defaults filled in, paths absolute)\n")
@@ -313,7 +315,9 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
             files[fname].update(add_bom_columns(out / fname, statics.check))
     if cfg.outputs.wanted("cut_files"):  # one nested DXF and SVG per material and thickness
         progress.advance("exports", 1, "nested cut files")
-        files.update(export.write_cut_files(built, out, cfg.outputs.nesting.model_dump()))
+        nesting = cfg.outputs.nesting.model_dump()
+        cut_batches = export.nest_cut_files(built, nesting)  # the report draws the same sheets
+        files.update(export.write_cut_files(built, out, nesting, batches=cut_batches))
     if cfg.outputs.stl_parts:  # one STL per part (a welding viewer fuses the touching parts of model.stl)
         progress.advance("exports", 1, "one STL per part")
         files["stl/"] = export.write_stl_parts(built, out / "stl")

@@ -54,19 +54,36 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
     bp = beam_planes(structure)
     from .panels import panel_solids
 
+    layers = spec.glass.solids()                      # outside in; the last one bears on the beams
+    bearing = len(layers) - 1
+    stack = tuple((ly.offset_mm, ly.thickness_mm, ly.inset_mm) for ly in layers)
+    order = (bearing,) + tuple(range(bearing))        # the bearing ply first: it is checked as today
+
     def build(gap, edge_mode, faces=None):
-        return panel_solids(structure, bp, P0, spec.glass_thickness, gap, edge_mode, s_beam, faces)
+        return panel_solids(structure, bp, P0, layers[bearing].thickness_mm, gap, edge_mode, s_beam, faces,
+                            stack=tuple(stack[j] for j in order))
 
     batches = build(spec.joint_gap, mode)
     _check_panels(batches, pid, mesh, structure.normals, P0, spec, mode, build)
     groups = []
-    for g in batches:
-        f = g["faces_index"]
-        nb = [tuple(bid[row]) + (tuple(nid[mesh.F[i, :g["k"]]]) if with_nodes else ())
-              for i, row in zip(f.tolist(), g["edges"])]
-        groups.append(_group("panel", pid[f], f, g["vertices"], g["faces"], g["normals"], g["bearing_face"],
-                             1 - g["bearing_face"], g["planarity_mm"], np.full(len(f), spec.glass_thickness),
-                             np.zeros(len(f)), nb, spec))
+    multi = len(layers) > 1
+    for j, ly in enumerate(layers):                    # one group per layer and face size
+        for g in batches:
+            f = g["faces_index"]
+            ply = g["plies"][order.index(j)]
+            ids = np.char.add(pid[f], f".{j + 1}") if multi else pid[f]
+            touch = _touching(j, spec.glass)
+            nb = [tuple(f"{u}.{k}" for k in touch) for u in pid[f].tolist()]
+            if j == bearing:
+                nb = [t + tuple(bid[row]) + (tuple(nid[mesh.F[i, :g["k"]]]) if with_nodes else ())
+                      for t, i, row in zip(nb, f.tolist(), g["edges"])]
+            groups.append(_group("panel", ids, f, ply["vertices"], g["faces"], ply["normals"], g["bearing_face"],
+                                 1 - g["bearing_face"], g["planarity_mm"], np.full(len(f), ly.thickness_mm),
+                                 np.zeros(len(f)), nb, spec, member=ly.member if multi else "",
+                                 material="" if ly.material == "glass" else ly.material,
+                                 hint=None if j == bearing else _ply_hint(ly, spec)))
+    if multi:                                          # the beams carry the bearing ply
+        pid = np.char.add(pid, f".{bearing + 1}")
     section = spec.beam.section
     web = spec.web if section != "plate" else spec.beam_width
     square = spec.connection != "mitre"
@@ -168,15 +185,35 @@ def span_positions(structure) -> tuple[list[float], np.ndarray, np.ndarray]:
     return d, V + d[0] * off, V + d[1] * off
 
 
+def _ply_hint(layer, spec):
+    """The hint for a ply above the one on the beams that folds (its sides lean in with the height)."""
+    text = (f"its {layer.member} lies {layer.offset_mm:g} to {layer.offset_mm + layer.thickness_mm:g} mm above "
+            f"the bearing face of the build-up {spec.glass.short()} (parts.glass) and the panel's sides lean in: "
+            "a thinner build-up, parts.edge: perpendicular or a smaller parts.joint_gap")
+    return lambda i: text
+
+
+def _touching(j: int, build_up) -> list[int]:
+    """The solids (``k`` from 1) of a unit in contact with its solid ``j`` (0-based, outside in): the
+    solid layers directly above and below it (none across the cavity)."""
+    everything = build_up.layers()
+    solid_at = [i for i, ly in enumerate(everything) if ly.solid]
+    if len(solid_at) == 1:
+        return []
+    at = solid_at[j]
+    return [solid_at.index(i) + 1 for i in (at - 1, at + 1) if 0 <= i < len(everything) and everything[i].solid]
+
+
 def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thickness, length,
-           neighbours, spec, ring=None, dashed="bottom", member="", centre_line=None) -> PartGroup:
+           neighbours, spec, ring=None, dashed="bottom", member: str = "", centre_line=None,
+           material: str = "", hint=None) -> PartGroup:
     """Validate one batch and derive volumes, outlines and residuals.
 
     ring : the outline's vertices (default the outline face's); dashed : which sheet face
     ``flat_bevel`` draws (``top`` for the beam plate: its + face; else the opposite face).
     """
     element = np.asarray(element)
-    _validate(kind, ids, element, V, faces, normals)
+    _validate(kind, ids, element, V, faces, normals, hint)
     vol = volumes(V, faces)
     bad = vol <= 0
     if bad.any():
@@ -199,7 +236,7 @@ def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thi
                      thickness_mm=np.asarray(thickness, dtype=float),
                      planarity_mm=np.asarray(planarity, dtype=float), residual_mm=residual,
                      neighbours=tuple(tuple(str(x) for x in nb) for nb in neighbours), member=member,
-                     centre_line=centre_line)
+                     centre_line=centre_line, material=material)
 
 
 HINTS = {"panel": "parts.joint_gap may be too large for this face, or the face is degenerate",
@@ -262,14 +299,15 @@ def _report(groups, spec, mode, s_beam, distances, beams, node_facts) -> dict:
         res = np.concatenate([g.residual_mm for g in gs])
         ids = [i for g in gs for i in g.ids]
         density = spec.density(kind)
+        mass = sum(float(g.volume_mm3.sum()) * spec.group_density(g) for g in gs) * 1e-9
         out[kind + "s"] = {
-            "count": int(len(vol)), "volume_mm3": float(vol.sum()), "mass_kg": float(vol.sum() * density * 1e-9),
+            "count": int(len(vol)), "volume_mm3": float(vol.sum()), "mass_kg": mass,
             "density_kg_m3": density, "planarity_mm_max": float(pl.max()),
             "planarity_worst": ids[int(np.argmax(pl))],
             "residual_mm_max": float(res.max()), "residual_worst": ids[int(np.argmax(res))]}
     sb = beams["setback"]
     out["beams"]["end_setback_mm"] = {"min": float(sb.min()), "max": float(sb.max())}
-    out["beams"]["bearing_width_mm"] = 0.5 * (spec.bearing_width - spec.joint_gap)
+    out["beams"]["bearing_width_mm"] = 0.5 * (spec.bearing_width - spec.joint_gap) - spec.glass.step_mm  # stepped unit
     out["beams"]["section"] = spec.beam.section
     out["beams"]["connection"] = spec.connection
     for kind in ("beam", "node"):
@@ -277,6 +315,10 @@ def _report(groups, spec, mode, s_beam, distances, beams, node_facts) -> dict:
         if units:
             out[kind + "s"]["units"] = len(units)
     out["beams"]["depth_mm"] = abs(distances[-1] - distances[0])
+    panel_faces = [g.element for g in groups if g.kind == "panel"]
+    units = int(len(np.unique(np.concatenate(panel_faces)))) if panel_faces else 0
+    out["panels"].update(units=units, build_up=spec.glass.describe(), unit_thickness_mm=spec.glass.thickness_mm,
+                         solids_per_unit=len(spec.glass.solids()))
     if node_facts:
         out["nodes"].update(node_facts)
     return out

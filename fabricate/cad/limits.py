@@ -27,14 +27,21 @@ def check_limits(groups, spec) -> dict:
 
     ``corner``: panels with a corner below ``min_corner_deg``; ``edge``: panels and beams with an
     outline edge below ``min_edge_mm``; ``sheet``: panels whose stock rectangle does not fit the
-    sheet ``sheet_mm`` either way round; ``weight``: panels heavier than ``max_panel_kg``.
+    sheet ``sheet_mm`` either way round (per glass ply); ``weight``: glass units (every ply and interlayer)
+    heavier than ``max_panel_kg``, by unit id.
     """
     lim = spec.limits
     W, H = lim.sheet_mm
     found: dict[str, list] = {"corner": [], "edge": [], "sheet": [], "weight": []}
+    unit_kg: dict[str, float] = {}
+    for g in groups:  # a glass unit's weight: every ply and interlayer (ids P0001.k -> P0001)
+        if g.kind == "panel":
+            for i, m in zip(g.ids, g.volume_mm3 * spec.group_density(g) * 1e-9):
+                unit_kg[i.split(".", 1)[0]] = unit_kg.get(i.split(".", 1)[0], 0.0) + float(m)
+    found["weight"] = [(i, m) for i, m in unit_kg.items() if m > lim.max_panel_kg]
     for g in groups:
-        if g.kind not in ("panel", "beam"):
-            continue
+        if g.kind not in ("panel", "beam") or getattr(g, "material", ""):
+            continue  # an interlayer is not cut from sheet
         L = edge_lengths(g.bevel_ref)
         if g.kind == "beam" and len(g.faces) == 6:  # a flange or box web: its end cuts are as long as it is wide
             L = L[:, [0, 2]]
@@ -47,11 +54,16 @@ def check_limits(groups, spec) -> dict:
         w, h = g.rect[:, 0], g.rect[:, 1]
         fits = ((w <= W) & (h <= H)) | ((w <= H) & (h <= W))
         found["sheet"] += [(i, f"{a:.0f} x {b:.0f}") for i, a, b, ok in zip(g.ids, w, h, fits) if not ok]
-        kg = g.volume_mm3 * spec.density("panel") * 1e-9
-        found["weight"] += [(i, float(m)) for i, m in zip(g.ids, kg) if m > lim.max_panel_kg]
     limit = {"corner": f">= {lim.min_corner_deg:g} deg", "edge": f">= {lim.min_edge_mm:g} mm",
              "sheet": f"within {W:g} x {H:g} mm", "weight": f"<= {lim.max_panel_kg:g} kg"}
     out = {}
+    for key in ("corner", "edge", "sheet"):  # a glass unit is flagged once, by its id, at its worst ply
+        best: dict[str, tuple] = {}
+        for pid, value in found[key]:
+            uid = pid.split(".", 1)[0]
+            if uid not in best or (key != "sheet" and value < best[uid][1]):
+                best[uid] = (uid, value)
+        found[key] = list(best.values())
     for key, rows in found.items():
         entry = {"limit": limit[key], "count": len(rows), "ids": [r[0] for r in rows]}
         if rows:

@@ -14,6 +14,13 @@ the side opposite the beams.  Side ``j`` lies in
   into the face, normal to the face.
 
 Every corner is the meeting point of three planes (face plane, two sides).
+
+A glass unit of several layers (:mod:`fabricate.cad.glass`) is a ``stack`` of
+such prisms over the same side planes: ply ``i`` lies between ``offset_i`` and
+``offset_i + thickness_i`` from the bearing plane on the glass side, its sides
+moved ``inset_i`` further into the face (a stepped inner pane).  In ``axis``
+mode the plies' sides are then coplanar across the stack; in
+``perpendicular`` mode they are normal to the panel.
 """
 from __future__ import annotations
 
@@ -31,7 +38,8 @@ def prism_faces(k: int) -> tuple[tuple[int, ...], ...]:
 
 
 def panel_solids(structure, beam_planes: dict, P0: np.ndarray, thickness: float, gap: float, mode: str,
-                 s_beam: float, faces: np.ndarray | None = None) -> list[dict]:
+                 s_beam: float, faces: np.ndarray | None = None,
+                 stack: tuple[tuple[float, float, float], ...] | None = None) -> list[dict]:
     """Panels grouped by face size (of every face, or of the mesh faces ``faces (q,)`` only).
 
     P0 : (n, 3) vertex positions at the first layer (the glass bears there).
@@ -42,7 +50,11 @@ def panel_solids(structure, beam_planes: dict, P0: np.ndarray, thickness: float,
     ``vertices (p, 2k, 3)``, ``normals (p, k + 2, 3)`` outward face normals,
     ``faces`` (the shared face tuple), ``edges (p, k)`` topology edge under
     each side, ``planarity_mm (p,)``, ``bearing_face`` (0 lower | 1 upper).
+    stack : ``((offset, thickness, inset), ...)`` mm, the layers of a unit (default one ply
+    ``(0, thickness, 0)``); each batch then has ``plies``: per layer ``{"vertices", "normals"}``
+    in stack order, ``vertices`` and ``normals`` being those of the first.
     """
+    stack = ((0.0, float(thickness), 0.0),) if stack is None else tuple(stack)
     mesh = structure.mesh
     topo = mesh.topology
     N = unit(np.asarray(structure.normals, dtype=float))
@@ -74,14 +86,19 @@ def panel_solids(structure, beam_planes: dict, P0: np.ndarray, thickness: float,
             so = dot(mu, Pp) - 0.5 * gap
         else:
             raise ValueError(f"panel edge mode {mode!r}: expected 'axis' or 'perpendicular'")
-        o_lo = o0 - (thickness if s_beam > 0 else 0.0)
-        o_hi = o_lo + thickness
-        mu_prev, so_prev = np.roll(mu, 1, axis=1), np.roll(so, 1, axis=1)
+        mu_prev = np.roll(mu, 1, axis=1)
         nk = np.broadcast_to(n[:, None, :], mu.shape)
-        lo, _ = meet3(nk, np.broadcast_to(o_lo[:, None], so.shape), mu_prev, so_prev, mu, so)
-        hi, _ = meet3(nk, np.broadcast_to(o_hi[:, None], so.shape), mu_prev, so_prev, mu, so)
         normals = np.concatenate([-n[:, None, :], n[:, None, :], mu], axis=1)
-        out.append({"k": k, "faces_index": f, "vertices": np.concatenate([lo, hi], axis=1),
-                    "normals": normals, "faces": prism_faces(k), "edges": E, "planarity_mm": dev,
+        plies = []
+        for offset, t, inset in stack:  # one prism per layer of the unit (a few)
+            o_lo = o0 - offset - t if s_beam > 0 else o0 + offset
+            o_hi = o_lo + t
+            si = so - inset
+            si_prev = np.roll(si, 1, axis=1)
+            lo, _ = meet3(nk, np.broadcast_to(o_lo[:, None], so.shape), mu_prev, si_prev, mu, si)
+            hi, _ = meet3(nk, np.broadcast_to(o_hi[:, None], so.shape), mu_prev, si_prev, mu, si)
+            plies.append({"vertices": np.concatenate([lo, hi], axis=1), "normals": normals})
+        out.append({"k": k, "faces_index": f, "vertices": plies[0]["vertices"], "normals": normals,
+                    "plies": plies, "faces": prism_faces(k), "edges": E, "planarity_mm": dev,
                     "bearing_face": 1 if s_beam > 0 else 0})
     return out

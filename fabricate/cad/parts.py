@@ -90,6 +90,8 @@ class PartGroup:
         ``<unit id>.<k>`` (``P0001.1``, ``B0012.3``, k from 1), see :func:`unit_id`.
     centre_line : (p, 4, 3) float or None: beams: the beam quad ``A0 B0 B1 A1`` (corners on the
         node axes) of the beam each plate belongs to, the same for every member of a unit.
+    material : ``""`` for the kind's material (panel glass, beam and node steel), else what the
+        solids are made of (a glass unit's interlayer: ``PVB``, ``SGP``); see ``PartSpec.group_density``.
     """
 
     kind: str
@@ -119,6 +121,7 @@ class PartGroup:
     neighbours: tuple[tuple[str, ...], ...]
     member: str = ""
     centre_line: np.ndarray | None = None
+    material: str = ""
 
     def __len__(self) -> int:
         return len(self.ids)

@@ -3,8 +3,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from typing import Any
 
 from optimize.errors import ConfigError
+
+from .glass import BuildUp
 
 EDGE_OPTIONS = ("auto", "axis", "perpendicular")
 SECTIONS = ("plate", "rhs", "tee", "i")
@@ -109,7 +112,12 @@ class Limits:
 class PartSpec:
     """Dimensions of panels, beams and nodes (mm) and densities (kg/m3).
 
-    glass_thickness : panel thickness, measured along the face normal.
+    glass_thickness : monolithic panel thickness, measured along the face normal (the shorthand of
+        ``glass = {type: monolithic, thickness_mm: t}``).  With ``glass`` given it is derived: the
+        weight-equivalent glass thickness of the unit (:meth:`BuildUp.weight_thickness_mm`), which the
+        structure's glass load uses.
+    glass : None (monolithic ``glass_thickness``), a ``parts.glass`` mapping or a
+        :class:`fabricate.cad.glass.BuildUp`; after construction always the BuildUp.
     joint_gap : gap between neighbouring panels; every panel edge is set back
         by half of it from the beam plane (``axis``) or the face edge
         (``perpendicular``).
@@ -145,6 +153,7 @@ class PartSpec:
     limits: Limits = Limits()
     beam: BeamSpec = BeamSpec()
     node: NodeSpec = NodeSpec()
+    glass: Any = None
 
     def __post_init__(self) -> None:
         for key, cls in (("limits", Limits), ("beam", BeamSpec), ("node", NodeSpec)):
@@ -180,6 +189,14 @@ class PartSpec:
                               f"radius {self.hub_radius:g} mm")
         if not (isinstance(self.node_sides, int) and self.node_sides >= 6):
             raise ConfigError(f"parts.node_sides = {self.node_sides!r}: expected an integer >= 6")
+        if isinstance(self.glass, dict) and all(v is None for v in self.glass.values()):
+            object.__setattr__(self, "glass", None)     # an empty section: the monolithic shorthand
+        given = self.glass is not None
+        build_up = BuildUp.from_config(self.glass, self.glass_thickness)
+        object.__setattr__(self, "glass", build_up)
+        if given:
+            object.__setattr__(self, "glass_thickness", build_up.weight_thickness_mm(float(self.density_glass)))
+        self.glass.check_bearing(0.5 * (self.bearing_width - self.joint_gap))
 
     @property
     def web(self) -> float:
@@ -221,9 +238,16 @@ class PartSpec:
             return "axis" if is_conical else "perpendicular"
         return self.edge
 
-    def density(self, kind: str) -> float:
-        """kg/m3 of a part kind (``panel`` glass, ``beam`` and ``node`` steel)."""
-        return self.density_glass if kind == "panel" else self.density_steel
+    def density(self, kind: str, material: str = "") -> float:
+        """kg/m3 of a part kind (``panel`` glass, ``beam`` and ``node`` steel), or of a panel layer's
+        ``material`` (``PartGroup.material``: an interlayer, see :mod:`fabricate.cad.glass`)."""
+        if kind == "panel":
+            return self.glass.density(material, self.density_glass) if material else self.density_glass
+        return self.density_steel
+
+    def group_density(self, group) -> float:
+        """kg/m3 of the solids of a :class:`PartGroup`."""
+        return self.density(group.kind, getattr(group, "material", ""))
 
     def as_dict(self) -> dict:
         return asdict(self)

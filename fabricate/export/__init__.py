@@ -7,7 +7,7 @@ from optimize._lazy import lazy_exports
 
 _EXPORTS = {
     "write_bom": ".bom",
-    "write_cut_files": ".cutfiles", "write_layout_plan": ".cutfiles",
+    "write_cut_files": ".cutfiles", "write_layout_plan": ".cutfiles", "nest_cut_files": ".cutfiles",
     "write_dxf": ".dxf",
     "write_flat": ".flatdata",
     "write_glass_schedule": ".schedules", "write_node_schedule": ".schedules",

@@ -8,8 +8,10 @@ full precision: ``fabricate check`` compares the STEP solids with it),
 bounding rectangle of the flat outline and bevel), ``planarity_mm`` (how far
 the source polygon was from the plane the part was built in),
 ``residual_mm`` (construction round-off), ``neighbours`` (ids in contact,
-space separated), ``member`` (which plate, ply or hub piece of a unit of several solids:
-``web``, ``top flange +``, ``tube``; empty for a part of one solid).
+space separated), ``unit`` (the part a solid belongs to: ``P0001`` for the plies
+``P0001.1 ...`` of a glass unit, else its own id), ``member`` (what the solid is in
+its unit: ``ply 1``, ``inner interlayer 1``, ``web``, ``top flange +``, ``tube``; empty for a one-solid part),
+``material`` (``glass``, ``PVB``, ``SGP``, ``steel``; its density gives the weight).
 """
 from __future__ import annotations
 
@@ -21,7 +23,8 @@ from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
 COLUMNS = ("id", "kind", "element", "mesh_vertices", "area_m2", "length_mm", "thickness_mm", "volume_mm3",
-           "weight_kg", "rect_w_mm", "rect_h_mm", "planarity_mm", "residual_mm", "neighbours", "member")
+           "weight_kg", "rect_w_mm", "rect_h_mm", "planarity_mm", "residual_mm", "neighbours", "unit", "member",
+           "material")
 
 
 def _mesh_vertices(group, mesh) -> list[str]:
@@ -50,7 +53,8 @@ def write_bom(parts, path, *, mesh=None) -> dict:
             w = csv.writer(fh)
             w.writerow(COLUMNS)
             for g in parts.groups:
-                density = parts.spec.density(g.kind)
+                density = parts.spec.group_density(g)
+                material = g.material or ("glass" if g.kind == "panel" else "steel")
                 weight = g.volume_mm3 * density * 1e-9
                 mass[g.kind] = mass.get(g.kind, 0.0) + float(weight.sum())
                 verts = _mesh_vertices(g, mesh)
@@ -59,7 +63,7 @@ def write_bom(parts, path, *, mesh=None) -> dict:
                                 f"{g.length_mm[i]:.3f}", f"{g.thickness_mm[i]:.3f}", repr(float(g.volume_mm3[i])),
                                 f"{weight[i]:.3f}", f"{g.rect[i, 0]:.3f}", f"{g.rect[i, 1]:.3f}",
                                 f"{g.planarity_mm[i]:.3g}", f"{g.residual_mm[i]:.3g}", " ".join(g.neighbours[i]),
-                                g.member))
+                                pid.split(".", 1)[0], g.member, material))
                     rows += 1
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the bill of materials ({exc.strerror or exc})") from None

@@ -10,7 +10,7 @@ sheet is not nested: it is listed under ``oversize`` (and, for glass, flagged
 by the sheet limit); ``outlines.dxf`` still draws it.
 
 ``write_layout_plan`` writes ``layout_plan.dxf``: the roof seen from above
-(model x, y in mm), every panel's bearing outline (layer PANELS) and every
+(model x, y in mm), every glass unit's bearing outline (layer PANELS, the unit id) and every
 beam's glass-side edge (layer BEAMS) with its id where it sits.
 """
 from __future__ import annotations
@@ -29,20 +29,55 @@ MATERIAL = {"panel": "glass", "beam": "steel"}
 
 
 def _batches(parts):
-    """``[(material, thickness_mm, kind)]`` of the flat parts, in order."""
+    """``[(material, thickness_mm, kind)]`` of the parts cut from sheet, in order (a glass unit's
+    interlayers are not: they come from the roll and are trimmed after laminating)."""
     seen = []
     for g in parts.groups:
-        if g.kind in MATERIAL and len(g):
+        if g.kind in MATERIAL and len(g) and not g.material:
             key = (MATERIAL[g.kind], round(float(g.thickness_mm[0]), 3), g.kind)
             if key not in seen:
                 seen.append(key)
     return seen
 
 
-def write_cut_files(parts, folder, nesting: dict) -> dict:
-    """Every material and thickness nested on its sheets: DXF and SVG per batch (atomic, each).
+def nest_cut_files(parts, nesting: dict) -> list[dict]:
+    """Every material and thickness nested on its sheets (no file written).
 
     nesting : ``{"glass": {"sheet_mm", "margin_mm", "kerf_mm", "rotation"}, "steel": {...}}``.
+    Returns ``[{"stem", "material", "thickness_mm", "kind", "layout", "parts", "oversize"}]``: the
+    :class:`~fabricate.export.nesting.Layout` of ``parts`` (the parts of that batch that fit a sheet).
+    """
+    import dataclasses
+
+    sheet_parts = dataclasses.replace(parts, groups=tuple(g for g in parts.groups if not g.material))
+    out = []
+    for material, t, kind in _batches(parts):
+        opts = nesting[material]
+        W, H = (float(v) for v in opts["sheet_mm"])
+        margin, kerf = float(opts["margin_mm"]), float(opts["kerf_mm"])
+        rot = bool(opts["rotation"])
+        big = []
+        for g in sheet_parts.groups:  # parts that fit no sheet are listed, not nested
+            if g.kind == kind and np.isclose(g.thickness_mm[0], t):
+                w, h = g.rect[:, 0] + 2 * margin, g.rect[:, 1] + 2 * margin
+                fits = ((w <= W) & (h <= H)) | (rot & (w <= H) & (h <= W))
+                big += [i for i, ok in zip(g.ids, fits) if not ok]
+        sub = sheet_parts if not big else _without(sheet_parts, set(big))
+        stem = f"cut_{material}_{t:g}mm"
+        name = f"{material.upper()}-{t:g}"
+        try:
+            lay = layout(sub, (W, H), margin, kerf=kerf, rotation=rot, kinds=(kind,), thickness=t, name=name)
+        except ValueError as exc:
+            raise ExportError(f"{stem}: nesting failed ({exc})") from None
+        out.append({"stem": stem, "material": material, "thickness_mm": t, "kind": kind, "layout": lay,
+                    "parts": sub, "oversize": big})
+    return out
+
+
+def write_cut_files(parts, folder, nesting: dict, batches: list[dict] | None = None) -> dict:
+    """Every material and thickness nested on its sheets: DXF and SVG per batch (atomic, each).
+
+    nesting : as :func:`nest_cut_files`; batches : its result when already nested.
     Returns ``{file name: facts}`` (the DXF's facts carry the layout: sheets with ids and yields).
     """
     from .dxf import write_dxf
@@ -50,29 +85,13 @@ def write_cut_files(parts, folder, nesting: dict) -> dict:
 
     folder = Path(folder)
     out = {}
-    for material, t, kind in _batches(parts):
-        opts = nesting[material]
-        W, H = (float(v) for v in opts["sheet_mm"])
-        margin, kerf = float(opts["margin_mm"]), float(opts["kerf_mm"])
-        rot = bool(opts["rotation"])
-        big = []
-        for g in parts.groups:  # parts that fit no sheet are listed, not nested
-            if g.kind == kind and np.isclose(g.thickness_mm[0], t):
-                w, h = g.rect[:, 0] + 2 * margin, g.rect[:, 1] + 2 * margin
-                fits = ((w <= W) & (h <= H)) | (rot & (w <= H) & (h <= W))
-                big += [i for i, ok in zip(g.ids, fits) if not ok]
-        sub = parts if not big else _without(parts, set(big))
-        stem = f"cut_{material}_{t:g}mm"
-        name = f"{material.upper()}-{t:g}"
-        try:
-            lay = layout(sub, (W, H), margin, kerf=kerf, rotation=rot, kinds=(kind,), thickness=t, name=name)
-        except ValueError as exc:
-            raise ExportError(f"{stem}: nesting failed ({exc})") from None
+    for b in batches if batches is not None else nest_cut_files(parts, nesting):
+        stem, lay, sub = b["stem"], b["layout"], b["parts"]
         facts = write_dxf(sub, folder / f"{stem}.dxf", lay=lay)
-        facts.update(material=material, thickness_mm=t, oversize=big)
+        facts.update(material=b["material"], thickness_mm=b["thickness_mm"], oversize=b["oversize"])
         out[f"{stem}.dxf"] = facts
-        out[f"{stem}.svg"] = dict(write_svg(sub, folder / f"{stem}.svg", lay=lay), material=material,
-                                  thickness_mm=t)
+        out[f"{stem}.svg"] = dict(write_svg(sub, folder / f"{stem}.svg", lay=lay), material=b["material"],
+                                  thickness_mm=b["thickness_mm"])
     return out
 
 
@@ -101,6 +120,18 @@ def _without(parts, drop: set):
     return dataclasses.replace(parts, groups=tuple(groups))
 
 
+def plan_groups(parts) -> list[tuple]:
+    """``[(group, ids)]`` the layout plan draws: per glass unit its ply on the beams, labelled with the
+    unit id (``P0001``), and every beam."""
+    from fabricate.cad.glass import bearing_groups
+    from fabricate.cad.parts import unit_id
+
+    from .schedules import beam_units
+
+    out = [(g, tuple(unit_id(i) for i in g.ids)) for g in bearing_groups(parts) if len(g)]
+    return out + [(g, tuple(unit_id(i) for i in g.ids)) for g in beam_units(parts) if len(g)]  # a beam once
+
+
 def write_layout_plan(parts, path) -> dict:
     """``layout_plan.dxf``: every panel and beam with its id where it sits on the roof (plan view, mm)."""
     import ezdxf
@@ -111,15 +142,8 @@ def write_layout_plan(parts, path) -> dict:
     for name, colour in (("PANELS", 4), ("BEAMS", 8), ("IDS", 5)):
         doc.layers.add(name, color=colour)
     msp = doc.modelspace()
-    from fabricate.cad.parts import unit_id
-
-    from .schedules import beam_units
-
-    units = {id(g) for g in beam_units(parts)}
     n = 0
-    for g in parts.groups:
-        if g.kind not in MATERIAL or not len(g) or (g.kind == "beam" and id(g) not in units):
-            continue                                       # a beam once (its first plate), not per plate
+    for g, ids in plan_groups(parts):
         P = g.vertices[:, list(g.ring)][..., :2]
         if g.kind == "beam":
             C = g.centre_line if g.centre_line is not None else g.vertices[:, :4]
@@ -128,9 +152,9 @@ def write_layout_plan(parts, path) -> dict:
         h = np.clip(0.06 * size, 20.0, 400.0)
         centre = P.mean(axis=1)
         layer = "PANELS" if g.kind == "panel" else "BEAMS"
-        for i, pid in enumerate(g.ids):  # ezdxf entities per part (a plan, not a cut file)
+        for i, pid in enumerate(ids):  # ezdxf entities per part (a plan, not a cut file)
             msp.add_lwpolyline(P[i].tolist(), close=g.kind == "panel", dxfattribs={"layer": layer})
-            msp.add_text(unit_id(pid) if g.kind == "beam" else pid, height=float(h[i]) * (0.5 if g.kind == "beam" else 1.0),
+            msp.add_text(pid, height=float(h[i]) * (0.5 if g.kind == "beam" else 1.0),
                          dxfattribs={"layer": "IDS"}).set_placement(tuple(centre[i]),
                                                                     align=ezdxf.enums.TextEntityAlignment.MIDDLE_CENTER)
             n += 1

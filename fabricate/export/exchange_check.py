@@ -1,7 +1,7 @@
 """``fabricate check`` of the exchange files against the bill of materials.
 
 - ``ifc``: ifcopenshell opens ``model.ifc``; one element per BOM row with the
-  same id (Name and Tag); full mode also validates the file against the IFC4
+  same id (Name and Tag), one per glass unit (``P0001`` for the rows ``P0001.1 ...``, volumes summed); full mode also validates the file against the IFC4
   schema and its express rules' attribute types (``ifcopenshell.validate``)
   and compares every element's volume, from ifcopenshell's own geometry
   kernel, with the BOM's within ``1e-6`` relative.
@@ -54,9 +54,17 @@ def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False) -> di
     face sets' own coordinates as parsed, about 20x faster)."""
     import ifcopenshell
 
+    from fabricate.cad.parts import unit_id
+
     f = ifcopenshell.open(str(path))
     elements = {e.Name: e for e in f.by_type("IfcElement") if not e.is_a("IfcCurtainWall")}
-    rows = {r["id"]: r for r in bom}
+    rows: dict[str, dict] = {}
+    for r in bom:  # a glass unit of several solids (P0001.1 ...) is one element: its volumes summed
+        u = unit_id(r["id"])
+        if u in rows:
+            rows[u] = dict(rows[u], volume_mm3=repr(float(rows[u]["volume_mm3"]) + float(r["volume_mm3"])))
+        else:
+            rows[u] = r
     bad_tag = sorted(n for n, e in elements.items() if e.Tag != n)[:20]
     extra: dict = {"bad_tag": bad_tag}
     if full:

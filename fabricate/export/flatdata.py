@@ -1,6 +1,7 @@
 """``flat.json``: the flat data of every part cut from sheet, and the check that it defines the part.
 
-For every panel and beam: the outline to cut (mm, in the part frame, as the
+For every panel and beam (every ply and interlayer of a glass unit, with its
+``member`` and ``material``): the outline to cut (mm, in the part frame, as the
 DXF draws it before nesting), the bevel reference line with its corner
 heights, the bevel angle of every edge on both sides, the sheet thickness
 and the 4 x 4 transform that places the part in the model (see
@@ -36,7 +37,8 @@ def write_flat(parts, path) -> dict:
         if g.kind not in FLAT_KINDS or not len(g):
             continue
         groups.append({
-            "kind": g.kind, "faces": [list(f) for f in g.faces], "top_face": g.outline_face,
+            "kind": g.kind, "member": g.member, "material": g.material or ("glass" if g.kind == "panel" else "steel"),
+            "faces": [list(f) for f in g.faces], "top_face": g.outline_face,
             "bottom_face": g.bevel_face, "cuts": g.cuts.tolist(), "reference_corners": list(g.ring),
             "ids": list(g.ids), "thickness_mm": g.thickness_mm.tolist(), "outline": g.flat.tolist(),
             "bevel_reference": g.bevel_ref.tolist(), "bevel_reference_z_mm": g.bevel_ref_z.tolist(),

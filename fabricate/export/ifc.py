@@ -5,7 +5,8 @@ Structure of the file::
     IfcProject -> IfcSite -> IfcBuilding  (IfcRelAggregates)
     IfcBuilding contains one IfcCurtainWall (IfcRelContainedInSpatialStructure)
     IfcCurtainWall aggregates
-        one IfcPlate  (CURTAIN_PANEL) per glass panel   P0001 ...
+        one IfcPlate  (CURTAIN_PANEL) per glass unit    P0001 ...  (its plies P0001.1 ... as the
+                                                                 items of one body representation)
         one IfcMember (MULLION)       per beam          B0001 ...
         one IfcMember (USERDEFINED 'NODE') per node hub N0001 ...
 
@@ -13,9 +14,11 @@ Structure of the file::
 the bill of materials.  Geometry is exact: every part is a planar-faced
 polyhedron, written as a closed ``IfcPolygonalFaceSet`` (IFC4's faceted
 solid: the part's own vertices in millimetres, one indexed planar polygon per
-face; a quarter of the entities of an ``IfcFacetedBrep``).  Materials: the glass as an
-``IfcMaterialLayerSet`` (one layer per ply of the build-up, today one
-monolithic sheet), the steel as an ``IfcMaterial`` with its grade.
+face; a quarter of the entities of an ``IfcFacetedBrep``); a glass unit of several solids
+(laminated, insulated) has one face set per ply and interlayer in its one body.  Materials:
+the glass as an ``IfcMaterialLayerSet`` listing the build-up from the outside in (every
+glass ply, interlayer (PVB, SGP) and the cavity's gas, ``IsVentilated`` false), the steel
+as an ``IfcMaterial`` with its grade.
 Quantities: ``Qto_PlateBaseQuantities`` (width = thickness, gross/net area,
 volume, weight) and ``Qto_MemberBaseQuantities`` (length, volume, weight);
 the fabrication figures (planarity of a panel, twist of a beam, construction
@@ -108,12 +111,27 @@ class _Writer:
 
 
 def _glass_layers(w: _Writer, spec) -> object:
-    """The glass build-up as an ``IfcMaterialLayerSet`` (today: one monolithic ply)."""
+    """The glass build-up as an ``IfcMaterialLayerSet``: one layer per ply, interlayer and cavity, outside in."""
     f = w.f
-    glass = f.createIfcMaterial("Glass", "float glass", "glass")
-    _density(w, glass, spec.density_glass)
-    layer = f.createIfcMaterialLayer(glass, float(spec.glass_thickness), None, "ply 1", None, "glass", None)
-    return f.createIfcMaterialLayerSet([layer], f"monolithic {spec.glass_thickness:g} mm", None)
+    build_up = spec.glass
+    made: dict[str, object] = {}
+
+    def material(name: str):
+        if name not in made:
+            if name == "glass":
+                made[name] = f.createIfcMaterial("Glass", "float glass", "glass")
+                _density(w, made[name], spec.density_glass)
+            elif name in ("PVB", "SGP"):
+                made[name] = f.createIfcMaterial(name, f"{name} interlayer", "plastic")
+                _density(w, made[name], spec.density("panel", name))
+            else:
+                made[name] = f.createIfcMaterial(name.capitalize(), f"{name} filling of the cavity", "gas")
+        return made[name]
+
+    layers = [f.createIfcMaterialLayer(material(ly.material), float(ly.thickness_mm), False, ly.member or "ply 1",
+                                       None, ly.material if ly.solid else "cavity", None)
+              for ly in build_up.layers()]
+    return f.createIfcMaterialLayerSet(layers, build_up.describe()[:255], None)
 
 
 def _density(w: _Writer, material, density: float) -> None:
@@ -150,9 +168,12 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
     _density(w, steel, parts.spec.density_steel)
     layers = _glass_layers(w, parts.spec)
     members: dict[str, list] = {"panel": [], "beam": [], "node": []}
+    _glass_units(w, parts, wall_place, members["panel"])
     for g in parts.groups:
+        if g.kind == "panel":
+            continue
         cls, predefined, object_type = CLASS[g.kind]
-        density = parts.spec.density(g.kind)
+        density = parts.spec.group_density(g)
         for i, pid in enumerate(g.ids):
             el = f.create_entity(cls, GlobalId=w.guid(), Name=pid, Description=g.kind,
                                  ObjectType=object_type, ObjectPlacement=w.placement(wall_place),
@@ -172,6 +193,46 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
         raise ExportError(f"{path}: cannot write the IFC file ({exc.strerror or exc})") from None
     return {"file": path.name, "bytes": path.stat().st_size, "schema": "IFC4",
             "elements": {k: len(v) for k, v in members.items()}, "seconds": time.perf_counter() - t0}
+
+
+def _glass_units(w: _Writer, parts, wall_place, out: list) -> None:
+    """One IfcPlate per glass unit: its ply on the beams gives area and planarity, every ply and
+    interlayer a face set of its body; volume and weight summed over them."""
+    from fabricate.cad.glass import bearing_groups
+    from fabricate.cad.parts import unit_id
+
+    spec = parts.spec
+    solids: dict[str, list] = {}
+    for g in parts.of_kind("panel"):
+        density = spec.group_density(g)
+        for i, pid in enumerate(g.ids):  # one face set per solid
+            solids.setdefault(unit_id(pid), []).append((w.solid(g.vertices[i], g.faces),
+                                                        float(g.volume_mm3[i]), density))
+    cls, predefined, object_type = CLASS["panel"]
+    for g in bearing_groups(parts):
+        for i, ply in enumerate(g.ids):  # one element per unit
+            uid = unit_id(ply)
+            items = solids[uid]
+            rep = w.f.createIfcShapeRepresentation(w.body, "Body", "Tessellation", [it[0] for it in items])
+            el = w.f.create_entity(cls, GlobalId=w.guid(), Name=uid, Description="glass unit " + spec.glass.short(),
+                                   ObjectType=object_type, ObjectPlacement=w.placement(wall_place),
+                                   Representation=w.f.createIfcProductDefinitionShape(None, None, [rep]), Tag=uid,
+                                   PredefinedType=predefined)
+            out.append(el)
+            volume_m3 = sum(it[1] for it in items) * 1e-9
+            weight = sum(it[1] * it[2] for it in items) * 1e-9
+            area = float(g.area_mm2[i]) * 1e-6
+            w.quantities(el, "Qto_PlateBaseQuantities", {
+                "Width": ("length", spec.glass.thickness_mm), "GrossArea": ("area", area), "NetArea": ("area", area),
+                "GrossVolume": ("volume", volume_m3), "NetVolume": ("volume", volume_m3),
+                "GrossWeight": ("weight", weight), "NetWeight": ("weight", weight)})
+            fab = {"PartId": uid, "MeshElement": int(g.element[i]), "BuildUp": spec.glass.short(),
+                   "Solids": " ".join(f"{uid}.{k + 1}" for k in range(len(items))) if len(items) > 1 else uid,
+                   "Residual_mm": float(g.residual_mm[i]), "Planarity_mm": float(g.planarity_mm[i]),
+                   "Neighbours": " ".join(n for n in g.neighbours[i] if unit_id(n) != uid)}
+            if spec.glass.type == "insulated":
+                fab["SpacerSetback_mm"] = float(spec.glass.edge_seal_mm)
+            w.props(el, PSET, fab)
 
 
 def _describe(w: _Writer, el, g, i: int, density: float) -> None:

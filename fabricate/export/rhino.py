@@ -75,7 +75,7 @@ def write_3dm(parts, path, *, structure=None, mesh=None) -> dict:
     counts = {name: 0 for name, _ in LAYERS}
     for g in parts.groups:
         layer = KIND_LAYER[g.kind]
-        density = parts.spec.density(g.kind)
+        density = parts.spec.group_density(g)
         for i, pid in enumerate(g.ids):
             row = {"id": pid, "kind": g.kind, "element": int(g.element[i]),
                    "volume_mm3": repr(float(g.volume_mm3[i])),

@@ -1,11 +1,15 @@
 """Schedules a glass supplier and a steel shop order from (CSV, mm, degrees, kg).
 
-- ``glass_schedule.csv``: one row per panel: build-up, thickness, area, the
-  stock blank, per edge (in the order of the bearing face, counter-clockwise
+- ``glass_schedule.csv``: one row per glass unit (a panel, whatever its
+  build-up): the build-up (``10/16/88.4`` and spelled out), its total
+  thickness (cavity included), its solids (``P0001.1 ...``: plies and
+  interlayers, outside in), the spacer setback of an insulated unit (edge
+  seal width), area, the stock blank (of its largest ply), per edge (in the order of the bearing face, counter-clockwise
   seen from the beams) its length, the corner angle at its start, its bevel
   (degrees from square, positive when the face away from the beams is the
   smaller one), the beam under it and the neighbouring panel across it;
-  weight, warp (mm: distance between the diagonals of the mesh face, the
+  weight (every ply and interlayer: volume x density; spacer and seal not
+  included), warp (mm: distance between the diagonals of the mesh face, the
   planarity times the mean diagonal; n-gons: twice the largest distance from
   the plane), the limits it breaks.
 - ``steel_cut_list.csv``: one row per beam: section (``plate 60 x 212``,
@@ -39,8 +43,8 @@ from optimize.errors import ExportError
 from fabricate.cad.geometry import polygon_area_2d
 from fabricate.cad.limits import corner_angles_deg, edge_lengths
 
-GLASS_COLUMNS = ("id", "face", "build_up", "thickness_mm", "area_m2", "blank_w_mm", "blank_h_mm",
-                 "edge_lengths_mm", "corner_angles_deg", "edge_bevels_deg", "beams", "neighbours",
+GLASS_COLUMNS = ("id", "face", "build_up", "thickness_mm", "solids", "spacer_setback_mm", "area_m2", "blank_w_mm",
+                 "blank_h_mm", "edge_lengths_mm", "corner_angles_deg", "edge_bevels_deg", "beams", "neighbours",
                  "weight_kg", "warp_mm", "planarity", "flags")
 STEEL_COLUMNS = ("id", "edge", "section", "member", "plates", "grade", "length_mm", "blank_w_mm", "blank_h_mm",
                  "end_a_mitre_deg", "end_a_bevel_deg", "end_b_mitre_deg", "end_b_bevel_deg", "top_bevel_deg",
@@ -110,48 +114,64 @@ def mean_diagonal(mesh, faces: np.ndarray) -> np.ndarray:
 
 
 def build_up_text(spec) -> str:
-    """The glass build-up as a supplier writes it."""
-    glass = getattr(spec, "glass", None)
-    if glass is not None and hasattr(glass, "describe"):
-        return glass.describe()
-    return f"monolithic {spec.glass_thickness:g} mm"
+    """The glass build-up as a supplier writes it (``insulated 10/16/88.4 (10 | 16 argon | 8 + 1.52 PVB + 8 ...)``)."""
+    return spec.glass.describe()
 
 
 def write_glass_schedule(parts, path) -> dict:
     """Write ``glass_schedule.csv`` (atomic).  Returns facts: ``file, bytes, rows, seconds``."""
     t0 = time.perf_counter()
     path = Path(path)
-    flags = _flags(parts)
+    from fabricate.cad.glass import bearing_groups, unit_sums
     from fabricate.cad.parts import unit_id
 
-    beam_panels: dict[str, list[str]] = {}   # the panels each beam carries (on any of its plates)
+    flags: dict[str, list[str]] = {}
+    for pid, fl in _flags(parts).items():  # a ply's flags are its unit's
+        flags.setdefault(unit_id(pid), []).extend(f for f in fl if f not in flags.get(unit_id(pid), []))
+    beam_panels: dict[str, list[str]] = {}   # the glass units each beam carries (on any of its plates)
     for g in parts.of_kind("beam"):
         for i, pid in enumerate(g.ids):
             got = beam_panels.setdefault(unit_id(pid), [])
-            got += [n for n in g.neighbours[i] if n[0] == "P" and n not in got]
-    build_up = build_up_text(parts.spec)
+            got += [unit_id(n) for n in g.neighbours[i] if n[0] == "P" and unit_id(n) not in got]
+    spec = parts.spec
+    build_up = build_up_text(spec)
+    solids = spec.glass.solids()
+    seal = f"{spec.glass.edge_seal_mm:g}" if spec.glass.type == "insulated" else ""
     mesh = parts.mesh
+    weight_of = unit_sums(parts, lambda g: g.volume_mm3 * spec.group_density(g) * 1e-9)
+    glass = [g for g in parts.of_kind("panel") if not g.material]
+    blank_area = unit_sums(parts, lambda g: np.zeros(len(g)))
+    blank = np.zeros((len(blank_area), 2))
+    for g in glass:  # the unit's blank: its largest ply's
+        a = g.rect.prod(axis=1)
+        bigger = a > blank_area[g.element]
+        blank_area[g.element[bigger]] = a[bigger]
+        blank[g.element[bigger]] = g.rect[bigger]
 
     def rows():
-        for g in parts.of_kind("panel"):
+        for g in bearing_groups(parts):
             L, A = edge_lengths(g.bevel_ref), corner_angles_deg(g.bevel_ref)
             area = polygon_area_2d(g.bevel_ref)                # the glass (bearing face), not the blank
             side = g.cuts[:, 0] - 2                       # the side face (and beam) under each edge
             bevel = g.bevel_deg[..., 1]
-            weight = g.volume_mm3 * parts.spec.density("panel") * 1e-9
+            weight = weight_of[g.element]
             warp = warp_mm(mesh, g.element) if mesh is not None else 2 * g.planarity_mm
             diag = mean_diagonal(mesh, g.element) if mesh is not None else np.ones(len(g))
-            for i, pid in enumerate(g.ids):
-                beams = [g.neighbours[i][s] for s in side.tolist()]
+            for i, ply in enumerate(g.ids):
+                pid = unit_id(ply)
+                beams = [b for b in g.neighbours[i] if b[0] == "B"]
+                beams = [beams[s] for s in side.tolist()]
                 across = [next((p for p in beam_panels.get(b, []) if p != pid), "-") for b in beams]
-                yield (pid, int(g.element[i]), build_up, f"{g.thickness_mm[i]:.2f}",
-                       f"{area[i] * 1e-6:.4f}", f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}",
+                members = " ".join(f"{pid}.{k + 1}" for k in range(len(solids))) if len(solids) > 1 else pid
+                yield (pid, int(g.element[i]), build_up, f"{spec.glass.thickness_mm:.2f}", members, seal,
+                       f"{area[i] * 1e-6:.4f}", f"{blank[g.element[i], 0]:.1f}", f"{blank[g.element[i], 1]:.1f}",
                        _num(L[i]), _num(A[i]), _num(bevel[i], "{:+.2f}"), " ".join(beams), " ".join(across),
                        f"{weight[i]:.1f}", f"{warp[i]:.3g}", f"{warp[i] / diag[i]:.2e}",
                        "; ".join(flags.get(pid, [])))
     n = _write(path, GLASS_COLUMNS, rows())
     return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "build_up": build_up,
-            "seconds": time.perf_counter() - t0}
+            "build_up_short": spec.glass.short(), "unit_thickness_mm": spec.glass.thickness_mm,
+            "solids_per_unit": len(solids), "seconds": time.perf_counter() - t0}
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -242,7 +262,7 @@ def write_steel_cut_list(parts, path) -> dict:
     by_edge: dict[int, list] = {}
     for g in parts.of_kind("beam"):
         a = beam_angles(g)
-        weight = g.volume_mm3 * spec.density("beam") * 1e-9
+        weight = g.volume_mm3 * spec.group_density(g) * 1e-9
         length = np.linalg.norm(g.bevel_ref[:, 1] - g.bevel_ref[:, 0], axis=1)
         for i, pid in enumerate(g.ids):  # the rows, grouped by beam
             by_edge.setdefault(int(g.element[i]), []).append((g, i, pid, a, weight[i], length[i]))
@@ -257,7 +277,7 @@ def write_steel_cut_list(parts, path) -> dict:
             plates = by_edge[e]
             g0, i0, pid0, a0 = plates[0][:4]
             unit = unit_id(pid0)
-            panels = sorted({n for p in plates for n in p[0].neighbours[p[1]] if n[0] == "P"})
+            panels = sorted({unit_id(n) for p in plates for n in p[0].neighbours[p[1]] if n[0] == "P"})
             nodes = " ".join(part_ids("node", topo.edges[e])) if topo is not None else ""
             two = len(panels) == 2 and np.isfinite(uf["dihedral"][e])
             dihedral = f"{uf['dihedral'][e]:.2f}" if two else ""
@@ -275,7 +295,7 @@ def write_steel_cut_list(parts, path) -> dict:
             for g, i, pid, a, w, L in plates:
                 yield (pid, e, f"PL{g.thickness_mm[i]:g}", g.member, "", spec.steel_grade, f"{L:.1f}",
                        f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}", *angles(a, i), "", f"{w:.2f}",
-                       " ".join(n for n in g.neighbours[i] if n[0] == "P"), nodes, "; ".join(flags.get(pid, [])))
+                       " ".join(unit_id(n) for n in g.neighbours[i] if n[0] == "P"), nodes, "; ".join(flags.get(pid, [])))
     n = _write(path, STEEL_COLUMNS, rows())
     return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "beams": len(by_edge),
             "section": section_text(spec, depth), "seconds": time.perf_counter() - t0}

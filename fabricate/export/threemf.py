@@ -3,7 +3,8 @@
 Written directly (zip + XML): ``3D/3dmodel.model`` holds one ``<object>``
 per part named by its id, with the same triangles as the STL, vertices
 relative to the local origin (``%.12g`` mm) and a build item whose transform
-puts the origin back.  Colours are ``basematerials`` (glass, steel, node).
+puts the origin back.  Colours are ``basematerials`` (glass, steel, node, and the interlayers of
+laminated glass: ``PVB interlayer``).
 """
 from __future__ import annotations
 
@@ -31,6 +32,8 @@ RELS = ('<?xml version="1.0" encoding="UTF-8"?>\n'
         '<Relationship Target="/3D/3dmodel.model" Id="rel0" '
         'Type="http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel"/></Relationships>\n')
 MATERIAL = {"panel": "glass", "beam": "steel", "node": "node steel"}
+INTERLAYER_COLOUR = "#F2EBD9"
+"""A glass unit's interlayer (PVB, SGP) is a base material of its own."""
 
 
 def _hex(rgb) -> str:
@@ -47,6 +50,7 @@ def write_3mf(parts, path, *, origin: np.ndarray | None = None) -> dict:
     origin = parts.local_origin() if origin is None else np.asarray(origin, dtype=float)
     validate_manifold(parts, origin)
     tx = " ".join(f"{x:.17g}" for x in origin)
+    extra = sorted({g.material for g in parts.groups if g.material})   # a glass unit's interlayers
     head = ('<?xml version="1.0" encoding="UTF-8"?>\n'
             f'<model unit="millimeter" xml:lang="en-US" xmlns="{CORE}">\n'
             '<metadata name="Application">conical-fab</metadata>\n'
@@ -54,6 +58,7 @@ def write_3mf(parts, path, *, origin: np.ndarray | None = None) -> dict:
             f'to the origin {escape(tx)} mm, restored by each build item transform</metadata>\n'
             '<resources>\n<basematerials id="1">'
             + "".join(f'<base name="{MATERIAL[k]}" displaycolor="{_hex(COLOURS[k])}"/>' for k in KINDS)
+            + "".join(f'<base name="{escape(m)} interlayer" displaycolor="{INTERLAYER_COLOUR}"/>' for m in extra)
             + "</basematerials>\n")
     items, n_tri, object_id = [], 0, 2
     try:
@@ -68,7 +73,7 @@ def write_3mf(parts, path, *, origin: np.ndarray | None = None) -> dict:
                     vt = "".join(['<vertex x="%.12g" y="%.12g" z="%.12g"/>'] * nv)
                     tris = "<triangles>" + "".join(f'<triangle v1="{a}" v2="{b}" v3="{c}"/>'
                                                    for a, b, c in T.tolist()) + "</triangles></mesh></object>\n"
-                    pindex = KINDS.index(g.kind)
+                    pindex = len(KINDS) + extra.index(g.material) if g.material else KINDS.index(g.kind)
                     out = []
                     for pid, row in zip(g.ids, X.reshape(len(g), -1).tolist()):
                         out.append(f'<object id="{object_id}" name="{pid}" type="model" pid="1" '

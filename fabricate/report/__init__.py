@@ -12,7 +12,7 @@ _EXPORTS = {
     "render_html": ".html", "write_html": ".html",
     "collect_measures": ".measures",
     "picture_defect": ".pictures", "picture_history": ".pictures", "picture_layers": ".pictures",
-    "picture_outlines": ".pictures",
+    "picture_plan": ".shop_pictures", "picture_sheets": ".shop_pictures",
     "build_scene": ".scene",
     "MARKERS": ".writer", "write_report": ".writer",
 }

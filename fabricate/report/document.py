@@ -63,9 +63,13 @@ def parts_summary(parts) -> dict[str, Any] | None:
         groups = parts.of_kind(kind)
         vol = float(sum(float(np.sum(g.volume_mm3)) for g in groups))
         density = parts.spec.density(kind)
+        mass = sum(float(np.sum(g.volume_mm3)) * parts.spec.group_density(g) for g in groups) * 1e-9
         out[kind + "s"] = {"count": int(sum(len(g) for g in groups)),    # solids (plates, plies, hub pieces)
                            "units": len({i.split(".", 1)[0] for g in groups for i in g.ids}), "volume_mm3": vol,
-                           "mass_kg": vol * 1e-9 * density, "density_kg_m3": density}
+                           "mass_kg": mass, "density_kg_m3": density}
+    from fabricate.cad.glass import bearing_groups
+
+    out["panels"].update(units=sum(len(g) for g in bearing_groups(parts)), build_up=parts.spec.glass.describe())
     out["total"] = {"count": len(parts), "mass_kg": sum(v["mass_kg"] for v in out.values())}
     out["edge_mode"] = parts.edge_mode
     out["cad_report"] = parts.report

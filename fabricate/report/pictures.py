@@ -6,7 +6,8 @@ Each function draws one PNG from plain arrays and writes it atomically:
   defect on a log scale, the tolerance marked on the colour bar;
 - :func:`picture_layers`: the offset layers as wireframes with the beams;
 - :func:`picture_history`: defects against iteration (log scale) with tolerances;
-- :func:`picture_outlines`: a sheet of the flat part outlines with their ids.
+- the shop drawings (nested sheets, layout plan) are in :mod:`.shop_pictures`; the ids
+  on them are sized by :func:`outline_label_sizes` and drawn by :func:`_id_patch`.
 
 The figure objects are created without ``pyplot`` so that threads (a Dask
 worker) can draw at the same time.
@@ -175,28 +176,8 @@ def picture_history(histories: list[tuple[str, list[dict]]], path: str | Path, *
     return _save(fig, path)
 
 
-def shelf_layout(sizes: np.ndarray, width: float, gap: float) -> np.ndarray:
-    """(k, 2) lower-left corners packing boxes ``sizes (k, 2)`` in shelves of ``width``."""
-    order = np.argsort(-sizes[:, 1], kind="stable")
-    out = np.zeros_like(sizes)
-    x = y = shelf = 0.0
-    for i in order:  # a layout of a picture, not a kernel
-        w, h = sizes[i]
-        if x > 0 and x + w > width:
-            x, y = 0.0, y + shelf + gap
-            shelf = 0.0
-        out[i] = (x, y)
-        x += w + gap
-        shelf = max(shelf, h)
-    return out
-
-
-LABEL_INCH = 0.55
-"""The outline sheet is drawn so that the median part is this wide (inches) on the PNG: ids fit."""
 MAX_SHEET_INCH = 48.0
 MIN_FONT_PT = 3.0
-THIN_FONT_PT = 5.5
-"""The id size (pt) the sheet is scaled for on its thinnest parts (the 5th percentile: beams)."""
 
 
 def outline_label_sizes(widths_pt: np.ndarray, heights_pt: np.ndarray, ids: list[str]) -> np.ndarray:
@@ -205,51 +186,6 @@ def outline_label_sizes(widths_pt: np.ndarray, heights_pt: np.ndarray, ids: list
     chars = np.array([max(len(i), 1) for i in ids], dtype=float)
     fs = np.minimum.reduce([0.85 * widths_pt / (0.62 * chars), 0.7 * heights_pt, np.full(len(ids), 9.0)])
     return np.where(fs >= MIN_FONT_PT, fs, 0.0)
-
-
-def picture_outlines(outlines: list[tuple[str, np.ndarray]], path: str | Path, *, title: str) -> Path:
-    """A sheet of flat outlines ``[(part id, (k, 2) polygon in mm), ...]`` packed in shelves, each
-    labelled with its id in a font sized to the part; the sheet grows with the number of parts so
-    that the median part is ``LABEL_INCH`` wide (up to ``MAX_SHEET_INCH``)."""
-    from matplotlib.collections import PolyCollection
-
-    if not outlines:
-        fig = _figure((8.0, 8.0))
-        ax = fig.add_subplot(111)
-        ax.text(0.5, 0.5, "no outlines", ha="center", va="center", transform=ax.transAxes)
-        return _save(fig, path)
-    polys = [np.asarray(p, dtype=float) for _, p in outlines]
-    lo = np.array([p.min(axis=0) for p in polys])
-    sizes = np.array([p.max(axis=0) for p in polys]) - lo
-    gap = 0.08 * float(np.median(sizes.max(axis=1)))
-    width = max(float(np.sqrt((sizes + gap).prod(axis=1).sum()) * 1.2), float(sizes[:, 0].max()))
-    corners = shelf_layout(sizes, width, gap)
-    placed = [p - l + c for p, l, c in zip(polys, lo, corners)]
-    allp = np.concatenate(placed)
-    span = allp.max(axis=0) - allp.min(axis=0) + 2 * gap                     # mm
-    inch_per_mm = LABEL_INCH / max(float(np.median(sizes[:, 0])), 1e-9)
-    thin = float(np.percentile(sizes[:, 1], 5))  # thin parts (beams) still get a THIN_FONT_PT id
-    inch_per_mm = max(inch_per_mm, THIN_FONT_PT / (0.7 * 72.0 * max(thin, 1e-9)))
-    inch_per_mm = min(inch_per_mm, MAX_SHEET_INCH / float(span.max()))
-    inch_per_mm = max(inch_per_mm, 7.0 / float(span.max()))                   # never below 7 in
-    fig = _figure((float(span[0] * inch_per_mm) + 1.0, float(span[1] * inch_per_mm) + 1.0))
-    ax = fig.add_axes((0.5 / fig.get_figwidth(), 0.5 / fig.get_figheight(),
-                       1 - 1.0 / fig.get_figwidth(), 1 - 1.0 / fig.get_figheight()))
-    ax.add_collection(PolyCollection(placed, facecolors=(0.8, 0.88, 0.95, 1.0), edgecolors="k", linewidths=0.4))
-    ids = [pid for pid, _ in outlines]
-    pt = 72.0 * inch_per_mm
-    fs = outline_label_sizes(sizes[:, 0] * pt, sizes[:, 1] * pt, ids)
-    labels = [(pid, p.mean(axis=0), f / pt) for pid, p, f in zip(ids, placed, fs) if f > 0]
-    if labels:
-        ax.add_artist(_id_patch(labels))  # add_patch would trace every glyph for the data limits
-    missing = int(np.sum(fs == 0))
-    ax.set_xlim(allp[:, 0].min() - gap, allp[:, 0].max() + gap)
-    ax.set_ylim(allp[:, 1].min() - gap, allp[:, 1].max() + gap)
-    ax.set_aspect("equal")
-    ax.set_xlabel("mm")
-    note = f" ({missing} parts too small to label here: see outlines.svg)" if missing else ""
-    ax.set_title(title + note, fontsize=10)
-    return _save(fig, path)
 
 
 def _id_patch(labels: list[tuple[str, np.ndarray, float]]):

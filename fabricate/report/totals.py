@@ -58,15 +58,16 @@ def client_totals(parts) -> dict | None:
     """Glass area (m2), panel count and distinct sizes; steel length (m) and weight (kg, t)."""
     if parts is None:
         return None
+    from fabricate.cad.glass import bearing_groups
+    from fabricate.cad.parts import unit_id
+
     panels = parts.of_kind("panel")
     area = 0.0
     sizes = 0
     largest = 0
-    seen: set[int] = set()
-    for g in panels:  # one area per panel position (a ply of the same face is not more glass area)
-        fresh = np.array([e not in seen for e in g.element.tolist()], dtype=bool)
-        area += float(np.sum(g.area_mm2[fresh]))
-        seen.update(g.element.tolist())
+    units = bearing_groups(parts)          # one solid per glass unit: its ply on the beams
+    for g in units:  # one area per panel position (a ply of the same face is not more glass area)
+        area += float(np.sum(g.area_mm2))
         labels = distinct_sizes(np.asarray(g.flat, dtype=float), np.asarray(g.thickness_mm, dtype=float))
         if labels.size:
             sizes += int(labels.max()) + 1
@@ -74,12 +75,12 @@ def client_totals(parts) -> dict | None:
     steel = [g for kind in ("beam", "node") for g in parts.of_kind(kind)]
     density = parts.spec.density("beam")
     steel_kg = sum(float(np.sum(g.volume_mm3)) for g in steel) * 1e-9 * density
-    glass_kg = sum(float(np.sum(g.volume_mm3)) for g in panels) * 1e-9 * parts.spec.density("panel")
-    from fabricate.cad.parts import unit_id
+    glass_kg = sum(float(np.sum(g.volume_mm3)) * parts.spec.group_density(g) for g in panels) * 1e-9
     from fabricate.export.schedules import beam_units
 
     length = sum(float(np.sum(g.length_mm)) for g in beam_units(parts))   # one length per beam, not per plate
-    return {"glass_area_m2": area * 1e-6, "panels": sum(len(g) for g in panels),
+    return {"glass_area_m2": area * 1e-6, "panels": sum(len(g) for g in units),
+            "build_up": parts.spec.glass.short() if hasattr(parts.spec, "glass") else "",
             "distinct_panel_sizes": sizes, "most_panels_of_one_size": largest,
             "size_tolerance_mm": SIZE_TOL_MM,
             "size_rule": "congruent flat outlines (corner distances, mirror images differ) and equal "
@@ -100,7 +101,8 @@ def totals_lines(t: dict | None) -> list[str]:
     """The totals as short lines (console summary, the report's summary table)."""
     if not t:
         return []
-    return [f"glass {t['glass_area_m2']:,.1f} m2 in {t['panels']:,} panels of {t['distinct_panel_sizes']:,} "
+    bu = f" {t['build_up']} mm" if t.get("build_up") else ""
+    return [f"glass{bu} {t['glass_area_m2']:,.1f} m2 in {t['panels']:,} panels of {t['distinct_panel_sizes']:,} "
             f"distinct sizes (within {t['size_tolerance_mm']:g} mm; at most {t['most_panels_of_one_size']:,} "
             f"of one size), {kg(t['glass_mass_kg'])}",
             f"steel {t['steel_length_m']:,.1f} m of beams ({t['beams']:,}), {kg(t['steel_mass_kg'])} = "

@@ -12,7 +12,7 @@ from optimize.atomic import atomic_open
 from .document import build_report, write_report_json
 from .glb import glb_bytes
 from .html import copy_viewer, write_html
-from .pictures import picture_defect, picture_history, picture_layers, picture_outlines
+from .pictures import picture_defect, picture_history, picture_layers
 from .scene import build_scene
 
 log = logging.getLogger(__name__)
@@ -28,14 +28,6 @@ def histories(opt) -> list[tuple[str, list[dict]]]:
         return [(f"level {i + 1}", r.history) for i, r in enumerate(levels) if r is not None]
     result = opt.result
     return [("", result.history)] if result is not None else []
-
-
-def part_outlines(parts) -> list[tuple[str, np.ndarray]]:
-    """``[(part id, (k, 2) flat outline in mm)]`` of the panels and beams (``PartGroup.flat``)."""
-    if parts is None:
-        return []
-    return [(pid, np.asarray(flat, dtype=float)) for g in parts.groups if g.kind in ("panel", "beam")
-            for pid, flat in zip(g.ids, g.flat)]
 
 
 def write_pictures(run) -> dict[str, str]:
@@ -63,10 +55,30 @@ def write_pictures(run) -> dict[str, str]:
         from fabricate.structure.run import write_pictures as structure_pictures
 
         pics.update(structure_pictures(run.structure.check, out, name))
-    outlines = part_outlines(run.parts.parts)
-    if outlines:
-        picture_outlines(outlines, out / "outlines.png", title=f"{name}: flat outlines ({len(outlines)} parts)")
-        pics["outlines.png"] = "a sheet of the flat outlines with their part ids"
+    parts = run.parts.parts
+    if parts is not None and any(g.kind in ("panel", "beam") and len(g) for g in parts.groups):
+        pics.update(shop_pictures(run, parts))
+    return pics
+
+
+def shop_pictures(run, parts) -> dict[str, str]:
+    """``sheets.png`` (the fullest glass and steel sheet of the nested cut files) and ``layout_plan.png``."""
+    from .shop_pictures import picture_plan, picture_sheets, plan_drawing, sheet_drawings
+
+    out, name = run.workdir, run.config.name
+    batches = run.exports.cut_batches
+    written = batches is not None
+    if batches is None:  # cut files not written: the same nesting, drawn only
+        from fabricate.export.cutfiles import nest_cut_files
+
+        batches = nest_cut_files(parts, run.config.outputs.nesting.model_dump())
+    sheets = sheet_drawings(batches)
+    picture_sheets(sheets, out / "sheets.png", title=f"{name}: nested stock sheets")
+    files = ", ".join(s["file"] for s in sheets)
+    pics = {"sheets.png": (f"the fullest nested sheet of {files}, parts with their ids and the sheet's yield"
+                           if written else "the nesting of the cut files (not written: outputs.cut_files off)")}
+    picture_plan(plan_drawing(parts), out / "layout_plan.png", title=f"{name}: layout plan")
+    pics["layout_plan.png"] = "the layout plan: every glass unit and beam id where it sits on the roof (plan view)"
     return pics
 
 

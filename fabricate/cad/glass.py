@@ -1,0 +1,295 @@
+"""Glass build-ups: monolithic, laminated (plies and interlayers) and insulated (outer pane, cavity, inner pane).
+
+A unit is a stack of layers along the panel normal, on the glass side of the
+bearing face (the face that bears on the beams stays where a monolithic panel
+has it).  Layers are listed from the outside (weather side, away from the
+beams) to the inside (on the beams), the order a glazier writes a build-up
+(``10/16/88.4``) and numbers the glass surfaces.
+
+- every glass ply is one solid (``P0001.1``, ``P0001.2`` ...: ``k`` counts the
+  solid layers from the outside);
+- every **interlayer** (PVB, SGP) is a solid of its own too, between its two
+  plies: it is part of the unit's thickness, weight (PVB 1070 kg/m3, SGP
+  950 kg/m3) and of the 3D model (STEP, 3MF, IFC show a closed laminate), but
+  it is not cut from glass sheet, so it has no glass cut file;
+- the **cavity** of an insulated unit (argon, air, krypton) is no solid: its
+  gas is in the build-up text and the IFC layer set; the spacer frame and the
+  edge seal are made by the unit's fabricator and are not modelled: their
+  width (``edge_seal_mm``, the spacer setback from the glass edge) is in the
+  glass schedule, their weight is not in the unit weight;
+- ``step_mm`` > 0 makes a stepped unit: the inner pane (and its spacer) is set
+  back by that much from the outer pane's edge; the inner pane still bears on
+  the beams, so the step must stay below the bearing width.
+
+``layers()`` gives each layer's distance from the bearing face (``offset_mm``,
+to its beam-side face), its thickness and its edge inset: the panels of
+:mod:`fabricate.cad.panels` are built from exactly these numbers.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from optimize.errors import ConfigError
+
+INTERLAYER_DENSITY = {"PVB": 1070.0, "SGP": 950.0}
+"""kg/m3 of the interlayers (PVB: polyvinyl butyral; SGP: SentryGlas ionoplast)."""
+GASES = ("argon", "air", "krypton")
+TYPES = ("monolithic", "laminated", "insulated")
+PLY_MM = (2.0, 25.0)
+"""Float glass is made from 2 to 25 mm thick."""
+PVB_FILM_MM = 0.38
+
+
+def _number(key: str, value, lo: float, hi: float, *, low_open: bool = False) -> float:
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or value > hi or value < lo or (low_open and value <= lo):
+        rng = f"({lo:g}, {hi:g}]" if low_open else f"[{lo:g}, {hi:g}]"
+        raise ConfigError(f"{key} = {value!r}: expected a number in {rng} mm")
+    return float(value)
+
+
+@dataclass(frozen=True)
+class Layer:
+    """One layer of a unit: a solid (glass ply, interlayer) or the cavity.
+
+    member : its name in the unit (``"ply 1"``, ``"interlayer 1"``, ``"outer pane"``, ``"cavity"``).
+    material : ``glass`` | ``PVB`` | ``SGP`` | the cavity's gas.
+    thickness_mm : along the panel normal.  offset_mm : from the bearing face (on the beams), away from
+    the beams, to the layer's beam-side face.  inset_mm : its edges set back from the unit's edge.
+    solid : a solid of the model (every layer but the cavity).
+    """
+
+    member: str
+    material: str
+    thickness_mm: float
+    offset_mm: float
+    inset_mm: float
+    solid: bool
+
+
+@dataclass(frozen=True)
+class Pane:
+    """A monolithic pane (one ply) or a laminated one (plies with one interlayer between each two)."""
+
+    plies_mm: tuple[float, ...]
+    interlayer: str = "PVB"
+    interlayer_mm: float = 0.0
+
+    @property
+    def laminated(self) -> bool:
+        return len(self.plies_mm) > 1
+
+    @property
+    def thickness_mm(self) -> float:
+        return sum(self.plies_mm) + (len(self.plies_mm) - 1) * self.interlayer_mm
+
+    def short(self) -> str:
+        """The supplier's notation: ``10``; laminated PVB of plies under 10 mm in 0.38 mm films:
+        ``88.4`` (8 + 8, four films = 1.52 mm); otherwise ``8 + 1.52 SGP + 8``."""
+        if not self.laminated:
+            return f"{self.plies_mm[0]:g}"
+        films = self.interlayer_mm / PVB_FILM_MM
+        if (self.interlayer == "PVB" and len(self.plies_mm) == 2 and all(p < 10 and p == int(p) for p in self.plies_mm)
+                and abs(films - round(films)) < 1e-9):
+            return f"{int(self.plies_mm[0])}{int(self.plies_mm[1])}.{int(round(films))}"
+        return self.long()
+
+    def long(self) -> str:
+        """``8 + 1.52 PVB + 8`` (every ply and interlayer, mm)."""
+        if not self.laminated:
+            return f"{self.plies_mm[0]:g}"
+        join = f" + {self.interlayer_mm:g} {self.interlayer} + "
+        return join.join(f"{p:g}" for p in self.plies_mm)
+
+    def layers(self, prefix: str) -> list[tuple[str, str, float]]:
+        """``[(member, material, thickness)]`` from the outside in."""
+        if not self.laminated:
+            return [((prefix + " pane").strip() if prefix else "ply 1", "glass", self.plies_mm[0])]
+        out = []
+        head = f"{prefix} " if prefix else ""
+        for j, p in enumerate(self.plies_mm):
+            if j:
+                out.append((f"{head}interlayer {j}", self.interlayer, self.interlayer_mm))
+            out.append((f"{head}ply {j + 1}", "glass", p))
+        return out
+
+
+@dataclass(frozen=True)
+class BuildUp:
+    """A glass unit: ``type`` monolithic | laminated (``outer`` is the pane) | insulated (``outer`` pane,
+    ``cavity_mm`` of ``gas``, ``inner`` pane on the beams, spacer ``edge_seal_mm`` in from the edge,
+    inner pane ``step_mm`` in from the outer pane's edge)."""
+
+    type: str
+    outer: Pane
+    inner: Pane | None = None
+    cavity_mm: float = 0.0
+    gas: str = ""
+    edge_seal_mm: float = 0.0
+    step_mm: float = 0.0
+
+    @classmethod
+    def monolithic(cls, thickness_mm: float) -> "BuildUp":
+        return cls("monolithic", Pane((float(thickness_mm),)))
+
+    @classmethod
+    def from_config(cls, data: dict | None, glass_thickness: float = 10.0, key: str = "parts.glass") -> "BuildUp":
+        """The build-up of a ``parts.glass`` mapping (None: monolithic ``glass_thickness``).
+
+        Raises ConfigError naming the key for an unknown type, a missing or misplaced key, or a
+        thickness out of range."""
+        if data is None:
+            return cls.monolithic(_number("parts.glass_thickness", glass_thickness, 0.0, 200.0, low_open=True))
+        if isinstance(data, BuildUp):
+            return data
+        if not isinstance(data, dict):
+            raise ConfigError(f"{key} = {data!r}: expected a mapping with type monolithic | laminated | insulated")
+        data = {k: v for k, v in data.items() if v is not None}
+        kind = data.get("type")
+        if kind not in TYPES:
+            raise ConfigError(f"{key}.type = {kind!r}: expected one of {', '.join(TYPES)}")
+        if kind != "insulated":
+            extra = sorted(set(data) & {"outer", "inner", "cavity_mm", "gas", "edge_seal_mm", "step_mm"})
+            if extra:
+                raise ConfigError(f"{key}.{extra[0]}: applies to an insulated unit, not to type {kind}")
+            return cls(kind, _pane(data, key, kind))
+        extra = sorted(set(data) & {"thickness_mm", "plies_mm", "interlayer", "interlayer_mm"})
+        if extra:
+            raise ConfigError(f"{key}.{extra[0]}: an insulated unit takes its panes as {key}.outer and "
+                              f"{key}.inner (each monolithic or laminated)")
+        panes = {}
+        for side in ("outer", "inner"):
+            p = data.get(side)
+            if not isinstance(p, dict):
+                raise ConfigError(f"{key}.{side} = {p!r}: expected a pane, e.g. {{type: monolithic, "
+                                  "thickness_mm: 8}} or {type: laminated, plies_mm: [8, 8], interlayer_mm: 1.52}")
+            pk = {k: v for k, v in p.items() if v is not None}
+            ptype = pk.get("type", "monolithic")
+            if ptype not in ("monolithic", "laminated"):
+                raise ConfigError(f"{key}.{side}.type = {ptype!r}: expected monolithic or laminated")
+            panes[side] = _pane(pk, f"{key}.{side}", ptype)
+        gas = data.get("gas", "argon")
+        if gas not in GASES:
+            raise ConfigError(f"{key}.gas = {gas!r}: expected one of {', '.join(GASES)}")
+        return cls("insulated", panes["outer"], panes["inner"],
+                   cavity_mm=_number(f"{key}.cavity_mm", data.get("cavity_mm", 16.0), 4.0, 50.0),
+                   gas=gas, edge_seal_mm=_number(f"{key}.edge_seal_mm", data.get("edge_seal_mm", 16.0), 5.0, 50.0),
+                   step_mm=_number(f"{key}.step_mm", data.get("step_mm", 0.0), 0.0, 200.0))
+
+    @property
+    def thickness_mm(self) -> float:
+        """The whole unit, cavity included."""
+        inner = self.inner.thickness_mm + self.cavity_mm if self.inner is not None else 0.0
+        return self.outer.thickness_mm + inner
+
+    def layers(self) -> tuple[Layer, ...]:
+        """Every layer from the outside (away from the beams) to the inside (on the beams)."""
+        rows: list[tuple[str, str, float, float]] = []           # member, material, thickness, inset
+        if self.inner is None:
+            rows += [(m, mat, t, 0.0) for m, mat, t in self.outer.layers("")]
+        else:
+            rows += [(m, mat, t, 0.0) for m, mat, t in self.outer.layers("outer")]
+            rows.append(("cavity", self.gas, self.cavity_mm, self.step_mm))
+            rows += [(m, mat, t, self.step_mm) for m, mat, t in self.inner.layers("inner")]
+        out, below = [], 0.0
+        for member, material, t, inset in reversed(rows):  # offsets summed from the bearing face up
+            out.append(Layer(member, material, float(t), below, float(inset), member != "cavity"))
+            below += t
+        return tuple(reversed(out))
+
+    def solids(self) -> tuple[Layer, ...]:
+        """The solid layers (plies and interlayers), outside in: solid ``k`` (from 1) is ``<unit>.<k>``."""
+        return tuple(layer for layer in self.layers() if layer.solid)
+
+    def glass_mm(self) -> float:
+        """The glass in the unit (mm), interlayers and cavity not counted."""
+        return sum(layer.thickness_mm for layer in self.layers() if layer.material == "glass")
+
+    def weight_thickness_mm(self, density_glass: float) -> float:
+        """mm of glass of ``density_glass`` that weighs what the unit's plies and interlayers weigh per m2."""
+        return sum(layer.thickness_mm * (1.0 if layer.material == "glass" else INTERLAYER_DENSITY[layer.material]
+                                         / density_glass) for layer in self.solids())
+
+    def density(self, material: str, density_glass: float) -> float:
+        """kg/m3 of a layer's material."""
+        return INTERLAYER_DENSITY.get(material, density_glass)
+
+    def short(self) -> str:
+        """``10``, ``88.4``, ``10/16/88.4``: the build-up as a supplier writes it (outside first, mm)."""
+        if self.inner is None:
+            return self.outer.short()
+        return f"{self.outer.short()}/{self.cavity_mm:g}/{self.inner.short()}"
+
+    def describe(self) -> str:
+        """The build-up spelled out: ``insulated 10/16/88.4 (10 | 16 argon | 8 + 1.52 PVB + 8)``."""
+        if self.type == "monolithic":
+            return f"monolithic {self.outer.short()} mm"
+        if self.type == "laminated":
+            return f"laminated {self.outer.short()} ({self.outer.long()})"
+        step = f", inner pane stepped {self.step_mm:g}" if self.step_mm else ""
+        return (f"insulated {self.short()} ({self.outer.long()} | {self.cavity_mm:g} {self.gas} | "
+                f"{self.inner.long()}; edge seal {self.edge_seal_mm:g}{step})")
+
+    def check_bearing(self, bearing_mm: float) -> None:
+        """Raise ConfigError when a stepped inner pane would not reach the beams (``bearing_mm``: the
+        width each panel edge bears on, ``(beam_width - joint_gap) / 2``)."""
+        if self.step_mm and self.step_mm >= bearing_mm:
+            raise ConfigError(f"parts.glass.step_mm = {self.step_mm:g} mm: the inner pane would not bear on the "
+                              f"beams (bearing width (parts.beam_width - parts.joint_gap) / 2 = {bearing_mm:g} mm); "
+                              "expected a smaller step or wider beams")
+
+    def as_config(self) -> dict:
+        """The ``parts.glass`` mapping of this build-up."""
+        def pane(p: Pane) -> dict:
+            if not p.laminated:
+                return {"type": "monolithic", "thickness_mm": p.plies_mm[0]}
+            return {"type": "laminated", "plies_mm": list(p.plies_mm), "interlayer": p.interlayer,
+                    "interlayer_mm": p.interlayer_mm}
+        if self.inner is None:
+            return pane(self.outer)
+        return {"type": "insulated", "outer": pane(self.outer), "cavity_mm": self.cavity_mm, "gas": self.gas,
+                "inner": pane(self.inner), "edge_seal_mm": self.edge_seal_mm, "step_mm": self.step_mm}
+
+
+def _pane(data: dict, key: str, kind: str) -> Pane:
+    if kind == "monolithic":
+        for bad in ("plies_mm", "interlayer", "interlayer_mm"):
+            if bad in data:
+                raise ConfigError(f"{key}.{bad}: applies to a laminated pane, not to type monolithic "
+                                  f"(give {key}.thickness_mm)")
+        if "thickness_mm" not in data:
+            raise ConfigError(f"{key}.thickness_mm: missing; a monolithic pane needs its thickness (mm)")
+        return Pane((_number(f"{key}.thickness_mm", data["thickness_mm"], *PLY_MM),))
+    if "thickness_mm" in data:
+        raise ConfigError(f"{key}.thickness_mm: a laminated pane is given by {key}.plies_mm (and its interlayer), "
+                          "not by one thickness")
+    plies = data.get("plies_mm")
+    if not isinstance(plies, (list, tuple)) or len(plies) < 2:
+        raise ConfigError(f"{key}.plies_mm = {plies!r}: expected a list of two or more ply thicknesses (mm), "
+                          "e.g. [8, 8]")
+    plies = tuple(_number(f"{key}.plies_mm[{j}]", p, *PLY_MM) for j, p in enumerate(plies))
+    inter = data.get("interlayer", "PVB")
+    if inter not in INTERLAYER_DENSITY:
+        raise ConfigError(f"{key}.interlayer = {inter!r}: expected one of {', '.join(INTERLAYER_DENSITY)}")
+    t = _number(f"{key}.interlayer_mm", data.get("interlayer_mm", 1.52), 0.0, 10.0, low_open=True)
+    return Pane(plies, inter, t)
+
+
+def bearing_groups(parts) -> list:
+    """The panel groups of the ply on the beams (every panel group of a monolithic build-up): one
+    solid per unit, which the glass schedule, the layout plan and the shop limits describe."""
+    solids = parts.spec.glass.solids() if hasattr(parts.spec, "glass") else ()
+    last = solids[-1].member if len(solids) > 1 else ""
+    return [g for g in parts.of_kind("panel") if g.member == last]
+
+
+def unit_sums(parts, values) -> np.ndarray:
+    """(n_faces,) per mesh face the sum over every panel solid of ``values(group) (p,)``."""
+    n = 1 + max((int(g.element.max()) for g in parts.of_kind("panel") if len(g)), default=-1)
+    out = np.zeros(n)
+    for g in parts.of_kind("panel"):  # a few groups (layers x face sizes)
+        np.add.at(out, g.element, values(g))
+    return out
