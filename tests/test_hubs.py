@@ -115,14 +115,15 @@ def test_to_build123d_labels_the_tube_parts():
 
 def test_a_run_with_rhs_beams_and_tube_hubs_passes_its_checks(tmp_path):
     """The files of a small run: STEP reads back with every plate and hub id, the full check (STEP, 3MF,
-    STL, flat data, NC1, bearing, clashes) passes, the cut files hold each plate thickness."""
+    STL, IFC, flat data, NC1, bearing, clashes) passes, the cut files hold each plate thickness, the IFC
+    has one member per beam and per hub."""
     from _pipeline_fixtures import tiny_config
 
     from fabricate.check import check_outputs
     from fabricate.app.pipeline import run_pipeline
 
     outputs = {"step": True, "stl": True, "3mf": True, "dxf": True, "svg": False, "bom": True, "pictures": False,
-               "html": False, "ifc": False, "3dm": False, "nc1": True, "gltf": False, "check": "off"}
+               "html": False, "ifc": True, "3dm": False, "nc1": True, "gltf": False, "check": "off"}
     cfg = tiny_config(tmp_path, "rhs_hubs", outputs=outputs,
                       parts={"beam": dict(section="rhs", web_mm=6, flange_mm=8, flange_width_mm=120),
                              "node": dict(TUBE)})
@@ -131,7 +132,12 @@ def test_a_run_with_rhs_beams_and_tube_hubs_passes_its_checks(tmp_path):
     res = check_outputs(out)
     failed = {k: v.get("why") for k, v in res["checks"].items() if v.get("pass") is False}
     assert res["pass"], failed
-    assert res["checks"]["flat"]["pass"] and res["checks"]["step"]["pass"]
+    assert res["checks"]["flat"]["pass"] and res["checks"]["step"]["pass"] and res["checks"]["ifc"]["pass"]
+    import ifcopenshell
+
+    members = {e.Name: e for e in ifcopenshell.open(str(out / "model.ifc")).by_type("IfcMember")}
+    assert len(members["B0001"].Representation.Representations[0].Items) == 6     # one member, six plates
+    assert len(members["N0001"].Representation.Representations[0].Items) == 3     # tube and two caps
     from fabricate.export.step_text import read_step_text
 
     solids, _ = read_step_text(out / "model.step")
