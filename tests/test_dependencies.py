@@ -38,7 +38,8 @@ def _declared():
 
 def _imports(folder: str) -> dict[str, set[str]]:
     """``{top-level module: {files importing it}}`` of every .py file under ``folder``."""
-    local = {p.stem for p in (REPO / "tests").glob("*.py")}  # test helpers imported by name
+    # test helpers and benchmark modules imported by name from their own folder
+    local = {p.stem for d in ("tests", "benchmarks") for p in (REPO / d).glob("*.py")}
     found: dict[str, set[str]] = {}
     for path in (REPO / folder).rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text(), str(path))):
