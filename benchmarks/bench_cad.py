@@ -20,7 +20,7 @@ caches), one after the other.  Prints a JSON line per side and the ratio.
 dome of ``--panels`` panels (build_parts and every fabrication writer), in one run: today's plate
 beams with mitred ends against RHS beams welded from six plates on tube hubs with two cap plates
 (goal: within 3x of plate-only), and the full file check of the RHS files against their export
-(goal: not longer).  Insulated glass joins through the ``GLASS_INSULATED`` hook once it exists.
+(goal: not longer); the new side also has insulated glass (``GLASS_INSULATED``).
 
 ``--check`` (issue 14): for the railway station (configs/railway_station.yaml,
 run with the check off) and the dome of ``--panels`` panels, one child process
@@ -202,9 +202,11 @@ SECTIONS = {  # --sections (issue 18 item 1): today's plates with mitred ends ag
             "parts.beam.flange_width_mm": 100.0, "parts.node.connection": "hub", "parts.node.hub": "tube",
             "parts.node.radius_mm": 110.0, "parts.node.wall_mm": 10.0, "parts.node.cap_mm": 15.0},
 }
-GLASS_INSULATED: dict = {}
-"""Hook for insulated glass in the --sections run (``parts.glass`` overrides): empty until the glass
-build-ups are on this branch; the printed line says whether insulated glass was in the run."""
+GLASS_INSULATED: dict = {"parts.glass": {"type": "insulated", "outer": {"type": "monolithic", "thickness_mm": 10.0},
+                                          "cavity_mm": 16.0, "inner": {"type": "laminated", "plies_mm": [6.0, 6.0],
+                                                                       "interlayer": "PVB", "interlayer_mm": 1.52}}}
+"""Insulated glass 10/16/66.4 (four solids per panel) in the new side of the --sections run; the
+plate-only side keeps the config's glass (the dome: monolithic 10 mm)."""
 
 
 def _spec_overrides(variant: str) -> dict:
@@ -277,7 +279,7 @@ def main_sections(panels: int) -> None:
         for variant in SECTIONS:
             with tempfile.TemporaryDirectory(prefix="bench_sections_") as tmp:
                 rows[case, variant] = _child(f"sections_{case}_{variant}", panels, tmp)
-    glass = "with insulated glass" if GLASS_INSULATED else "glass monolithic (GLASS_INSULATED hook empty)"
+    glass = "insulated glass 10/16/66.4" if GLASS_INSULATED else "glass as configured"
     for case in ("railway", "dome"):
         p, r = rows[case, "plate"], rows[case, "rhs"]
         print(f"{r['case']}: plate beams, mitred ends ({p['parts']} parts) CAD + export {p['cad_export_s']:.2f} s; "
