@@ -49,7 +49,7 @@ ROOT = Path(__file__).resolve().parents[1]
 def structure(panels: int):
     """A dome of revolution (conical by construction) with about ``panels`` faces, in mm."""
     from fabricate.offset import offset_structure
-    from optimize import shapes
+    from optimize.modelling import shapes
 
     around = max(8, int(round((2 * panels) ** 0.5)))
     rows = max(2, int(round(panels / around)))

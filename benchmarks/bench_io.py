@@ -19,9 +19,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout, not an installed copy
 
-from optimize import shapes  # noqa: E402
-from optimize.io import read_mesh, write_mesh  # noqa: E402
-from optimize.io.ply import format_ply  # noqa: E402
+from optimize.modelling import shapes  # noqa: E402
+from optimize.mesh.io import read_mesh, write_mesh  # noqa: E402
+from optimize.mesh.io.ply import format_ply  # noqa: E402
 
 
 def _best(fn, repeat: int = 3) -> tuple[float, float]:

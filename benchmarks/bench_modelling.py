@@ -29,9 +29,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout, not an installed copy
 
 from optimize.api import optimize_mesh  # noqa: E402
-from optimize.designs import DESIGNS  # noqa: E402
-from optimize.hierarchy import subdivide_and_perturb  # noqa: E402
-from optimize.subdivision import subdivide  # noqa: E402
+from optimize.modelling.designs import DESIGNS  # noqa: E402
+from optimize.modelling.hierarchy import subdivide_and_perturb  # noqa: E402
+from optimize.modelling.subdivision import subdivide  # noqa: E402
 
 PAPER = {"trefoil penalty": 0.08, "trefoil sqp": 0.75, "conical level": 10.0, "conical total": 13.0}
 
@@ -57,7 +57,7 @@ def _row(label: str, seconds: float, result, paper: float | None) -> None:
 
 
 def trefoil(repeat: int) -> None:
-    from optimize.paper import kernels
+    from optimize import kernels
 
     compile_s = kernels.warm_up()  # numba: compiled or loaded from its disk cache, not counted below
     d = DESIGNS["trefoil_band"]()

@@ -28,7 +28,7 @@ conjugate900+noise, a skew torus and a blob (closed, their mesh lines not
 conjugate) and extra real meshes (``--data DIR``): the new default
 (``ours``: convexity rows, fairness weight falling with the defect), the old
 one (``ours-old``: ``convex=False`` and the fairness weight in full), the
-remeshed route (``ours+rm``: ``optimize.routes``, remeshed along principal
+remeshed route (``ours+rm``: ``optimize.remesh.routes``, remeshed along principal
 directions; closed meshes cannot be remeshed), the paper's penalty / SQP /
 hybrid and libigl / mpfp, each with its fold count and distance.
 The scaling curve runs every size in a fresh process and reports its peak
@@ -51,8 +51,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from optimize import Mesh, measures, optimize_mesh, shapes  # noqa: E402
-from optimize.closeness import Reference  # noqa: E402
+from optimize import Mesh, optimize_mesh  # noqa: E402
+from optimize.mesh import measures
+from optimize.modelling import shapes
+from optimize.proximity import Reference  # noqa: E402
 
 TUNNEL = ROOT / "configs" / "meshes" / "tunnel.off"  # the built-in design tunnel, in metres
 DATA = None  # --data PATH: a folder with halftunnel.off and cylinder.obj (libigl tutorial meshes), else skipped
@@ -91,20 +93,20 @@ def revolution(faces: int, noise: float = 0.005):
 
 def real_mesh(path=None):
     """The shipped forking tunnel (784 quads, irregular vertices, three loops), or ``--mesh PATH``."""
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     return read_mesh(path or TUNNEL)
 
 
 def halftunnel():
     """halftunnel.off from ``--data DIR``."""
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     return read_mesh(Path(DATA) / "halftunnel.off")
 
 
 def cylinder():
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     return read_mesh(Path(DATA) / "cylinder.obj")
 
@@ -192,9 +194,9 @@ def result_row(mesh0, name, target, method, seconds, res):
 def foldfree_table(args):
     """Old (no convexity rows, fairness weight in full) and new default, the paper's methods,
     the remeshed route and libigl / mpfp where installed, with folds and distances."""
-    from optimize import guided
-    from optimize.conjugacy import net_defect
-    from optimize.routes import optimize_routes
+    from optimize.solvers import guided
+    from optimize.remesh.conjugacy import net_defect
+    from optimize.remesh.routes import optimize_routes
 
     igl = mpfp = None
     if not args.no_peers:
@@ -427,10 +429,10 @@ def scaling(args):
 def linalg(args):
     import scipy.sparse as sp
 
-    from optimize.api import normalization
-    from optimize.fairness import fairness_matrix_parts
-    from optimize.formulation import Formulation
-    from optimize.guided import _embed
+    from optimize.mesh.measures import normalization
+    from optimize.terms.fairness import fairness_matrix_parts
+    from optimize.terms.formulation import Formulation
+    from optimize.solvers.guided import _embed
     from optimize.linalg import BACKENDS, NormalSolver
 
     print("\nOne regularized Gauss-Newton system (first iteration), each backend, fresh factorization")
@@ -451,8 +453,6 @@ def linalg(args):
         ref = None
         for be in BACKENDS:
             if be == "auto" or (be == "eliminate" and form.face_blocks() is None):
-                continue
-            if be == "cholespy" and importlib.util.find_spec("cholespy") is None:
                 continue
             s = NormalSolver(be, form.face_blocks(), reuse=False)
             t = time.perf_counter()

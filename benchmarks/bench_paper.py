@@ -12,9 +12,9 @@ process, less disturbed by other jobs on a shared machine), iterations, final
 defects, distance to the input (relative to its bbox diagonal), and the ratio
 of the paper's figure to ours (goal: >= 10).  Repeated runs on the same mesh
 reuse its problem (patterns, band layouts, closest-point structure:
-:mod:`optimize.paper.cache`), as interactive modelling does; the first run,
+:mod:`optimize.solvers.paper.cache`), as interactive modelling does; the first run,
 which builds it, is printed too ("first").  The compiled kernels
-(:mod:`optimize.paper.kernels`, numba) are compiled or loaded from their disk
+(:mod:`optimize.solvers.paper.kernels`, numba) are compiled or loaded from their disk
 cache before any timing; that time is printed apart and not counted.
 ``--baseline`` also times the strip case with the fast paths switched off in
 the same run (no compiled kernels, no kept problems, sparse ``J^T J`` / KKT
@@ -41,11 +41,12 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 import numpy as np  # noqa: E402
 
-from optimize import measures, shapes  # noqa: E402
+from optimize.mesh import measures  # noqa: E402
+from optimize.modelling import shapes
 from optimize.errors import ConfigError  # noqa: E402
-from optimize.paper import run_paper_method  # noqa: E402
-from optimize.paper.det import det_local  # noqa: E402
-from optimize.paper.strip import trefoil_band  # noqa: E402
+from optimize.solvers.paper import run_paper_method  # noqa: E402
+from optimize.solvers.paper.det import det_local  # noqa: E402
+from optimize.modelling.designs import trefoil_band_mesh as trefoil_band  # noqa: E402
 
 PAPER_SECONDS = {"penalty": 0.08, "sqp": 0.75}  # Liu et al. 2006, 336-face strip, 2 GHz PC
 
@@ -93,12 +94,13 @@ def slow_paths():
     """The implementation without banded layouts and cached footpoints (for ``--baseline``).
 
     Every ``Problem.band`` is None, so the penalty method assembles a sparse
-    ``J^T J`` each iteration for :class:`optimize.paper.linalg.SPDSolver` and
+    ``J^T J`` each iteration for :class:`optimize.linalg.spd.SPDSolver` and
     SQP factors its KKT matrix by SuperLU; footpoints come from
     ``Reference.closest`` directly.
     """
-    from optimize.paper import cache, kernels
-    from optimize.paper.problem import Problem
+    from optimize import kernels
+    from optimize.solvers.paper import cache
+    from optimize.solvers.paper.problem import Problem
 
     band, foot = Problem.band, Problem.footpoints
     Problem.band = lambda self, name, factory: None
@@ -131,7 +133,7 @@ HEADER = ("method       seconds  cpu s  iters  ok   planarity        det    coni
 
 def warm_up():
     """Compile (or load) the numba kernels before any timing; print how long it took."""
-    from optimize.paper import kernels
+    from optimize import kernels
 
     sec = kernels.warm_up()
     state = "not available (NumPy paths)" if kernels.get() is None else f"ready in {sec:.3f} s"

@@ -31,12 +31,12 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # this checkout, not an installed copy
 
-from optimize import surfaces  # noqa: E402
+from optimize.remesh import surfaces  # noqa: E402
 from optimize.api import optimize_mesh  # noqa: E402
-from optimize.measures import conical_defect, fairness  # noqa: E402
-from optimize.principal import principal_frames  # noqa: E402
-from optimize.principal_quadric import quadric_frames  # noqa: E402
-from optimize.remesh import isoparametric_remesh, remesh  # noqa: E402
+from optimize.mesh.measures import conical_defect, fairness  # noqa: E402
+from optimize.remesh.principal import principal_frames  # noqa: E402
+from optimize.remesh.principal_quadric import quadric_frames  # noqa: E402
+from optimize.remesh.quads import isoparametric_remesh, remesh  # noqa: E402
 
 
 def turned_quadric(a: float, b: float, deg: float):
@@ -161,7 +161,7 @@ def main() -> None:
 
 def fine_surface(h: float) -> None:
     """A 15k-vertex dome: frames at sampled vertices (the default) against every vertex, same run."""
-    from optimize.remesh import SAMPLE
+    from optimize.remesh.quads import SAMPLE
 
     surf = surfaces.height_field(turned_quadric(-0.10, -0.04, 30), n=(141, 106))
     rows = []

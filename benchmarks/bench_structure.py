@@ -60,7 +60,7 @@ def dome(beams: int = 10000) -> dict:
     from fabricate.app.config import parse_config
     from fabricate.offset import offset_structure
     from fabricate.structure.check import check_structure
-    from optimize import shapes
+    from optimize.modelling import shapes
 
     around = int(round((beams / 2) ** 0.5 * 1.4))
     rows = max(2, int(round(beams / (2 * around))))

@@ -1,5 +1,11 @@
 """Geometry core: polygon meshes, measures and the optimizers of conical meshes.
 
+Subpackages: ``mesh`` (model, topology, measures, files), ``terms`` (unknowns and the
+problem's terms), ``solvers`` (default and the paper's methods), ``linalg`` (sparse
+factorizations), ``proximity`` (closest points), ``modelling`` (shapes, designs,
+subdivision, strips), ``remesh`` (principal-direction remeshing); ``api`` and ``options``
+are the entry point and its settings.
+
 Names are loaded on first use (PEP 562): ``import optimize.errors`` or
 ``fabricate --help`` does not pay for SciPy and the solvers, and
 ``from optimize import optimize_mesh`` works as before.
@@ -9,7 +15,7 @@ from ._lazy import lazy_exports
 _EXPORTS = {
     "optimize_mesh": ".api",
     "ConfigError": ".errors", "ConvergenceError": ".errors", "ExportError": ".errors", "MeshError": ".errors",
-    "Mesh": ".mesh",
+    "Mesh": ".mesh", "measures": ".mesh:measures",  # (the README's example imports measures from here)
     "OptimizeResult": ".result",
     "Tolerances": ".tolerances",
 }

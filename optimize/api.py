@@ -1,8 +1,8 @@
 """``optimize_mesh``: make a mesh PQ, conical or circular, fair and close to a reference.
 
-The default method is the regularized Gauss-Newton of :mod:`optimize.guided`
-on the quadratic formulation of :mod:`optimize.formulation`.  The paper's own
-methods (``"penalty"``, ``"sqp"``, ``"hybrid"``) live in ``optimize.paper`` and
+The default method is the regularized Gauss-Newton of :mod:`optimize.solvers.guided`
+on the quadratic formulation of :mod:`optimize.terms.formulation`.  The paper's own
+methods (``"penalty"``, ``"sqp"``, ``"hybrid"``) live in ``optimize.solvers.paper`` and
 are imported only when asked for.
 """
 from __future__ import annotations
@@ -12,25 +12,22 @@ import time
 
 import numpy as np
 
-from . import measures
-from .closeness import Reference
-from .constraints import fixed as fixed_mod
-from .constraints import glide as glide_mod
 from .errors import ConfigError
-from .formulation import TARGETS, UNKNOWNS, Formulation, fit_axes
-from .conjugacy import record_net
-from .constraints import convexity
-from . import guided
-from .guided import Convex, Glide, solve
-from .linalg import BACKENDS
-from .mesh import Mesh
+from .mesh import Mesh, measures
+from .options import DEFAULTS, FORMULATIONS, METHODS, OptimizeOptions  # noqa: F401 (re-exported)
+from .proximity.curve import BoundaryCurve
+from .proximity.surface import Reference
+from .remesh.conjugacy import record_net
 from .result import OptimizeResult, check_folds, record_shape
+from .solvers import guided
+from .solvers.guided import Convex, Glide, solve
+from .terms import convexity
+from .terms import fixed as fixed_mod
+from .terms.formulation import Formulation, fit_axes
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
 
-METHODS = ("default", "penalty", "sqp", "hybrid")
-FORMULATIONS = ("auto",) + UNKNOWNS
 FOLD_ADVICE = ("the convexity rows should have prevented this: please report it; remeshing along "
                "principal directions (input.remesh) gives a mesh a fold-free PQ mesh is near")
 NO_CONVEX_FOLD_ADVICE = ("run with convexity kept (drop --no-convex / convex=False): faces then stay convex "
@@ -43,22 +40,18 @@ GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half i
 
 def resolve_formulation(target: str, formulation: str) -> str:
     """The unknowns ``"auto"`` stands for: positions only for ``conical`` (3x smaller
-    factors, fewer iterations; see ``optimize.formulation``), auxiliary otherwise."""
+    factors, fewer iterations; see ``optimize.terms.formulation``), auxiliary otherwise."""
     if formulation != "auto":
         return formulation
     return "vertices" if target == "conical" else "auxiliary"
 
 
-def normalization(mesh: Mesh) -> tuple[np.ndarray, float]:
-    """Centre ``(3,)`` and scale (mean edge length) that map ``mesh`` to unit edges."""
-    return mesh.V.mean(axis=0), float(measures.edge_lengths(mesh).mean())
-
-
-def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
-                  reference: Mesh | None = None, fixed=None, glide_boundary: bool = False,
-                  fairness: float = 1e-3, closeness: float = 1e-2, tol: Tolerances = Tolerances(),
-                  max_iter: int = 200, callback=None, linear_solver: str = "auto",
-                  formulation: str = "auto", torsion_free_beams="auto", convex: bool = True,
+def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DEFAULTS.method,
+                  reference: Mesh | None = None, fixed=None, glide_boundary: bool = DEFAULTS.glide_boundary,
+                  fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness,
+                  tol: Tolerances = DEFAULTS.tol, max_iter: int = DEFAULTS.max_iter, callback=None,
+                  linear_solver: str = DEFAULTS.linear_solver, formulation: str = DEFAULTS.formulation,
+                  torsion_free_beams=DEFAULTS.torsion_free_beams, convex: bool = DEFAULTS.convex,
                   **options) -> OptimizeResult:
     """Move the vertices of ``mesh`` so that it becomes ``target``; never mutates ``mesh``.
 
@@ -67,14 +60,14 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         around every interior valence-4 vertex tangent to one cone) |
         ``"circular"`` (PQ, and every quad has a circumcircle).
     method : ``"default"`` (regularized Gauss-Newton) | ``"penalty"`` | ``"sqp"`` |
-        ``"hybrid"`` (the paper's methods, ``optimize.paper``).
+        ``"hybrid"`` (the paper's methods, ``optimize.solvers.paper``).
     reference : Mesh or None.  Surface the vertices stay close to (the input
         when None); triangulated inside.
     fixed : None | "none" | "boundary" | "corners" | (k,) int vertex indices that do not move.
     glide_boundary : keep free boundary vertices on the reference's boundary curve
         (corner vertices, with one face, are then fixed); boundary edges at
         gliding vertices keep at least ``GLIDE_EDGE_FLOOR`` of their start
-        length (a one-sided row, :mod:`optimize.constraints.edgefloor`), so a
+        length (a one-sided row, :mod:`optimize.terms.edgefloor`), so a
         vertex cannot slide onto its neighbour or into a corner.
     fairness, closeness : weights of the scale-free fairness and tangent-plane
         closeness energies relative to the constraints (halved every iteration; the
@@ -83,7 +76,7 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
     tol : Tolerances; the run converges when every defect of the target is within it.
     max_iter : iteration budget.
     callback : ``callback(entry: dict)`` after each iteration.
-    linear_solver : one of ``optimize.linalg.BACKENDS`` (default method only);
+    linear_solver : one of ``optimize.options.LINEAR_SOLVERS`` (default method only);
         ``"auto"`` is MKL PARDISO where installed, else SciPy's SuperLU.
     formulation : ``"auxiliary"`` (quadratic rows on positions plus unit normals,
         cone axes, circle centres), ``"vertices"`` (positions only) or ``"auto"``
@@ -100,38 +93,43 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
         Where no fold-free mesh is near, the run ends ``stalled`` / ``max_iter`` and
         ``defects["convexity"]`` names the faces held at their convexity floor.
     options : extras of the paper's methods (``mu``, ``kkt_tol``, ...), passed on
-        to ``optimize.paper.run_paper_method``; none for the default method.
+        to ``optimize.solvers.paper.run_paper_method``; none for the default method.
 
     Returns :class:`OptimizeResult` (``success`` only when every tolerance is met).
     Raises :class:`ConfigError` for unknown target, method, fixed or solver values.
+    The keywords are those of :class:`optimize.options.OptimizeOptions` (their defaults
+    are its defaults); :func:`run` takes such an object.
     """
-    if method not in METHODS:
-        raise ConfigError(f"method: {method!r} is not known, expected one of {METHODS}")
-    if method != "default" and (formulation != "auto" or linear_solver != "auto"):
-        raise ConfigError(f"formulation / linear_solver ({formulation!r}, {linear_solver!r}) are settings "
-                          f"of the default method, not of {method!r}; leave them 'auto'")
-    if method != "default":
-        return _paper(mesh, target, method=method, reference=reference, fixed=fixed,
-                      glide_boundary=glide_boundary, fairness=fairness, closeness=closeness,
-                      tol=tol, max_iter=max_iter, callback=callback, **options)
-    if options:
-        raise ConfigError(f"options {sorted(options)} are only for the paper's methods, not {method!r}")
-    if target == "strip":
-        raise ConfigError("target: 'strip' is solved by the paper's methods only; use "
-                          "method='penalty', 'sqp' or 'hybrid'")
-    if target not in TARGETS:
-        raise ConfigError(f"target: {target!r} is not known, expected one of {TARGETS}")
-    if formulation not in FORMULATIONS:
-        raise ConfigError(f"formulation: {formulation!r} is not known, expected one of {FORMULATIONS}")
-    if linear_solver not in BACKENDS:
-        raise ConfigError(f"linear_solver: {linear_solver!r} is not known, expected one of {BACKENDS}")
-    for key, val in (("fairness", fairness), ("closeness", closeness)):
-        if not (np.isfinite(val) and val >= 0):
-            raise ConfigError(f"{key}: weight {val!r}, expected a finite number >= 0")
-    if int(max_iter) < 0:
-        raise ConfigError(f"max_iter: {max_iter!r}, expected a non-negative integer")
+    opts = OptimizeOptions(target=target, method=method, fairness=fairness, closeness=closeness,
+                           max_iter=max_iter, tol=tol, linear_solver=linear_solver, formulation=formulation,
+                           torsion_free_beams=torsion_free_beams, convex=convex, glide_boundary=glide_boundary,
+                           paper=options)
+    return run(mesh, opts, reference=reference, fixed=fixed, callback=callback)
+
+
+def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None = None, fixed=None,
+        callback=None) -> OptimizeResult:
+    """Optimize ``mesh`` with the settings ``opts`` (:class:`optimize.options.OptimizeOptions`).
+
+    reference, fixed, callback : as in :func:`optimize_mesh`.  The default method runs
+    here; the paper's methods in ``optimize.solvers.paper`` (imported only then).
+    """
+    if opts.method != "default":
+        return _paper(mesh, opts.target, method=opts.method, reference=reference, fixed=fixed,
+                      glide_boundary=opts.glide_boundary, fairness=opts.fairness, closeness=opts.closeness,
+                      tol=opts.tol, max_iter=opts.max_iter, callback=callback, **opts.paper)
+    target, tol, formulation, linear_solver = opts.target, opts.tol, opts.formulation, opts.linear_solver
+    fairness, closeness, max_iter = opts.fairness, opts.closeness, opts.max_iter
+    glide_boundary, torsion_free_beams, convex = opts.glide_boundary, opts.torsion_free_beams, opts.convex
+    method = opts.method
+    if linear_solver == "pardiso":
+        from .linalg import pardiso
+
+        if not pardiso.available():
+            raise ConfigError(f"linear_solver: 'pardiso' needs Intel MKL, which did not load "
+                              f"({pardiso.load_error()}); install the 'mkl' package or use 'auto' / 'superlu'")
     t0 = time.perf_counter()
-    centre, h = normalization(mesh)
+    centre, h = measures.normalization(mesh)
     norm = mesh.with_vertices((mesh.V - centre) / h)
     ref_mesh = reference if reference is not None else mesh
     ref_norm = ref_mesh.with_vertices((ref_mesh.V - centre) / h) if reference is not None else norm
@@ -146,11 +144,9 @@ def optimize_mesh(mesh: Mesh, target: str = "pq", *, method: str = "default",
             E = mesh.topology.edges
             at = mesh.topology.is_boundary_edge & np.isin(E, bnd).any(1)  # a gliding vertex cannot slide onto its neighbour
             floor = GLIDE_EDGE_FLOOR * np.linalg.norm(norm.V[E[at, 0]] - norm.V[E[at, 1]], axis=1)
-            glide = Glide(bnd, glide_mod.BoundaryCurve(ref_norm), E[at], floor)
+            glide = Glide(bnd, BoundaryCurve(ref_norm), E[at], floor)
     unknowns = resolve_formulation(target, formulation)
     t = mesh.topology
-    if torsion_free_beams not in ("auto", True, False):
-        raise ConfigError(f"torsion_free_beams: {torsion_free_beams!r}, expected 'auto', true or false")
     beams = (target == "conical" and unknowns == "vertices"
              and (bool(t.interior_irregular.size) if torsion_free_beams == "auto"
                   else bool(torsion_free_beams)))
@@ -275,10 +271,10 @@ def _node_axes(form: Formulation, x: np.ndarray, normals: np.ndarray) -> tuple[n
 
 
 def _paper(mesh, target, **kwargs) -> OptimizeResult:
-    """Dispatch to ``optimize.paper.run_paper_method`` (teammate H3), imported lazily."""
+    """Dispatch to ``optimize.solvers.paper.run_paper_method`` (teammate H3), imported lazily."""
     try:
-        from . import paper
+        from .solvers import paper
     except ImportError as exc:
-        raise ConfigError(f"method: {kwargs['method']!r} needs optimize.paper (the paper's penalty "
+        raise ConfigError(f"method: {kwargs['method']!r} needs optimize.solvers.paper (the paper's penalty "
                           f"and SQP methods), which is not available: {exc}") from exc
     return paper.run_paper_method(mesh, target, **kwargs)

@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import measures
-from .mesh import Mesh
+from .errors import ConvergenceError
+from .mesh import Mesh, measures
 
 STATUSES = ("converged", "folded", "stalled", "max_iter", "diverged")
 
@@ -86,6 +86,19 @@ class OptimizeResult:
             raise ValueError(f"OptimizeResult: success=True with status {self.status!r}; "
                              "only a converged run is a success")
 
+    def raise_for_status(self) -> "OptimizeResult":
+        """Return ``self`` when the run succeeded; otherwise raise
+        :class:`optimize.errors.ConvergenceError` (exit code 3) naming the status and every
+        defect over its tolerance, for callers that want an exception rather than a status."""
+        if self.success:
+            return self
+        over = [f"{k} {v['max']:.3g} > {v['tolerance']:.3g}" for k, v in self.defects.items()
+                if isinstance(v, dict) and v.get("ok") is False and "max" in v and "tolerance" in v]
+        folded = self.defects.get("folded", {}).get("count", 0)
+        facts = ", ".join(over + ([f"{folded} folded face(s)"] if folded else [])) or "no defect over tolerance"
+        raise ConvergenceError(f"{self.mesh.name}: {self.method}/{self.target} ended {self.status} after "
+                               f"{self.nit} iteration(s) ({facts}): {self.message}")
+
     def report(self) -> dict:
         """A JSON-ready summary (no arrays): how the run ended, defects, timings, history."""
         return {
@@ -104,7 +117,7 @@ class OptimizeResult:
 def check_folds(result: OptimizeResult, V0: np.ndarray, advice: str = "") -> OptimizeResult:
     """The one fold check of every method: record ``defects["folded"]`` (faces convex at
     ``V0 (n, 3)``, the input positions, that are dented, flipped or collapsed in
-    ``result.mesh``: :func:`optimize.measures.folded_faces`) and turn a ``converged``
+    ``result.mesh``: :func:`optimize.mesh.measures.folded_faces`) and turn a ``converged``
     run with any of them into ``folded`` (not a success); ``advice`` ends the message.
     Returns ``result`` (updated in place; calling it twice changes nothing more)."""
     folded = np.nonzero(measures.folded_faces(result.mesh, result.mesh.V, V0))[0]
@@ -121,7 +134,7 @@ def record_shape(result: OptimizeResult, mesh0: Mesh, distance: np.ndarray, diag
     ``distance (n,)`` in the mesh's units, absolute and over the reference's bbox ``diagonal``;
     ``defects["fairness"]``: the roughness (``fairness.roughness``) of ``mesh0`` (the input)
     and of the result, and their ratio (above 1: the result is rougher)."""
-    from .fairness import roughness
+    from .terms.fairness import roughness
 
     d = np.asarray(distance, dtype=float)
     result.defects["distance"] = {"max": float(d.max(initial=0.0)), "mean": float(d.mean()) if d.size else 0.0,

@@ -8,6 +8,13 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
 
+HELD_TO = {"det": "planarity", "glide": "planarity", "short_edge": "planarity",
+           "node_cone": "conical", "beam": "conical"}
+"""Derived defects of the solvers and the tolerance each is held to: ``det`` (the paper's strip
+determinants), ``glide`` (distance of gliding vertices to the boundary curve / mean edge),
+``short_edge`` (how far an edge at a gliding vertex fell below its floor / mean edge),
+``node_cone`` and ``beam`` (the node-axis rows of torsion-free beams, radians)."""
+
 
 @dataclass(frozen=True)
 class Tolerances:
@@ -33,6 +40,16 @@ class Tolerances:
     cad_linear_mm: float = 1e-3
     closeness: float = 5e-3
     beam_twist_mm: float = 1.0
+
+    def for_defect(self, name: str) -> float:
+        """The threshold a solver's stop test holds the defect ``name`` to: a field of its own,
+        or for the derived defects :data:`HELD_TO`'s field (``det``, ``glide``, ``short_edge``:
+        planarity; ``node_cone``, ``beam``: conical).  Raises ValueError for an unknown name."""
+        field_name = HELD_TO.get(name, name)
+        if field_name not in self.__dataclass_fields__:
+            raise ValueError(f"defect {name!r} has no tolerance, expected a field of Tolerances or one of "
+                             f"{sorted(HELD_TO)}")
+        return getattr(self, field_name)
 
     def replace(self, **changes: float) -> "Tolerances":
         """Return a copy with some thresholds changed."""

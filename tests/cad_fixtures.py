@@ -5,7 +5,7 @@ import functools
 
 import numpy as np
 
-from optimize import shapes
+from optimize.modelling import shapes
 
 
 def dome_mesh(n_around: int = 8, k: int = 4, radius_m: float = 6.0, rise_m: float = 2.0, sweep=2 * np.pi):

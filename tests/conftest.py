@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from optimize import Mesh, shapes
+from optimize import Mesh
+from optimize.modelling import shapes
 
 REPO = Path(__file__).resolve().parents[1]
 TUNNEL = REPO / "configs" / "meshes" / "tunnel.off"
@@ -55,7 +56,7 @@ def tunnel_path() -> Path:
 
 @pytest.fixture(scope="session")
 def small_tunnel() -> Mesh:
-    from optimize.designs import DESIGNS
+    from optimize.modelling.designs import DESIGNS
 
     m = DESIGNS["tunnel"](subdivisions=1).mesh
     return m.with_vertices(m.V / 1000.0, name="small_tunnel")
@@ -63,7 +64,7 @@ def small_tunnel() -> Mesh:
 
 @pytest.fixture(scope="session")
 def cylinder_path(tmp_path_factory) -> Path:
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     path = tmp_path_factory.mktemp("meshes") / "cylinder.obj"
     write_mesh(path, shapes.capped_cylinder())

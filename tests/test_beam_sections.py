@@ -11,7 +11,7 @@ from fabricate.cad.beams import beam_planes
 from fabricate.cad.sections import MEMBERS, section_rectangles
 from fabricate.export.meshes import group_triangles, manifold_of
 from fabricate.offset import offset_structure
-from optimize import shapes
+from optimize.modelling import shapes
 from optimize.errors import ConfigError
 
 SECTIONS = {"tee": dict(section="tee", web_mm=10, flange_mm=12, flange_width_mm=140),

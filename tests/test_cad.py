@@ -10,10 +10,10 @@ from fabricate.cad import PartSpec, build_parts
 from fabricate.cad.geometry import polygon_area_2d, volumes
 from fabricate.export.verify import Solid, intersections
 from fabricate.offset import offset_structure
-from optimize import shapes
+from optimize.modelling import shapes
 from fabricate.cad.errors import PartError
 from optimize.errors import ConfigError, MeshError
-from optimize.measures import face_areas
+from optimize.mesh.measures import face_areas
 
 
 @pytest.fixture(scope="module")

@@ -4,8 +4,8 @@ import json
 import pytest
 
 from fabricate.app.cli import main
-from optimize.io import read_mesh
-from optimize.measures import summary
+from optimize.mesh.io import read_mesh
+from optimize.mesh.measures import summary
 
 
 @pytest.mark.parametrize("which", ["tunnel_path", "cylinder_path"])

@@ -11,8 +11,8 @@ from fabricate.app.cli.units import UNIT_TO_MM, UNITS
 from fabricate.app.config import UNIT_TO_MM as CONFIG_UNITS
 from fabricate.offset import offset_structure
 from fabricate.offset.turnover import area_quadratic, focal_limits, turned_faces
-from optimize import shapes
-from optimize.io import read_mesh, write_mesh
+from optimize.modelling import shapes
+from optimize.mesh.io import read_mesh, write_mesh
 from optimize.mesh import Mesh
 
 RADIUS_M, RISE_M = 8.0, 3.0
@@ -171,7 +171,7 @@ def test_remesh_notes_count_the_faces_written(tmp_path, capsys):
     """The seamless branch collapses boundary slivers after tracing: the note counts what is written."""
     import re
 
-    from optimize import surfaces
+    from optimize.remesh import surfaces
 
     f = (lambda x, y: 0.1 * (x ** 3 - 3 * x * y * y),
          lambda x, y: 0.1 * np.stack([3 * x * x - 3 * y * y, -6 * x * y], 1),

@@ -1,10 +1,10 @@
-"""optimize.components: connected components in NumPy, checked against SciPy's csgraph."""
+"""optimize.mesh.components: connected components in NumPy, checked against SciPy's csgraph."""
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from optimize.components import component_labels
+from optimize.mesh.components import component_labels
 
 
 @pytest.mark.parametrize("n,e,seed", [(1, 0, 0), (50, 0, 1), (1000, 600, 2), (5000, 4990, 3), (3000, 9000, 4)])
@@ -21,7 +21,7 @@ def test_a_long_path_backwards_is_one_component():
 
 
 def test_two_meshes_side_by_side(grid3x3, quad):
-    from optimize.strips import join_meshes
+    from optimize.modelling.strips import join_meshes
 
     t = join_meshes([grid3x3, quad]).topology
     assert t.n_components == 2 and np.bincount(t.component).tolist() == [16, 4]

@@ -7,9 +7,9 @@ import pytest
 import yaml
 
 from fabricate.app.config import RunConfig, TolerancesSection, load_config, parse_config
-from optimize import shapes
+from optimize.modelling import shapes
 from optimize.errors import ConfigError
-from optimize.io import write_mesh
+from optimize.mesh.io import write_mesh
 from optimize.tolerances import Tolerances
 
 REPO = Path(__file__).resolve().parents[1]

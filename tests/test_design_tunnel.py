@@ -1,11 +1,12 @@
-"""The built-in design ``tunnel`` (optimize/design_tunnel.py) and the mesh shipped from it."""
+"""The built-in design ``tunnel`` (optimize/modelling/design_tunnel.py) and the mesh shipped from it."""
 import numpy as np
 import pytest
 
-from optimize import ConfigError, measures
-from optimize.design_tunnel import control_mesh, flatten
-from optimize.designs import DESIGNS
-from optimize.io import read_mesh
+from optimize import ConfigError
+from optimize.mesh import measures
+from optimize.modelling.design_tunnel import control_mesh, flatten
+from optimize.modelling.designs import DESIGNS
+from optimize.mesh.io import read_mesh
 
 from conftest import TUNNEL
 
@@ -57,7 +58,7 @@ def test_junction_kites_are_circular_in_the_control_mesh():
 
 
 def test_flatten_moves_little_and_reaches_what_is_asked(tunnel):
-    from optimize.subdivision import catmull_clark
+    from optimize.modelling.subdivision import catmull_clark
 
     coarse = control_mesh(width=4000.0, height=3200.0, lengths=(10000.0, 8000.0, 8000.0), bend_deg=20.0,
                           taper=1.0, rise=0.0, rings=(4, 3, 3))

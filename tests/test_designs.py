@@ -8,12 +8,13 @@ import numpy as np
 import pytest
 
 from fabricate.app.cli import main
-from optimize import ConfigError, measures
-from optimize.designs import DESIGNS, describe, parse_params
-from optimize.hierarchy import TARGETS, subdivide_and_perturb
-from optimize.strip_analysis import analyze_strip
-from optimize.strips import strip_layouts
-from optimize.subdivision import SCHEMES, subdivide
+from optimize import ConfigError
+from optimize.mesh import measures
+from optimize.modelling.designs import DESIGNS, describe, parse_params
+from optimize.modelling.hierarchy import TARGETS, subdivide_and_perturb
+from optimize.modelling.strip_analysis import analyze_strip
+from optimize.modelling.strips import strip_layouts
+from optimize.modelling.subdivision import SCHEMES, subdivide
 
 
 @pytest.mark.parametrize("name", sorted(DESIGNS))
@@ -172,7 +173,7 @@ def test_cli_lists_and_writes(tmp_path, capsys):
     assert all(name in out for name in DESIGNS) and "mm" in out
     path = tmp_path / "dome.obj"
     assert main(["shapes", "dome", "-o", str(path), "--param", "meridians=12"]) == 0
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     back = read_mesh(path)
     ref = DESIGNS["dome"](meridians=12).mesh

@@ -8,7 +8,7 @@ from fabricate.export import write_3dm, write_bom, write_ifc
 from fabricate.export.nc1 import write_nc1
 from fabricate.export.bom import read_bom
 from optimize.errors import MeshError
-from optimize.io import read_mesh
+from optimize.mesh.io import read_mesh
 
 import ifcopenshell  # noqa: E402 - declared dependencies: a missing one fails, never skips
 import rhino3dm  # noqa: E402
@@ -176,7 +176,7 @@ def test_a_3dm_quad_mesh_runs_through_fabricate_run_to_cut_files(tmp_path):
     from fabricate.app.cli import main
     from fabricate.export.ifc import read_ifc
     from fabricate.export.rhino import read_3dm_parts
-    from optimize import shapes
+    from optimize.modelling import shapes
 
     m = shapes.perturbed(shapes.revolution(shapes.dome_profile(6.0, 2.0, 3), 8), 0.02, seed=5)
     _write_rhino_mesh(tmp_path / "roof.3dm", [("canopy", 1, m.V, m.F), ("other", 0, m.V[:3], np.array([[0, 1, 2]]))])

@@ -66,8 +66,8 @@ def test_a_bug_is_an_internal_error_with_its_traceback_in_a_log(monkeypatch, cap
 
 
 def test_broken_pipe_is_silent(tmp_path):
-    from optimize import shapes
-    from optimize.io import write_mesh
+    from optimize.modelling import shapes
+    from optimize.mesh.io import write_mesh
 
     write_mesh(tmp_path / "big.obj", shapes.grid(60, 60))
     proc = subprocess.Popen([sys.executable, "-m", "fabricate", "measure", str(tmp_path / "big.obj")],

@@ -10,7 +10,7 @@ from fabricate.cad.geometry import polygon_area_2d, volumes
 from fabricate.export.flatdata import check_flat, read_flat, rebuild, write_flat
 from fabricate.export import write_bom
 from fabricate.offset import offset_structure
-from optimize import shapes
+from optimize.modelling import shapes
 
 
 def _twisted():

@@ -3,7 +3,9 @@ an honest diagnosis where no fold-free PQ mesh is near, unmeetable fixed sets re
 import numpy as np
 import pytest
 
-from optimize import measures, optimize_mesh, shapes
+from optimize import optimize_mesh
+from optimize.mesh import measures
+from optimize.modelling import shapes
 
 
 def hypar(n=10, noise=0.0, seed=0):
@@ -68,8 +70,8 @@ def test_convexity_holds_after_every_accepted_iteration(target, formulation):
 
 def test_convexity_rows_gradient_matches_finite_differences():
     from optimize import Mesh
-    from optimize.constraints import convexity
-    from optimize.variables import Layout
+    from optimize.terms import convexity
+    from optimize.terms.variables import Layout
 
     pent = Mesh([[0, 0, 0], [1, 0, 0.1], [1.5, 1, 0], [0.5, 1.6, 0.2], [-0.3, 1, 0]], [[0, 1, 2, 3, 4]])
     for mesh in (pent, hypar(3, noise=0.2)):
@@ -106,7 +108,7 @@ def test_unmeetable_fixed_set_is_refused_before_iterating():
 
 def test_cli_optimize_prints_distance_fairness_and_folds(tmp_path, capsys):
     from fabricate.app.cli import main
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     src = tmp_path / "in.obj"
     write_mesh(src, conjugate_grid())
@@ -121,7 +123,7 @@ def test_cli_optimize_prints_distance_fairness_and_folds(tmp_path, capsys):
 
 
 def test_near_pq_input_keeps_its_fairness_and_barely_moves(monkeypatch):
-    from optimize import guided
+    from optimize.solvers import guided
 
     base = shapes.revolution(shapes.dome_profile(k=9), 12)  # PQ by construction
     mesh = shapes.perturbed(base, 2e-4, seed=4)  # planar to about 1e-3: nearly there
@@ -137,7 +139,7 @@ def test_near_pq_input_keeps_its_fairness_and_barely_moves(monkeypatch):
 
 
 def test_net_defect_tells_conjugate_asymptotic_and_principal_nets_apart():
-    from optimize.conjugacy import net_defect
+    from optimize.remesh.conjugacy import net_defect
 
     translational = shapes.grid(9, 9, size=(8, 8), height=lambda x, y: 0.5 * np.sin(0.6 * x) + 0.04 * y ** 2)
     d = net_defect(translational)  # z = f(x) + g(y): its grid lines are a conjugate net
@@ -152,7 +154,7 @@ def test_net_defect_tells_conjugate_asymptotic_and_principal_nets_apart():
 
 
 def test_remesh_route_finds_a_fold_free_pq_mesh_where_the_input_lines_cannot():
-    from optimize.routes import optimize_routes
+    from optimize.remesh.routes import optimize_routes
 
     mesh = hypar(9)
     chosen, routes = optimize_routes(mesh, "pq", remesh="auto")
@@ -173,7 +175,7 @@ def test_remesh_route_finds_a_fold_free_pq_mesh_where_the_input_lines_cannot():
 def test_config_input_remesh_is_for_mesh_inputs(tmp_path):
     from fabricate.app.config import load_config
     from optimize.errors import ConfigError
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     write_mesh(tmp_path / "h.obj", hypar())
     (tmp_path / "a.yaml").write_text("input: {mesh: h.obj, remesh: auto}\n")
@@ -191,7 +193,7 @@ def test_fabricate_run_with_input_remesh_reports_both_routes(tmp_path):
 
     from fabricate.app.config import load_config
     from fabricate.app.pipeline import run_pipeline
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     mesh = hypar(8)
     write_mesh(tmp_path / "h.obj", mesh.with_vertices(mesh.V * 1000.0))  # metres of design, in mm
@@ -208,7 +210,7 @@ def test_fabricate_run_with_input_remesh_reports_both_routes(tmp_path):
 
 
 def test_fold_check_of_the_solver_agrees_with_measures_folded_faces():
-    from optimize.constraints.convexity import FoldCheck
+    from optimize.terms.convexity import FoldCheck
 
     mesh = hypar(6, noise=0.05)
     check = FoldCheck(mesh, mesh.V)

@@ -41,7 +41,7 @@ from pydantic import BaseModel
 
 from fabricate.app.batch import parse_sets
 from fabricate.app.config import RunConfig, load_config
-from optimize.designs import DESIGNS
+from optimize.modelling.designs import DESIGNS
 from optimize.errors import ConfigError
 
 REPO = Path(__file__).resolve().parents[1]

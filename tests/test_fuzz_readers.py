@@ -54,7 +54,7 @@ def _worker(folder: str) -> None:  # pragma: no cover - runs in the subprocess
 
     sys.path.insert(0, str(REPO))
     from optimize.errors import MeshError
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     with open("/proc/self/statm") as fh:
         size = int(fh.read().split()[0]) * resource.getpagesize()
@@ -173,8 +173,8 @@ def _seeds() -> dict[str, tuple[str, bytes]]:
     """name -> (extension, bytes) of small real files in every format."""
     import tempfile
 
-    from optimize import shapes
-    from optimize.io import write_mesh
+    from optimize.modelling import shapes
+    from optimize.mesh.io import write_mesh
 
     meshes = {"grid": shapes.grid(4, 3, height=lambda x, y: 0.1 * x * y, name="grid"),
               "dome": shapes.perturbed(shapes.revolution(shapes.dome_profile(k=3), 5), 0.05, seed=3)}
@@ -186,7 +186,7 @@ def _seeds() -> dict[str, tuple[str, bytes]]:
                 path = Path(tmp) / f"{name}.{ext}"
                 write_mesh(path, mesh, **kw)
                 out[f"{name}-{label}"] = (ext, path.read_bytes())
-            from optimize.io.ply import format_ply
+            from optimize.mesh.io.ply import format_ply
 
             out[f"{name}-ply-be"] = ("ply", format_ply(mesh, "binary_big_endian"))
             tris = mesh.V[mesh.triangulate()]
@@ -408,7 +408,7 @@ def test_generated_soups_end_in_a_mesh_or_a_mesh_error(worker, case):
 
 # -- valid files in every cosmetic variant are read, and read the same --------------------------------
 def _grid():
-    from optimize import shapes
+    from optimize.modelling import shapes
 
     return shapes.grid(4, 3, height=lambda x, y: 0.1 * x * y, name="grid")
 
@@ -483,7 +483,7 @@ def cosmetic(draw):
 @FUZZ
 @given(case=cosmetic())
 def test_valid_files_in_any_cosmetic_variant_read_the_same(tmp_path_factory, case):
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     labels, ext, data = case
     path = tmp_path_factory.mktemp("valid") / f"grid.{ext}"

@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 from optimize import ConfigError, Tolerances
-from optimize.designs import DESIGNS
-from optimize.measures import corner_angles
-from optimize.hierarchy import refine_strip, subdivide_and_perturb
-from optimize.strip_analysis import develop, gauss_image
-from optimize.strips import strip_layouts
-from optimize.subdivision import catmull_clark
+from optimize.modelling.designs import DESIGNS
+from optimize.mesh.measures import corner_angles
+from optimize.modelling.hierarchy import refine_strip, subdivide_and_perturb
+from optimize.modelling.strip_analysis import develop, gauss_image
+from optimize.modelling.strips import strip_layouts
+from optimize.modelling.subdivision import catmull_clark
 
 TOL = Tolerances()
 

@@ -4,9 +4,10 @@ import struct
 import numpy as np
 import pytest
 
-from optimize import ExportError, Mesh, MeshError, shapes
-from optimize.io import read_mesh, write_mesh
-from optimize.io.ply import format_ply
+from optimize import ExportError, Mesh, MeshError
+from optimize.modelling import shapes
+from optimize.mesh.io import read_mesh, write_mesh
+from optimize.mesh.io.ply import format_ply
 
 #: (file extension, write_mesh keywords or a PLY encoding written with format_ply)
 FORMATS = [("obj", {}), ("off", {}), ("ply", {}), ("ply", {"binary": False}),
@@ -454,7 +455,7 @@ def _stl_ascii(path, tris, fmt="%.9g"):
 
 @pytest.mark.parametrize("kind", ["binary", "ascii"])
 def test_stl_triangle_soup_is_welded_into_the_surface(tmp_path, kind):
-    from optimize.surfaces import holed_roof
+    from optimize.remesh.surfaces import holed_roof
 
     roof = holed_roof()
     tris = roof.V[roof.F]

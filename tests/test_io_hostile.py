@@ -16,10 +16,11 @@ import sys
 import numpy as np
 import pytest
 
-from optimize import Mesh, shapes
+from optimize import Mesh
+from optimize.modelling import shapes
 from optimize.errors import MeshError
-from optimize.io import read_mesh, write_mesh
-from optimize.measures import summary
+from optimize.mesh.io import read_mesh, write_mesh
+from optimize.mesh.measures import summary
 
 from test_fuzz_readers import REPO, Worker
 

@@ -4,9 +4,10 @@ import json
 import numpy as np
 import pytest
 
-from optimize import Mesh, shapes
-from optimize import measures as M
-from optimize.io import read_mesh
+from optimize import Mesh
+from optimize.modelling import shapes
+from optimize.mesh import measures as M
+from optimize.mesh.io import read_mesh
 
 
 def _planar_star(directions_deg):
@@ -132,7 +133,7 @@ def test_measures_do_not_change_the_mesh(perturbed_revolution):
     assert np.array_equal(perturbed_revolution.V, V0)
 
 
-# -- the shipped tunnel (figures: optimize/design_tunnel.py) and the capped cylinder ------------
+# -- the shipped tunnel (figures: optimize/modelling/design_tunnel.py) and the capped cylinder ------------
 def test_tunnel_measures(tunnel_path):
     m = read_mesh(tunnel_path)
     plan = M.planarity(m)

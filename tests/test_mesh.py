@@ -2,8 +2,9 @@
 import numpy as np
 import pytest
 
-from optimize import Mesh, MeshError, shapes
-from optimize.measures import face_areas
+from optimize import Mesh, MeshError
+from optimize.modelling import shapes
+from optimize.mesh.measures import face_areas
 
 SQUARE = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
 
@@ -121,7 +122,7 @@ def test_ragged_faces_are_padded():
 
 
 def test_triangulate_covers_every_face(cylinder_path):
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     m = read_mesh(cylinder_path)
     T = m.triangulate()

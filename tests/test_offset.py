@@ -11,11 +11,12 @@ import pytest
 
 from fabricate.offset import (beam_planarity, fit_axes, face_planes, offset_structure,
                               spherical_image_defect)
-from optimize import Mesh, Tolerances, shapes
+from optimize import Mesh, Tolerances
+from optimize.modelling import shapes
 from optimize.api import optimize_mesh
 from optimize.errors import ConfigError, MeshError
-from optimize.io import read_mesh
-from optimize.measures import conical_defect, face_normals, planarity, quad_planarity
+from optimize.mesh.io import read_mesh
+from optimize.mesh.measures import conical_defect, face_normals, planarity, quad_planarity
 
 DIST = (0.0, 20.0, 120.0)
 REL = 1e-9

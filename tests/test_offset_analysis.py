@@ -11,10 +11,11 @@ import pytest
 from fabricate.offset.axes import AXIS_NEAR, AXIS_RCOND, NEAR_CONICAL
 from fabricate.offset import (axis_line_intersections, edge_families, focal_meshes, offset_structure,
                               quad_circular_defect, require_pq)
-from optimize import Tolerances, shapes
+from optimize import Tolerances
+from optimize.modelling import shapes
 from optimize.api import optimize_mesh
 from optimize.errors import MeshError
-from optimize.measures import conical_defect, planarity, quad_planarity
+from optimize.mesh.measures import conical_defect, planarity, quad_planarity
 
 DIST = (0.0, 20.0, 120.0)
 
@@ -219,7 +220,7 @@ def test_axis_line_intersections_by_hand():
 
 
 def test_edge_families_fail_on_an_odd_cycle(cylinder_path):
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     grid = shapes.grid(4, 5)
     fam = edge_families(grid)

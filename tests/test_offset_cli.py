@@ -8,9 +8,9 @@ import pytest
 
 from fabricate.app.cli import main
 from fabricate.offset import offset_structure
-from optimize import shapes
-from optimize.io import read_mesh, write_mesh
-from optimize.measures import planarity
+from optimize.modelling import shapes
+from optimize.mesh.io import read_mesh, write_mesh
+from optimize.mesh.measures import planarity
 
 
 @pytest.fixture

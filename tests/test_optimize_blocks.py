@@ -2,10 +2,11 @@
 import numpy as np
 import pytest
 
-from optimize import shapes
-from optimize.closeness import Reference, closeness_terms, closest_on_triangles
-from optimize.fairness import fairness_energy, fairness_matrix
-from optimize.measures import edge_lengths, fairness
+from optimize.modelling import shapes
+from optimize.terms.closeness import closeness_terms
+from optimize.proximity import Reference, closest_on_triangles
+from optimize.terms.fairness import fairness_energy, fairness_matrix
+from optimize.mesh.measures import edge_lengths, fairness
 from optimize.result import OptimizeResult
 
 

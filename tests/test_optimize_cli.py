@@ -5,8 +5,9 @@ import json
 import numpy as np
 
 from fabricate.app.cli import main
-from optimize import measures, shapes
-from optimize.io import read_mesh, write_mesh
+from optimize.mesh import measures
+from optimize.modelling import shapes
+from optimize.mesh.io import read_mesh, write_mesh
 
 
 def _noisy(tmp_path):

@@ -3,12 +3,13 @@ that satisfy it by construction, layout bookkeeping."""
 import numpy as np
 import pytest
 
-from optimize import shapes
-from optimize.constraints import anglebalance, anglesum, circular, conical, diagonals, glide, planarity, unit
+from optimize import proximity
+from optimize.modelling import shapes
+from optimize.terms import anglebalance, anglesum, circular, conical, diagonals, glide, planarity, unit
 from optimize.errors import ConfigError
-from optimize.constraints import fixed as fixed_mod
-from optimize.formulation import Formulation
-from optimize.variables import Layout
+from optimize.terms import fixed as fixed_mod
+from optimize.terms.formulation import Formulation
+from optimize.terms.variables import Layout
 
 
 def _revolution():
@@ -61,7 +62,7 @@ def test_vertex_formulation_jacobian_with_ngons():
 
 
 def test_node_axis_rows_jacobian_and_zero_on_a_surface_of_revolution():
-    from optimize.constraints import nodeaxes
+    from optimize.terms import nodeaxes
 
     mesh = shapes.perturbed(_revolution(), 0.1, seed=4)
     form = Formulation(mesh, "conical", "vertices", beams=True)
@@ -82,7 +83,7 @@ def test_node_axis_rows_jacobian_and_zero_on_a_surface_of_revolution():
 
 
 def test_diagonal_distance_is_the_planarity_measure_times_mean_diagonal():
-    from optimize import measures
+    from optimize.mesh import measures
 
     mesh = shapes.perturbed(_revolution(), 0.1, seed=9)
     form = Formulation(mesh, "pq", "vertices")
@@ -134,7 +135,7 @@ def test_unit_jacobian(name):
 def test_glide_jacobian_and_footpoints():
     mesh = shapes.perturbed(shapes.grid(5, 4, height=lambda x, y: x * y), 0.05, seed=6)
     form = Formulation(mesh, "pq")
-    curve = glide.BoundaryCurve(mesh)
+    curve = proximity.BoundaryCurve(mesh)
     bnd = np.nonzero(mesh.topology.is_boundary_vertex)[0]
     x = form.start(mesh.V)
     r, _ = glide.terms(x, form.layout, bnd, curve)
@@ -146,14 +147,14 @@ def test_glide_jacobian_and_footpoints():
     # exact closest points against brute force over all segments
     P = mesh.V[bnd] + 0.3 * rng.standard_normal((len(bnd), 3))
     Y, _ = curve.closest(P)
-    best = np.min([np.linalg.norm(glide.closest_on_segments(P, np.broadcast_to(a, P.shape),
+    best = np.min([np.linalg.norm(proximity.closest_on_segments(P, np.broadcast_to(a, P.shape),
                                                             np.broadcast_to(b, P.shape)) - P, axis=1)
                    for a, b in zip(curve.A, curve.B)], axis=0)
     np.testing.assert_allclose(np.linalg.norm(Y - P, axis=1), best, atol=1e-14)
 
 
 def test_edge_floor_rows_act_only_on_short_edges():
-    from optimize.constraints import edgefloor
+    from optimize.terms import edgefloor
 
     mesh = shapes.grid(4, 3)
     form = Formulation(mesh, "pq")
@@ -174,8 +175,8 @@ def test_gliding_boundary_vertex_does_not_slide_into_a_corner():
     """The atrium roof's remeshed quads, conical with the boundary gliding: without the edge floor a
     vertex next to a corner slid into it (an edge of 0.0 mm, a panel the CAD stage refused)."""
     from optimize.api import GLIDE_EDGE_FLOOR, optimize_mesh
-    from optimize.remesh import remesh
-    from optimize.surfaces import holed_roof
+    from optimize.remesh.quads import remesh
+    from optimize.remesh.surfaces import holed_roof
 
     surf = holed_roof()
     quads, rep = remesh(surf, 0.3, with_report=True)
@@ -247,7 +248,7 @@ def test_fixed_resolution():
 
 
 def test_fairness_and_angle_parts_sum_to_the_whole():
-    from optimize.fairness import fairness_matrix, fairness_matrix_parts
+    from optimize.terms.fairness import fairness_matrix, fairness_matrix_parts
 
     mesh = shapes.perturbed(_revolution(), 0.1, seed=9)
     K1, K2 = fairness_matrix_parts(mesh)

@@ -3,9 +3,11 @@ motion and scale, fixed and gliding vertices, honest non-convergence, pure (inpu
 import numpy as np
 import pytest
 
-from optimize import ConfigError, Tolerances, measures, optimize_mesh, shapes
-from optimize.closeness import Reference
-from optimize.io import read_mesh
+from optimize import ConfigError, Tolerances, optimize_mesh
+from optimize.mesh import measures
+from optimize.modelling import shapes
+from optimize.proximity import Reference
+from optimize.mesh.io import read_mesh
 
 from conftest import TUNNEL
 
@@ -171,7 +173,7 @@ def test_boundary_glides_on_reference_boundary():
     mesh = shapes.perturbed(ref, 0.03, seed=15)
     res = optimize_mesh(mesh, "pq", reference=ref, glide_boundary=True)
     assert res.success, res.message
-    from optimize.constraints.glide import BoundaryCurve
+    from optimize.proximity import BoundaryCurve
 
     corners = np.array([0, 7, 64, 71])  # fixed when gliding: they cannot slide round a kink
     np.testing.assert_array_equal(res.mesh.V[corners], mesh.V[corners])
@@ -227,8 +229,9 @@ def test_history_records_every_defect_and_energy(noisy_dome):
     assert res.timings["total"] > 0 and res.timings["solve"] > 0
 
 
-def test_paper_methods_dispatch_lazily(monkeypatch):
-    import optimize.paper
+def test_paper_method_options_reach_the_paper_solver(monkeypatch):
+    # (that a default run does not import the paper's stack: tests/test_startup.py, in a subprocess)
+    import optimize.solvers.paper
 
     seen = {}
 
@@ -236,7 +239,7 @@ def test_paper_methods_dispatch_lazily(monkeypatch):
         seen.update(kwargs, target=target)
         return "from paper"
 
-    monkeypatch.setattr(optimize.paper, "run_paper_method", fake)
+    monkeypatch.setattr(optimize.solvers.paper, "run_paper_method", fake)
     mesh = shapes.grid(3, 3)
     assert optimize_mesh(mesh, "strip", method="sqp", kkt_tol=1e-9) == "from paper"
     assert seen["method"] == "sqp" and seen["target"] == "strip" and seen["kkt_tol"] == 1e-9

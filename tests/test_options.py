@@ -1,6 +1,6 @@
 """One source of defaults: the config sections are derived from the frozen option objects."""
 import dataclasses
-import sys
+import typing
 
 import pytest
 from pydantic import ValidationError
@@ -64,3 +64,20 @@ def test_the_command_line_reads_its_defaults_from_the_option_objects(monkeypatch
     assert run.out == batch.out == options.COMMAND.out_root and batch.workers == options.COMMAND.workers
     monkeypatch.setattr(options, "COMMAND", options.CommandOptions(out_root="elsewhere"))
     assert build_parser().parse_args(["run", "x.yaml"]).out == "elsewhere"  # read, not written again
+
+
+def test_the_optimize_section_and_command_take_the_optimizers_defaults():
+    """fabricate's optimize section and ``fabricate optimize`` read optimize.options (one place)."""
+    import optimize.options as opt
+    from fabricate.app.cli import build_parser
+    from fabricate.app.config import OptimizeSection
+
+    section = OptimizeSection()
+    for key in ("method", "formulation", "linear_solver", "torsion_free_beams", "fairness", "closeness",
+                "max_iter", "glide_boundary", "convex"):
+        assert getattr(section, key) == getattr(opt.DEFAULTS, key), key
+    for key in ("method", "formulation", "linear_solver"):
+        assert set(typing.get_args(OptimizeSection.model_fields[key].annotation)) == set(opt.CHOICES[key])
+    args = build_parser().parse_args(["optimize", "in.obj", "-o", "out.obj"])
+    assert (args.fairness, args.closeness, args.max_iter) == (opt.DEFAULTS.fairness, opt.DEFAULTS.closeness,
+                                                               opt.DEFAULTS.max_iter)

@@ -3,16 +3,16 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from optimize import shapes
+from optimize.modelling import shapes
 from optimize.mesh import Mesh
-from optimize.paper.angle_sum import angle_sum
-from optimize.paper.angles import corner_angle_terms
-from optimize.paper.balance import angle_balance
-from optimize.paper.circular import circular_angles
-from optimize.paper.det import det_combined_local, det_constraints
-from optimize.paper.hessian import constraint_curvature
-from optimize.paper.problem import Problem
-from optimize.paper.sqp import kkt_matrix, objective
+from optimize.solvers.paper.angle_sum import angle_sum
+from optimize.mesh.corners import corner_angle_gradients
+from optimize.solvers.paper.balance import angle_balance
+from optimize.solvers.paper.circular import circular_angles
+from optimize.solvers.paper.det import det_combined_local, det_constraints
+from optimize.solvers.paper.hessian import constraint_curvature
+from optimize.solvers.paper.problem import Problem
+from optimize.solvers.paper.sqp import kkt_matrix, objective
 
 RNG = np.random.default_rng(7)
 
@@ -55,8 +55,8 @@ def test_angle_sum_jacobian_on_ngons():
 
 def test_corner_angle_gradient_and_value():
     m = dome(noise=0.3)
-    phi, cols, vals = corner_angle_terms(m.topology, m.V)
-    from optimize.measures import corner_angles
+    phi, cols, vals = corner_angle_gradients(m.topology, m.V)
+    from optimize.mesh.measures import corner_angles
     assert np.allclose(phi, corner_angles(m), atol=1e-14)
     assert cols.shape == vals.shape == (len(phi), 9)
     # each angle is invariant under translating its three points together

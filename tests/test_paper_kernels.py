@@ -1,4 +1,4 @@
-"""The compiled kernels (optimize.paper.kernels) against the NumPy code they replace, and the
+"""The compiled kernels (optimize.solvers.paper.kernels) against the NumPy code they replace, and the
 methods with and without them.
 
 The kernel tests need numba and say so when it is missing; the method tests
@@ -11,16 +11,17 @@ import sys
 import numpy as np
 import pytest
 
-from optimize import measures
-from optimize.closeness import Reference, closest_on_triangles
-from optimize.paper import kernels, run_paper_method
-from optimize.paper.angles import angle_local, corner_vertices
-from optimize.paper.assembly import gram_band
-from optimize.paper.cache import problem_for
-from optimize.paper.det import det_local
-from optimize.paper.footpoints import Footpoints
-from optimize.paper.problem import Problem
-from optimize.paper.strip import trefoil_band
+from optimize.mesh import measures
+from optimize.proximity import Reference, closest_on_triangles
+from optimize import kernels
+from optimize.solvers.paper import run_paper_method
+from optimize.mesh.corners import angle_local, corner_vertices
+from optimize.solvers.paper.assembly import gram_band
+from optimize.solvers.paper.cache import problem_for
+from optimize.solvers.paper.det import det_local
+from optimize.proximity import Footpoints
+from optimize.solvers.paper.problem import Problem
+from optimize.modelling.designs import trefoil_band_mesh as trefoil_band
 
 RNG = np.random.default_rng(5)
 
@@ -194,8 +195,8 @@ def test_kept_problem_is_reused_only_for_the_same_input():
 
 
 def test_kkt_ldl_and_its_lu_fallback_solve_the_same_system(compiled):
-    from optimize.paper.assembly import kkt_band
-    from optimize.paper.sqp import kkt_matrix, objective
+    from optimize.solvers.paper.assembly import kkt_band
+    from optimize.solvers.paper.sqp import kkt_matrix, objective
 
     p = Problem(trefoil_band(120, 0.4), "strip", fixed=np.array([3, 50]), fairness=3e-3, closeness=2e-2)
     x = p.x0() + 0.05 * RNG.standard_normal(3 * p.mesh.n_vertices)
@@ -214,7 +215,7 @@ def test_kkt_ldl_and_its_lu_fallback_solve_the_same_system(compiled):
 
 @pytest.mark.parametrize("target, fixed", [("strip", None), ("strip", np.array([0, 7])), ("conical", "boundary")])
 def test_constraint_values_and_jacobian_equal_numpy(compiled, monkeypatch, target, fixed):
-    from optimize import shapes
+    from optimize.modelling import shapes
 
     m = trefoil_band(40, 0.4) if target == "strip" else shapes.perturbed(
         shapes.revolution(shapes.dome_profile(k=6), 10), 0.05, seed=1)

@@ -8,16 +8,17 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from optimize import measures, shapes
-from optimize.closeness import Reference
-from optimize.paper.assembly import gram_band, kkt_band
-from optimize.paper.banded import band_order
-from optimize.paper.footpoints import Footpoints
-from optimize.paper.linalg import solve
-from optimize.paper.penalty import Linearized
-from optimize.paper.problem import Problem
-from optimize.paper.sqp import KKTFactor, kkt_matrix, objective
-from optimize.paper.strip import trefoil_band
+from optimize.mesh import measures
+from optimize.modelling import shapes
+from optimize.proximity import Reference
+from optimize.solvers.paper.assembly import gram_band, kkt_band
+from optimize.linalg.banded import band_order
+from optimize.proximity import Footpoints
+from optimize.linalg.spd import solve
+from optimize.solvers.paper.penalty import Linearized
+from optimize.solvers.paper.problem import Problem
+from optimize.solvers.paper.sqp import KKTFactor, kkt_matrix, objective
+from optimize.modelling.designs import trefoil_band_mesh as trefoil_band
 
 RNG = np.random.default_rng(11)
 
@@ -64,7 +65,7 @@ def test_gram_band_equals_sparse_normal_matrix(fixed):
 
 @pytest.mark.parametrize("hessian", ["gauss-newton", "exact"])
 def test_kkt_band_solution_equals_sparse_lu(hessian):
-    from optimize.paper.hessian import constraint_curvature
+    from optimize.solvers.paper.hessian import constraint_curvature
 
     p = strip_problem(np.array([3, 50]), n_quads=120)  # bandwidth <= 2 sqrt(n) for the LU
     x = p.x0() + 0.05 * RNG.standard_normal(3 * p.mesh.n_vertices)

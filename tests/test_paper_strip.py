@@ -2,11 +2,13 @@
 import numpy as np
 import pytest
 
-from optimize import measures, shapes
-from optimize.errors import MeshError
-from optimize.paper import check_strip, run_paper_method
-from optimize.paper.det import det_local
-from optimize.paper.strip import strip_mesh, trefoil_band
+from optimize.mesh import measures
+from optimize.modelling import shapes
+from optimize.errors import ConfigError, MeshError
+from optimize.solvers.paper import check_strip, run_paper_method
+from optimize.solvers.paper.det import det_local
+from optimize.modelling.designs import trefoil_band_mesh as trefoil_band
+from optimize.modelling.strips import strip_mesh
 
 
 def rails(m=8):
@@ -17,10 +19,10 @@ def rails(m=8):
     return a, a * 1.3 + np.array([0, 0, 0.4]) + 0.2 * t[:, None] * np.array([0, 0, 1])
 
 
-@pytest.mark.parametrize("closed,faces,loops,orientable", [("open", 7, 1, True), ("closed", 8, 2, True),
-                                                           ("twisted", 8, 1, False)])
-def test_strip_kinds(closed, faces, loops, orientable):
-    m = strip_mesh(*rails(), closed=closed)
+@pytest.mark.parametrize("closed,twist,faces,loops,orientable", [(False, False, 7, 1, True), (True, False, 8, 2, True),
+                                                                 (True, True, 8, 1, False)])
+def test_strip_kinds(closed, twist, faces, loops, orientable):
+    m = strip_mesh(*rails(), closed=closed, twist=twist)
     check_strip(m)
     assert m.n_faces == faces
     assert len(m.topology.boundary_loops) == loops
@@ -34,7 +36,7 @@ def test_check_strip_rejects_other_meshes():
     from optimize.mesh import Mesh
     with pytest.raises(MeshError, match="quads only"):
         check_strip(Mesh(tri.V, tri.triangulate()))
-    with pytest.raises(MeshError, match="rails"):
+    with pytest.raises(ConfigError, match="shapes"):
         strip_mesh(np.zeros((3, 3)), np.zeros((4, 3)))
 
 

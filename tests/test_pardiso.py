@@ -13,7 +13,8 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from optimize import linalg, pardiso
+from optimize import linalg
+from optimize.linalg import pardiso
 
 X86 = platform.machine().lower() in ("x86_64", "amd64")
 

@@ -17,7 +17,7 @@ from fabricate.app.config import load_config
 from fabricate.app.pipeline import STAGES, run_pipeline
 from fabricate.app.progress import RecordingProgress
 from optimize.errors import ConfigError, ExportError, MeshError
-from optimize.io import read_mesh
+from optimize.mesh.io import read_mesh
 
 from _pipeline_fixtures import REPO, finished_run, tiny_config  # noqa: F401 - fixtures
 
@@ -216,8 +216,8 @@ def test_sigterm_during_a_run_leaves_no_folder(tmp_path):
 
 def test_input_mesh_is_not_changed_and_units_convert(tmp_path, monkeypatch):
     """A mesh file in metres comes out in mm; the stages never mutate what they are given."""
-    from optimize import shapes
-    from optimize.io import write_mesh
+    from optimize.modelling import shapes
+    from optimize.mesh.io import write_mesh
 
     mesh = shapes.revolution(shapes.dome_profile(6.0, 2.0, 4), 8)  # metres, exactly conical
     write_mesh(tmp_path / "dome_m.obj", mesh)
@@ -236,8 +236,9 @@ def test_folded_panels_write_no_cut_file_and_end_marked(tmp_path, capsys):
     The optimizer says "folded"; no panel or beam is built and no cut file written, but the mesh,
     the layers and the report are, marked as a missed tolerance (exit 3), with the faces named."""
     from fabricate.app.cli import main
-    from optimize import optimize_mesh, shapes
-    from optimize.io import write_mesh
+    from optimize import optimize_mesh
+    from optimize.modelling import shapes
+    from optimize.mesh.io import write_mesh
 
     mesh = shapes.perturbed(shapes.grid(8, 7, size=(7000.0, 6000.0),
                                         height=lambda x, y: 0.5e-3 * x * y), 50.0, seed=14)
@@ -264,8 +265,9 @@ def test_design_parameter_error_from_the_config(tmp_path):
 
 def test_surface_input_is_remeshed_into_quads(tmp_path):
     """A triangle surface (a saddle in metres) goes through remeshing, then the whole pipeline."""
-    from optimize import Mesh, shapes
-    from optimize.io import write_mesh
+    from optimize import Mesh
+    from optimize.modelling import shapes
+    from optimize.mesh.io import write_mesh
 
     g = shapes.grid(12, 12, size=(6.0, 6.0), height=lambda X, Y: 0.15 * ((X - 3) ** 2 - 0.5 * (Y - 3) ** 2))
     write_mesh(tmp_path / "saddle.obj", Mesh(g.V, g.triangulate(), name="saddle"))
@@ -284,7 +286,7 @@ def test_surface_input_is_remeshed_into_quads(tmp_path):
 def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
     """configs/atrium_roof.yaml: a triangle mesh with an opening -> principal quads -> conical with a
     gliding boundary -> panels and beams, STEP / STL / DXF / BOM, every enforced tolerance met."""
-    from optimize import surfaces
+    from optimize.remesh import surfaces
 
     shipped = read_mesh(REPO / "configs" / "surfaces" / "atrium_roof.obj")
     made = surfaces.holed_roof(scale=6000.0)  # the shipped file is what the docstring says it is
@@ -302,7 +304,7 @@ def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
     assert m["planarity"]["pass"] and m["conical"]["pass"] and m["folded"]["max"] == 0
     assert m["beam_planarity"]["pass"] and m["closeness"]["max"] < 0.005
     # closeness is measured to the user's triangle surface (the optimizer's reference), not to the quads
-    from optimize.closeness import Reference
+    from optimize.proximity import Reference
 
     dist = Reference(shipped).distance(mesh.V).max()
     assert dist == pytest.approx(m["closeness"]["max_mm"], rel=1e-3, abs=1e-3)
@@ -321,8 +323,9 @@ def test_a_tube_from_a_real_mesh_through_the_pipeline(tmp_path):
     circles and rulings, conical, offset and built into panels and beams (exit 0)."""
     import numpy as np
 
-    from optimize import Mesh, shapes
-    from optimize.io import write_mesh
+    from optimize import Mesh
+    from optimize.modelling import shapes
+    from optimize.mesh.io import write_mesh
 
     m = shapes.capped_cylinder()
     quads = m.F[m.face_sizes == 4][:, :4]

@@ -5,9 +5,10 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from optimize import ConfigError, Mesh, MeshError, surfaces
-from optimize.principal import principal_directions, principal_frames
-from optimize.principal_quadric import quadric_frames
+from optimize import ConfigError, Mesh, MeshError
+from optimize.remesh import surfaces
+from optimize.remesh.principal import principal_directions, principal_frames
+from optimize.remesh.principal_quadric import quadric_frames
 
 
 def _rotation(seed: int) -> np.ndarray:

@@ -31,3 +31,13 @@ def test_nothing_in_the_project_reads_beside_the_repository():
                 text = path.read_text(errors="replace")
                 hits += [f"{path.relative_to(REPO)}: {s}" for s in outside if s in text]
     assert not hits, hits
+
+
+def test_the_readme_layout_shows_every_optimize_package():
+    text = (REPO / "README.md").read_text()
+    layout = text[text.index("## Layout"):]
+    layout = layout[:layout.index("\n## ", 1)]
+    packages = sorted(p.parent.name for p in (REPO / "optimize").glob("*/__init__.py"))
+    assert packages and all(re.search(rf"^  {name}/ ", layout, re.M) for name in packages), packages
+    for name in re.findall(r"^  (\w+)/ ", layout[layout.index("optimize/"):layout.index("fabricate/")], re.M):
+        assert (REPO / "optimize" / name / "__init__.py").is_file(), name  # and no line for a package gone

@@ -125,7 +125,7 @@ def test_the_built_in_design_is_built_once_per_run(tmp_path, monkeypatch):
     """Validating the config builds the design; the input stage uses that one, not a second."""
     import functools
 
-    from optimize.designs import DESIGNS
+    from optimize.modelling.designs import DESIGNS
 
     calls = []
     original = DESIGNS["dome"]
@@ -142,7 +142,7 @@ def test_the_built_in_design_is_built_once_per_run(tmp_path, monkeypatch):
 
 
 def test_one_place_decides_the_method_of_a_strip_run(tmp_path):
-    from optimize.hierarchy import STRIP_METHOD
+    from optimize.modelling.hierarchy import STRIP_METHOD
 
     strip = tiny_config(tmp_path, optimize={"target": "strip"})
     method, kwargs = stages.optimizer_call(strip, "strip")
@@ -176,9 +176,9 @@ def test_fabricate_optimize_runs_a_strip_with_the_method_a_run_would_use(tmp_pat
     """``fabricate optimize --target strip`` (method default) runs what a config with target strip runs,
     instead of refusing the default method."""
     from fabricate.app.cli import main
-    from optimize import shapes
-    from optimize.hierarchy import STRIP_METHOD
-    from optimize.io import write_mesh
+    from optimize.modelling import shapes
+    from optimize.modelling.hierarchy import STRIP_METHOD
+    from optimize.mesh.io import write_mesh
 
     strip = shapes.perturbed(shapes.grid(6, 2, size=(5, 1), height=lambda x, y: 0.1 * x * y), 0.1, seed=3)
     write_mesh(tmp_path / "strip.obj", strip)

@@ -4,11 +4,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from optimize import ConfigError, Mesh, MeshError, Tolerances, surfaces
-from optimize.closeness import Reference
-from optimize.isolines import planar_faces
-from optimize.measures import conical_defect, planarity
-from optimize.remesh import as_triangles, isoparametric_remesh, remesh, surface_to_mesh
+from optimize import ConfigError, Mesh, MeshError, Tolerances
+from optimize.remesh import surfaces
+from optimize.proximity import Reference
+from optimize.remesh.isolines import planar_faces
+from optimize.mesh.measures import conical_defect, planarity
+from optimize.remesh.quads import as_triangles, isoparametric_remesh, remesh, surface_to_mesh
 
 
 @pytest.fixture(scope="module")
@@ -59,7 +60,7 @@ def test_surface_of_revolution_gives_meridians_and_parallels(waist, waist_quads)
 def test_faces_are_oriented_like_the_surface_and_non_quads_touch_the_boundary(roof):
     quads = remesh(roof.mesh, 0.3, side=roof.side)
     t = quads.topology
-    from optimize.measures import face_normals
+    from optimize.mesh.measures import face_normals
 
     assert np.all(face_normals(quads)[:, 2] > 0)  # outward = up for a roof
     other = np.nonzero(quads.face_sizes != 4)[0]
@@ -124,7 +125,7 @@ def test_chain_from_triangles_to_a_conical_mesh_meets_the_tolerances(waist):
 
 def test_cli_remesh_writes_a_mesh(tmp_path, roof):
     from fabricate.app.cli import main
-    from optimize.io import read_mesh, write_mesh
+    from optimize.mesh.io import read_mesh, write_mesh
 
     src = tmp_path / "roof.obj"
     write_mesh(src, roof.mesh)
@@ -175,10 +176,10 @@ def test_surface_with_a_hole_keeps_its_hole_and_becomes_conical():
 
 
 def test_vertex_indices_of_the_monkey_saddle_field_sum_to_minus_a_half():
-    from optimize.crossfield import face_crosses, smooth_cross_field
-    from optimize.principal import oriented_surface, principal_frames
-    from optimize.remesh import confidence, default_radius
-    from optimize.seamless import vertex_indices
+    from optimize.remesh.crossfield import face_crosses, smooth_cross_field
+    from optimize.remesh.principal import oriented_surface, principal_frames
+    from optimize.remesh.quads import confidence, default_radius
+    from optimize.remesh.seamless import vertex_indices
 
     surf = _monkey_saddle()
     mesh, _, _ = oriented_surface(surf.mesh, None, surf.side)
@@ -221,7 +222,7 @@ def test_umbilic_becomes_an_irregular_element_and_the_mesh_becomes_conical():
 
 def _straight_corners(quads, limit=160.0):
     """Number of corners above ``limit`` degrees (T-junctions, slivers' inner corners)."""
-    from optimize.measures import corner_angles
+    from optimize.mesh.measures import corner_angles
 
     return int(np.sum(np.degrees(corner_angles(quads)) > limit))
 
@@ -230,7 +231,7 @@ def _straight_corners(quads, limit=160.0):
 def test_boundary_slivers_are_snapped_not_merged(which):
     """Cells clipped just beyond an iso-line are collapsed onto the boundary: no corner near
     180 degrees is left for the optimizer to dent, and every small cell has gone."""
-    from optimize.measures import face_areas
+    from optimize.mesh.measures import face_areas
 
     if which == "planar":
         A = np.array([[0.08, 0.025], [0.025, -0.06]])  # a saddle whose principal lines are turned
@@ -253,7 +254,7 @@ def test_boundary_slivers_are_snapped_not_merged(which):
 def test_snap_slivers_on_a_small_mesh():
     """A 3 x 2 grid whose top row is a sliver (height 0.1 of the edge): the row is collapsed onto
     the boundary, the corners stay where they are, the rest is untouched."""
-    from optimize.boundary_cells import snap_slivers
+    from optimize.remesh.boundary_cells import snap_slivers
 
     xs, ys = np.arange(4.0), np.array([0.0, 1.0, 1.1])
     V = np.array([[x, y, 0.0] for y in ys for x in xs])
@@ -299,7 +300,7 @@ def test_a_quad_mesh_surface_with_three_boundary_loops_is_remeshed():
     Known limit: on this forking tube the tracing fails ("a traced cell has 15..20 corners") at
     edge lengths 0.6, 0.8, 1.2 and 2.0 m, and at 1.5 m one cell of the result is a 12-gon."""
     from conftest import TUNNEL
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     surf = read_mesh(TUNNEL)
     quads, rep = remesh(surf, 1.5, side="keep", with_report=True)  # a tube: no one vector points inside
@@ -361,7 +362,7 @@ def test_a_tube_is_remeshed_into_circles_and_rulings():
     around the tube, so the seamless branch cuts it open; the quads follow the circles and the rulings
     (the principal lines) and the mesh is conical.  No one vector points inside a tube: side='keep'
     takes the file's orientation, and a vector that cannot tell the sides apart is refused."""
-    from optimize import shapes
+    from optimize.modelling import shapes
 
     m = shapes.capped_cylinder()
     quads_in = m.F[m.face_sizes == 4][:, :4]

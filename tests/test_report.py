@@ -15,7 +15,8 @@ from fabricate.report.glb import Z_UP_TO_Y_UP
 from fabricate.report.html import ASSETS, VIEWER_FILES, copy_viewer
 from fabricate.report.measures import entry, planarity_scale
 from fabricate.report.pictures import picture_defect, picture_history, picture_layers
-from optimize import measures, shapes
+from optimize.mesh import measures
+from optimize.modelling import shapes
 
 from _pipeline_fixtures import finished_run  # noqa: F401 - a fixture
 

@@ -4,7 +4,7 @@ import numpy as np
 from fabricate.offset import offset_structure
 from fabricate.app.pipeline import outcome
 from fabricate.app.requirements import apply_requirements, default_requirements, warnings
-from optimize import shapes
+from optimize.modelling import shapes
 
 
 def _twisted():

@@ -49,7 +49,7 @@ def test_glass_schedule_edges_corners_and_neighbours(parts, files):
 
 def test_steel_cut_list_lengths_fit_their_stock_and_dihedrals_are_the_panels(parts, files):
     mesh = parts.mesh
-    from optimize.measures import face_normals
+    from optimize.mesh.measures import face_normals
 
     N = face_normals(mesh)
     bom = {r["id"]: r for r in files["bom"]}

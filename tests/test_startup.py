@@ -13,10 +13,12 @@ REPO = Path(__file__).resolve().parents[1]
 HEAVY = ("scipy", "matplotlib", "numba", "OCP", "build123d", "ifcopenshell", "rhino3dm", "openseespy")
 
 
-def _loaded_after(code: str) -> set[str]:
-    """Top-level packages of ``HEAVY`` in ``sys.modules`` after running ``code`` in a fresh interpreter."""
+def _loaded_after(code: str, watch=HEAVY) -> set[str]:
+    """Packages of ``watch`` in ``sys.modules`` after running ``code`` in a fresh interpreter
+    (a dotted name counts when it or one of its submodules is loaded)."""
     probe = (f"import sys\n{code}\n"
-             f"import json; print(json.dumps(sorted({{m.split('.')[0] for m in sys.modules}} & {set(HEAVY)!r})))")
+             f"loaded = {{p for m in sys.modules for p in {tuple(watch)!r} if m == p or m.startswith(p + '.')}}\n"
+             "import json; print(json.dumps(sorted(loaded)))")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")]))
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, env=env, timeout=120,
                          check=True).stdout
@@ -25,6 +27,19 @@ def _loaded_after(code: str) -> set[str]:
 
 def test_import_errors_loads_nothing_heavy():
     assert _loaded_after("import optimize.errors") == set()
+
+
+@pytest.mark.parametrize("target", ["pq", "conical"])
+def test_default_run_loads_neither_the_paper_stack_nor_numba(target):
+    """An ordinary run (default method, closeness on) imports no ``optimize.solvers.paper``, numba,
+    matplotlib or CAD kernel: checked in ``sys.modules`` of a fresh interpreter, so an eager
+    import anywhere on the path would show."""
+    code = ("from optimize import optimize_mesh\n"
+            "from optimize.modelling import shapes\n"
+            "m = shapes.perturbed(shapes.grid(4, 4, height=lambda u, v: 0.3 * u * v), 0.02, seed=1)\n"
+            f"res = optimize_mesh(m, {target!r})\n"
+            "assert res.nit > 0, res.message")
+    assert _loaded_after(code, HEAVY + ("optimize.solvers.paper",)) == {"scipy"}
 
 
 def test_fabricate_help_loads_nothing_heavy():
@@ -37,7 +52,7 @@ def test_fabricate_help_loads_nothing_heavy():
 def test_measure_loads_nothing_heavy(cylinder_path):
     code = ("import contextlib, io\nfrom fabricate.app.cli import main\n"
             f"with contextlib.redirect_stdout(io.StringIO()):\n    assert main(['measure', {str(cylinder_path)!r}]) == 0")
-    assert _loaded_after(code) == set()  # components in NumPy (optimize.components)
+    assert _loaded_after(code) == set()  # components in NumPy (optimize.mesh.components)
 
 
 @pytest.mark.parametrize("name", ["optimize_mesh", "Mesh", "MeshError", "Tolerances", "OptimizeResult"])

@@ -9,10 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from optimize import ConfigError, Mesh, MeshError, shapes
-from optimize.curves import chaikin
-from optimize.strip_analysis import analyze_strip, develop, gauss_image, strip_report
-from optimize.strips import join_meshes, refine_strips, strip_layouts, strip_mesh
+from optimize import ConfigError, Mesh, MeshError
+from optimize.modelling import shapes
+from optimize.modelling.curves import chaikin
+from optimize.modelling.strip_analysis import analyze_strip, develop, gauss_image, strip_report
+from optimize.modelling.strips import join_meshes, refine_strips, strip_layouts, strip_mesh
 
 T = np.linspace(0.0, 2.0, 9)
 CIRCLE = np.stack([3 * np.cos(T), 3 * np.sin(T), 0 * T], axis=1)

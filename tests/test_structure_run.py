@@ -21,7 +21,7 @@ from fabricate.offset import offset_structure
 from fabricate.structure.check import check_structure, report
 from fabricate.structure.loads import panel_area_vectors
 from fabricate.structure.sizing import size_sections
-from optimize import shapes
+from optimize.modelling import shapes
 
 
 @pytest.fixture(scope="module")

@@ -10,9 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from optimize import ConfigError, Mesh, MeshError, shapes
-from optimize.curves import chaikin, curve_operator, lane_riesenfeld
-from optimize.subdivision import SCHEMES, catmull_clark, doo_sabin, subdivide
+from optimize import ConfigError, Mesh, MeshError
+from optimize.modelling import shapes
+from optimize.modelling.curves import chaikin, curve_operator, lane_riesenfeld
+from optimize.modelling.subdivision import SCHEMES, catmull_clark, doo_sabin, subdivide
 
 
 def cube() -> Mesh:

@@ -39,6 +39,7 @@ from pydantic import (Field, PrivateAttr, ValidationError, ValidationInfo,
                       field_validator, model_validator)
 from pydantic_core import PydanticCustomError
 
+import optimize.options as OPT
 from optimize.errors import ConfigError
 from optimize.tolerances import Tolerances
 
@@ -86,7 +87,7 @@ def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
 
 
 class ShapeInput(Section):
-    """A built-in design of :mod:`optimize.designs` with its parameters (checked by
+    """A built-in design of :mod:`optimize.modelling.designs` with its parameters (checked by
     :func:`fabricate.app.config_design.check_design`)."""
 
     name: str
@@ -109,7 +110,7 @@ class ShapeInput(Section):
 
     @property
     def design(self):
-        """The :class:`optimize.designs.Design` built while validating (the input stage's mesh)."""
+        """The :class:`optimize.modelling.designs.Design` built while validating (the input stage's mesh)."""
         return self._design
 
 
@@ -185,17 +186,20 @@ class SubdivisionSection(Section):
 
 
 class OptimizeSection(Section):
-    target: Literal["pq", "conical", "circular", "strip", "none"] | None = None
-    method: Literal["default", "penalty", "sqp", "hybrid"] = "default"
-    formulation: Literal["auto", "auxiliary", "vertices"] = "auto"
-    linear_solver: Literal["auto", "pardiso", "superlu", "cholespy", "eliminate"] = "auto"
-    torsion_free_beams: Literal["auto"] | bool = "auto"
-    fairness: float = Field(default=1e-3, ge=0, le=1e6)
-    closeness: float = Field(default=1e-2, ge=0, le=1e6)
-    max_iter: int = Field(default=200, ge=1, le=MAX_ITER)
+    """The optimizer's settings; defaults and choices are :data:`optimize.options.DEFAULTS` and
+    :data:`optimize.options.CHOICES` (one place), ``target: null`` the input's own, ``none`` no optimization."""
+
+    target: Literal[OPT.TARGETS + ("none",)] | None = None
+    method: Literal[OPT.METHODS] = OPT.DEFAULTS.method
+    formulation: Literal[OPT.FORMULATIONS] = OPT.DEFAULTS.formulation
+    linear_solver: Literal[OPT.LINEAR_SOLVERS] = OPT.DEFAULTS.linear_solver
+    torsion_free_beams: Literal["auto"] | bool = OPT.DEFAULTS.torsion_free_beams
+    fairness: float = Field(default=OPT.DEFAULTS.fairness, ge=0, le=1e6)
+    closeness: float = Field(default=OPT.DEFAULTS.closeness, ge=0, le=1e6)
+    max_iter: int = Field(default=OPT.DEFAULTS.max_iter, ge=1, le=MAX_ITER)
     fixed: Literal["boundary", "corners"] | list[int] | None = None
-    glide_boundary: bool = False
-    convex: bool = True
+    glide_boundary: bool = OPT.DEFAULTS.glide_boundary
+    convex: bool = OPT.DEFAULTS.convex
 
     @field_validator("fixed")
     @classmethod

@@ -1,6 +1,6 @@
 """Checking the parameters of a built-in design in a config, in bounded time and memory.
 
-``input.shape: {name, params}`` names a function of :mod:`optimize.designs`.
+``input.shape: {name, params}`` names a function of :mod:`optimize.modelling.designs`.
 :func:`check_design` checks, before anything is built:
 
 - the name and every parameter name (with a did-you-mean);
@@ -10,7 +10,7 @@
 
 then builds the control mesh, which the design's own ranges keep small
 (every count has an upper bound there: ``nu <= 500``, ``meridians <= 1000``,
-...; every length is at most :data:`optimize.designs.MAX_SIZE_MM`), turning
+...; every length is at most :data:`optimize.modelling.designs.MAX_SIZE_MM`), turning
 any arithmetic failure into a ConfigError, and returns the design.
 :func:`subdivided_faces` then bounds what the subdivision will make of it
 (``fabricate.app.config`` and ``fabricate shapes --refined`` refuse more than
@@ -67,11 +67,11 @@ EXPECT = {"flag": "true or false", "integer": "an integer", "number": "a finite 
 
 
 def check_design(name: Any, params: dict[str, Any]):
-    """The :class:`optimize.designs.Design` of ``name(**params)``, checked (see the module docstring).
+    """The :class:`optimize.modelling.designs.Design` of ``name(**params)``, checked (see the module docstring).
 
     Raises DesignParamError naming the parameter, the value and what is expected.
     """
-    from optimize.designs import DESIGNS
+    from optimize.modelling.designs import DESIGNS
 
     if not isinstance(name, str) or name not in DESIGNS:
         raise DesignParamError(f"unknown design {short(name)}{did_you_mean(name, DESIGNS)} "

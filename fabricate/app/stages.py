@@ -46,14 +46,14 @@ def stage_input(cfg) -> InputRecord:
                     params=_plain(design.params), units=design.units)
         factor = UNIT_TO_MM[design.units] * cfg.scale  # designs carry their units; `units` is for files
     else:
-        from optimize.io import read_mesh
+        from optimize.mesh.io import read_mesh
 
         path = getattr(inp, kind)
         mesh = read_mesh(path, layer=inp.layer, name=inp.object)  # layer/object: .3dm only
         plan.update(source=str(path), units=cfg.units, levels=2 if kind == "control" else 0)
         factor = cfg.mm_per_unit
         if kind == "surface":
-            from optimize.remesh import remesh
+            from optimize.remesh.quads import remesh
 
             surface = mesh  # the optimizer's reference: the user's surface, not the quads
             mesh, rep = remesh(mesh, inp.edge_length, radius=inp.radius, side=inp.side,
@@ -80,10 +80,10 @@ def stage_input(cfg) -> InputRecord:
 # -- optimize ------------------------------------------------------------------
 def method_for(target: str, method: str) -> str:
     """The optimizer method that runs for ``method`` asked and ``target``: ``strip`` has no default
-    solver, so ``default`` means the paper's :data:`optimize.hierarchy.STRIP_METHOD` there (the one
+    solver, so ``default`` means the paper's :data:`optimize.modelling.hierarchy.STRIP_METHOD` there (the one
     place this is decided for ``fabricate run`` and ``fabricate optimize``)."""
     if target == "strip" and method == "default":
-        from optimize.hierarchy import STRIP_METHOD
+        from optimize.modelling.hierarchy import STRIP_METHOD
 
         return STRIP_METHOD
     return method
@@ -92,7 +92,7 @@ def method_for(target: str, method: str) -> str:
 def optimizer_call(cfg, target: str) -> tuple[str, dict[str, Any]]:
     """``(method, keyword arguments)`` of the optimizer for the config's ``optimize`` section: the one
     place that decides which method runs.  Target ``strip`` has no default solver: ``default`` means
-    the paper's :data:`optimize.hierarchy.STRIP_METHOD`; the keys of the default method (formulation,
+    the paper's :data:`optimize.modelling.hierarchy.STRIP_METHOD`; the keys of the default method (formulation,
     linear solver, torsion-free beams, convexity) go only where the default method was asked for."""
     opt = cfg.optimize
     method = method_for(target, opt.method)
@@ -106,7 +106,7 @@ def optimizer_call(cfg, target: str) -> tuple[str, dict[str, Any]]:
 
 
 def stage_optimize(cfg, inp: InputRecord, progress=None) -> OptimizeRecord:
-    """Subdivide and perturb to the target (``optimize.hierarchy.subdivide_and_perturb``;
+    """Subdivide and perturb to the target (``optimize.modelling.hierarchy.subdivide_and_perturb``;
     ``levels = 0`` optimizes the input itself, target ``"none"`` only subdivides)."""
     progress = progress or NullProgress()
     target, levels = inp.target, inp.levels
@@ -119,7 +119,7 @@ def stage_optimize(cfg, inp: InputRecord, progress=None) -> OptimizeRecord:
         progress.advance("optimize", 1, f"iteration {iteration[0]}"
                          + (f", planarity {p:.2e}" if isinstance(p, float) else ""))
 
-    from optimize.hierarchy import subdivide_and_perturb
+    from optimize.modelling.hierarchy import subdivide_and_perturb
 
     _, kwargs = optimizer_call(cfg, target)
     hier = subdivide_and_perturb(inp.mesh, levels, scheme=inp.scheme, target=target,
@@ -130,7 +130,7 @@ def stage_optimize(cfg, inp: InputRecord, progress=None) -> OptimizeRecord:
     mesh = hier.mesh
     routes, notes = (), ()
     if inp.kind == "mesh" and cfg.input.remesh != "never" and levels == 0 and result is not None:
-        from optimize.routes import optimize_routes  # input.remesh: the remeshed route too
+        from optimize.remesh.routes import optimize_routes  # input.remesh: the remeshed route too
 
         chosen, tried = optimize_routes(inp.mesh, target, remesh=cfg.input.remesh, original=result, **kwargs)
         routes = tuple(frozen(_plain(r.as_dict())) for r in tried)
@@ -267,7 +267,7 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
     import yaml
 
     from optimize.atomic import atomic_open
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     progress = progress or NullProgress()
     out = workdir

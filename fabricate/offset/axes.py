@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from optimize.errors import MeshError
-from optimize.measures import face_normals
+from optimize.mesh.measures import face_normals
 from optimize.mesh import Mesh
 
 AXIS_RCOND = 1e-10

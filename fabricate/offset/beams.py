@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.measures import quad_planarity
+from optimize.mesh.measures import quad_planarity
 
 
 def beam_quads(edges: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:

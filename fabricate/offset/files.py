@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_open
-from optimize.io import write_mesh
+from optimize.mesh.io import write_mesh
 
 from .focal import focal_meshes, spherical_image, spherical_image_defect
 from .structure import OffsetStructure

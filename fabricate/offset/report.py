@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize.measures import conical_defect
+from optimize.mesh.measures import conical_defect
 from optimize.mesh import Mesh
 from optimize.tolerances import Tolerances
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from optimize.errors import ConfigError, MeshError
-from optimize.measures import conical_defect, planarity
+from optimize.mesh.measures import conical_defect, planarity
 from optimize.mesh import Mesh
 from optimize.tolerances import Tolerances
 

@@ -18,7 +18,7 @@ from .totals import client_totals
 
 SCHEMA = "conical-fab/report/1"
 DISTRIBUTIONS = ("conical-fab", "numpy", "scipy", "pydantic", "PyYAML", "matplotlib", "rich",
-                 "build123d", "cadquery-ocp", "manifold3d", "ezdxf", "cholespy")
+                 "build123d", "cadquery-ocp", "manifold3d", "ezdxf")
 
 
 def versions() -> dict[str, str | None]:

@@ -7,7 +7,7 @@ worst elements with their index and value) and, where it means something,
 the same figures in mm or degrees (``max_mm``, ``max_deg``).
 
 Enforced: planarity always (glass panels are flat), and no folded panel (a
-face the optimizer dented or flipped, ``optimize.measures.folded_faces``), and no offset face
+face the optimizer dented or flipped, ``optimize.mesh.measures.folded_faces``), and no offset face
 that turns over (a layer past the focal distance, ``fabricate.offset.turnover``); the conical defect and
 the planarity of the beams between interior nodes (torsion-free beams, the
 paper's Geometry Fact 2) for a conical target; the circular defect for a
@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from optimize import measures as M
+from optimize.mesh import measures as M
 from optimize.mesh import Mesh
 
 N_WORST = 5

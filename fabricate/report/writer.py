@@ -6,7 +6,7 @@ import logging
 
 import numpy as np
 
-from optimize import measures as M
+from optimize.mesh import measures as M
 from optimize.atomic import atomic_open
 
 from .document import build_report, write_report_json

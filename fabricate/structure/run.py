@@ -12,7 +12,6 @@ from __future__ import annotations
 import numpy as np
 
 from .check import beam_table, check_structure, report
-from .outputs import structure_measures
 from .sections import built_section
 
 

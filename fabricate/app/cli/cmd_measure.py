@@ -18,7 +18,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from optimize.measures import summary
+    from optimize.mesh.measures import summary
 
     from .units import UNIT_TO_MM, read_mm
 

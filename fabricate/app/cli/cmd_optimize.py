@@ -4,6 +4,8 @@ from __future__ import annotations
 import json
 import sys
 
+from optimize.options import DEFAULTS
+
 from .units import add_units
 
 TARGETS = ("pq", "conical", "circular", "strip")
@@ -28,7 +30,7 @@ def register(sub) -> None:
     p.add_argument("--formulation", choices=("auto", "auxiliary", "vertices"), default="auto",
                    help="default method's unknowns: auxiliary (positions + normals, axes, centres; "
                         "quadratic rows), vertices (positions only), auto (vertices for conical)")
-    p.add_argument("--linear-solver", choices=("auto", "pardiso", "superlu", "cholespy", "eliminate"),
+    p.add_argument("--linear-solver", choices=("auto", "pardiso", "superlu", "eliminate"),
                    default="auto", help="sparse solver of the default method (auto: MKL PARDISO "
                                         "where installed, else SuperLU)")
     p.add_argument("--torsion-free-beams", choices=("auto", "on", "off"), default="auto",
@@ -47,11 +49,15 @@ def register(sub) -> None:
                    help="vertices that must not move (default none)")
     p.add_argument("--glide", action="store_true", help="boundary vertices glide on the boundary curve")
     p.add_argument("--reference", help="reference surface to stay close to (default: the input)")
-    p.add_argument("--fairness", type=float, default=1e-3, metavar="W", help="fairness weight (1e-3)")
-    p.add_argument("--closeness", type=float, default=1e-2, metavar="W", help="closeness weight (1e-2)")
+    p.add_argument("--fairness", type=float, default=DEFAULTS.fairness, metavar="W",
+                   help=f"fairness weight ({DEFAULTS.fairness:g})")
+    p.add_argument("--closeness", type=float, default=DEFAULTS.closeness, metavar="W",
+                   help=f"closeness weight ({DEFAULTS.closeness:g})")
     p.add_argument("--tol", type=float, default=None, metavar="T",
-                   help="tolerance for planarity and the conical/circular defect (default 1e-6)")
-    p.add_argument("--max-iter", type=int, default=200, metavar="N", help="iteration budget (200)")
+                   help="tolerance for planarity and the conical/circular defect "
+                        f"(default {DEFAULTS.tol.planarity:g})")
+    p.add_argument("--max-iter", type=int, default=DEFAULTS.max_iter, metavar="N",
+                   help=f"iteration budget ({DEFAULTS.max_iter})")
     p.add_argument("--report", metavar="JSON", help="write the run report (defects, history, timings)")
     p.add_argument("--progress", choices=("auto", "on", "off"), default="auto",
                    help="a progress line per iteration on stderr (auto: when stderr is a terminal)")
@@ -62,7 +68,7 @@ def register(sub) -> None:
 def run(args) -> int:
     from optimize import ConfigError, Tolerances, optimize_mesh
     from optimize.atomic import atomic_open
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     from ..quads import CLI_HINT, require_quads
     from .units import read_mm, to_file_units
@@ -78,7 +84,7 @@ def run(args) -> int:
     require_quads(mesh, str(args.mesh), hint=CLI_HINT)
     reference = read_mm(args.reference, args.units) if args.reference else None
     if args.target != "strip":  # said before optimizing: is a fold-free mesh likely near?
-        from optimize.conjugacy import net_defect
+        from optimize.remesh.conjugacy import net_defect
 
         print(f"{mesh.name}: {net_defect(mesh).line(args.target)}")
     from ..stages import method_for
@@ -94,7 +100,7 @@ def run(args) -> int:
         if args.remesh == "never" or args.target == "strip":
             res = optimize_mesh(mesh, args.target, reference=reference, callback=callback, **kwargs)
         else:
-            from optimize.routes import optimize_routes
+            from optimize.remesh.routes import optimize_routes
 
             chosen, routes = optimize_routes(mesh, args.target, remesh=args.remesh, reference=reference, **kwargs)
             res = chosen.result

@@ -54,8 +54,8 @@ def register(sub) -> None:
 
 def run(args) -> int:
     from optimize.atomic import atomic_open
-    from optimize.io import write_mesh
-    from optimize.remesh import surface_to_mesh
+    from optimize.mesh.io import write_mesh
+    from optimize.remesh.quads import surface_to_mesh
 
     from .units import read_mm, to_file_units
 

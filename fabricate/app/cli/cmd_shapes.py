@@ -24,7 +24,7 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
-    from optimize.designs import DESIGNS, describe, parse_params
+    from optimize.modelling.designs import DESIGNS, describe, parse_params
     from optimize.errors import ConfigError
 
     if args.name is None:
@@ -41,7 +41,7 @@ def run(args) -> int:
     mesh = design.mesh
     if args.refined and design.levels:
         from fabricate.app.config_design import MAX_FACES, subdivided_faces
-        from optimize.subdivision import subdivide
+        from optimize.modelling.subdivision import subdivide
 
         if subdivided_faces(mesh.n_faces, design.scheme, design.levels) > MAX_FACES:
             raise ConfigError(f"fabricate shapes {args.name} --refined: {mesh.n_faces:,} faces and {design.levels} "
@@ -53,7 +53,7 @@ def run(args) -> int:
         print(f"{design.name}: {mesh.n_vertices} vertices, {mesh.n_faces} faces ({design.units}); "
               f"levels {design.levels} {design.scheme}, target {design.target}. Give -o OUT to write it.")
         return 0
-    from optimize.io import write_mesh
+    from optimize.mesh.io import write_mesh
 
     from .units import UNIT_TO_MM, to_file_units
 

@@ -21,7 +21,7 @@ def add_units(p, what: str = "the mesh file", default: str | None = "mm") -> Non
 
 def read_mm(path, units: str):
     """The mesh in ``path`` with its vertices in mm (``units`` is the file's unit)."""
-    from optimize.io import read_mesh
+    from optimize.mesh.io import read_mesh
 
     mesh = read_mesh(path)
     f = UNIT_TO_MM[units]

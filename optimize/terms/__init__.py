@@ -1,0 +1,19 @@
+"""The optimization problem: unknowns with named slices, and its terms, one module each.
+
+- ``variables``: :class:`Layout`, the unknown vector's named blocks (vertices, normals, axes, ...);
+- ``formulation``: :class:`Formulation`, a target's unknowns and its list of constraint terms;
+- constraints, each ``terms(x, layout, ...) -> (r, J)``: the residual vector ``r (p,)`` (zero
+  when the constraint holds) and its sparse Jacobian ``J (p, layout.size)`` at ``x``, at most
+  quadratic in ``x``: ``planarity``, ``diagonals``, ``unit``, ``conical``, ``anglebalance``,
+  ``anglesum``, ``angles`` (their shared corner-angle rows), ``circular``, ``nodeaxes``,
+  ``convexity``, ``edgefloor``, ``glide``, ``fixed``;
+- energies: ``fairness`` (second differences along mesh polylines) and ``closeness``
+  (tangent-plane distance to the reference, footpoints from :mod:`optimize.proximity`).
+The solver, not the term, applies weights.  The modules load when imported
+(``from optimize.terms import conical``).
+"""
+from .._lazy import lazy_exports
+
+__all__ = ["anglebalance", "angles", "anglesum", "circular", "closeness", "conical", "convexity", "diagonals",
+           "edgefloor", "fairness", "fixed", "formulation", "glide", "nodeaxes", "planarity", "unit", "variables"]
+__getattr__, __dir__ = lazy_exports(__name__, {}, globals())

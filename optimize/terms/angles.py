@@ -1,0 +1,41 @@
+"""Signed sums of corner angles as constraint rows: the shared kernel of the angle constraints.
+
+Row ``i`` is ``sum_s sign[s] * angle(C[i, s]) - offset[i]``; the angles and their
+gradients are :func:`optimize.mesh.corners.angle_local`'s (the one corner-angle kernel).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..mesh import Mesh
+from ..mesh.corners import angle_local
+from .variables import Layout
+
+
+def angle_rows(x: np.ndarray, layout: Layout, mesh: Mesh, C: np.ndarray,
+               sign: np.ndarray, offset: np.ndarray, parts: bool = False):
+    """Rows ``sum_s sign[s] * angle(C[i, s]) - offset[i]`` and their Jacobian.
+
+    C : (p, k) int corners; sign : (k,) float; offset : (p,) float.
+    Returns ``r (p,)`` and ``J (p, layout.size)``; with ``parts`` also the list
+    of ``k`` matrices ``J_s`` (the terms of corner slot ``s``, ``J = sum J_s``),
+    each within one face.
+    """
+    t = mesh.topology
+    V = layout.view(x, "vertices")
+    p, k = C.shape
+    vid = np.stack([t.corner_vertex[C], t.corner_next_vertex[C], t.corner_prev_vertex[C]], axis=2)  # (p, k, 3)
+    phi, G = angle_local(V[vid.reshape(-1, 3)])  # (p k,), (p k, 9): d/d(corner, next, prev)
+    r = phi.reshape(p, k) @ sign - offset
+    iv = layout.index("vertices")  # (n, 3)
+    cols = iv[vid].reshape(p, k, 9)
+    vals = G.reshape(p, k, 9) * sign[None, :, None]
+    rows = np.repeat(np.arange(p), 9 * k)
+    J = sp.csr_matrix((vals.ravel(), (rows, cols.ravel())), shape=(p, layout.size))
+    if not parts:
+        return r, J
+    rows1 = np.repeat(np.arange(p), 9)
+    Js = [sp.csr_matrix((vals[:, s].ravel(), (rows1, cols[:, s].ravel())), shape=(p, layout.size))
+          for s in range(k)]
+    return r, J, Js

@@ -1,0 +1,225 @@
+"""The unknowns, their starting values and the stacked constraints of one target.
+
+Targets (all with auxiliary variables so every constraint is at most quadratic):
+
+- ``pq``: vertices, unit face normals; planarity on every face.
+- ``conical``: ``pq`` plus a unit axis and ``c = cos(theta)`` per interior
+  valence-4 vertex (``constraints.conical``) and the angle balance there
+  (``constraints.anglebalance``, which excludes degenerate cones).
+- ``circular``: ``pq`` plus a centre and squared radius per quad
+  (``constraints.circular``) and the opposite-angle sums (``constraints.anglesum``,
+  which exclude crossed quads).
+
+With ``unknowns="vertices"`` the same targets are written on the vertex
+positions (auxiliary unknowns only for the few n-gons): planarity as the
+signed distance between the diagonals of each quad (``constraints.diagonals``;
+an n-gon keeps a unit normal, ``constraints.planarity`` on its corners), the
+conical angle balance, the circular opposite-angle sums.  These rows are not quadratic, but the system is 3x smaller: for the
+conical target the sparse factor of a 10,000-face mesh has 8.2 million
+nonzeros instead of 23 million (the per-vertex cone axes and the angle rows
+both couple whole vertex stars), and the optimizer converges in fewer
+iterations (the axis unknowns of nearly cylindrical vertices are
+ill-conditioned).  ``optimize_mesh`` uses it for ``conical`` by default
+(``formulation="auto"``) and fits the node axes to the final face normals
+(exact at a conical vertex, whose four normals lie on one circle).
+
+Starting values come from the current mesh: face normals by Newell's method;
+axes by a least-squares fit to the normals around each vertex (the normal of
+the plane best fitting the four unit normals, oriented like them) and ``c``
+their mean dot product; circle centres by a least-squares circle fit in the
+best-fit plane of each quad.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import ConfigError
+from ..mesh import Mesh
+from ..mesh.measures import face_normals
+from . import (
+    anglebalance,
+    anglesum,
+    circular,
+    conical,
+    diagonals,
+    nodeaxes,
+    planarity,
+    unit,
+)
+from .variables import Layout
+
+TARGETS = ("pq", "conical", "circular")
+UNKNOWNS = ("auxiliary", "vertices")
+
+
+def fit_axes(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axes ``(p, 3)`` and ``c (p,)`` best fitting ``n . a = c`` for normals ``N (p, s, 3)``."""
+    centred = N - N.mean(axis=1, keepdims=True)
+    cov = np.einsum("psi,psj->pij", centred, centred)
+    _, vecs = np.linalg.eigh(cov)
+    a = vecs[:, :, 0]
+    mean = N.mean(axis=1)
+    a = np.where((np.einsum("pi,pi->p", a, mean) < 0)[:, None], -a, a)
+    return a, np.einsum("psj,pj->ps", N, a).mean(axis=1)
+
+
+def fit_circles(P: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Centres ``(q, 3)`` and squared radii ``(q,)`` of circles fitted to ``P (q, 4, 3)``.
+
+    The circle lies in the plane through the mean point with unit normal
+    ``n (q, 3)``; algebraic least squares ``|p|^2 = 2 p.c + k`` in that plane.
+    """
+    o = P.mean(axis=1)
+    helper = np.where((np.abs(n[:, 0]) < 0.9)[:, None], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    e1 = np.cross(n, helper)
+    e1 /= np.linalg.norm(e1, axis=1, keepdims=True)
+    e2 = np.cross(n, e1)
+    d = P - o[:, None, :]
+    u, v = np.einsum("qsj,qj->qs", d, e1), np.einsum("qsj,qj->qs", d, e2)
+    M = np.stack([2 * u, 2 * v, np.ones_like(u)], axis=2)  # (q, 4, 3)
+    rhs = u ** 2 + v ** 2
+    MtM = np.einsum("qsi,qsj->qij", M, M) + 1e-12 * np.eye(3)
+    sol = np.linalg.solve(MtM, np.einsum("qsi,qs->qi", M, rhs)[..., None])[..., 0]
+    C = o + sol[:, :1] * e1 + sol[:, 1:2] * e2
+    R = np.einsum("qsj,qsj->qs", P - C[:, None, :], P - C[:, None, :]).mean(axis=1)
+    return C, R
+
+
+class Formulation:
+    """Layout, starting vector and constraints of ``target`` for the topology of ``mesh``.
+
+    unknowns : ``"auxiliary"`` (vertices plus normals, axes, centres; every row
+        at most quadratic) or ``"vertices"`` (positions only, see above).
+    """
+
+    def __init__(self, mesh: Mesh, target: str, unknowns: str = "auxiliary", beams: bool = False):
+        if target not in TARGETS:
+            raise ConfigError(f"target: {target!r} is not known, expected one of {TARGETS}")
+        if unknowns not in UNKNOWNS:
+            raise ConfigError(f"formulation: {unknowns!r} is not known, expected one of {UNKNOWNS}")
+        self.mesh = mesh
+        self.target = target
+        self.unknowns = unknowns
+        self.cone_vertices = mesh.topology.interior_valence4 if target == "conical" else np.zeros(0, int)
+        self.quads = circular.circle_faces(mesh) if target == "circular" else np.zeros(0, int)
+        self.angle_mask = np.ones(len(self.cone_vertices), dtype=bool)
+        self.axis_vertices = np.zeros(0, dtype=np.int64)  # vertices with node-axis unknowns (beams)
+        if unknowns == "vertices":
+            self.layout = Layout().add("vertices", mesh.n_vertices, 3)
+            self.quadruples = diagonals.quadruples(mesh, max_size=4)
+            self.ngons = np.nonzero(mesh.face_sizes > 4)[0]
+            if len(self.ngons):  # a unit normal per n-gon (see constraints.diagonals)
+                self.layout.add("ngon_normals", len(self.ngons), 3)
+            if beams and target == "conical":  # node axes as unknowns, planar beams (constraints.nodeaxes)
+                self.axis_vertices = nodeaxes.axis_vertices(mesh)
+                self.beam_edges = nodeaxes.beam_edges(mesh)
+                self.axis_row = np.full(mesh.n_vertices, -1, dtype=np.int64)
+                self.axis_row[self.axis_vertices] = np.arange(len(self.axis_vertices))
+                p = len(self.axis_vertices)
+                self.layout.add("node_axes", p, 3).add("node_cos", p, 1)
+            return
+        if beams:
+            raise ConfigError("torsion_free_beams: written for formulation 'vertices' only, not 'auxiliary'")
+        self.layout = L = Layout().add("vertices", mesh.n_vertices, 3).add("normals", mesh.n_faces, 3)
+        if target == "conical":
+            L.add("axes", len(self.cone_vertices), 3).add("cos", len(self.cone_vertices), 1)
+        # cone vertices with an angle-balance row: all of them (self.angle_mask).  (Adding
+        # rows only where a vertex is caught on the degenerate branch was tried: no reliable
+        # detector was found before convergence, it flagged most vertices anyway.)
+        if target == "circular":
+            L.add("centres", len(self.quads), 3).add("radius2", len(self.quads), 1)
+
+    def start(self, V: np.ndarray) -> np.ndarray:
+        """The starting unknown vector for positions ``V (n, 3)``."""
+        if self.unknowns == "vertices":
+            blocks = {"vertices": V}
+            if len(self.ngons):
+                blocks["ngon_normals"] = face_normals(self.mesh, V)[self.ngons]
+            if len(self.axis_vertices):
+                blocks["node_axes"], blocks["node_cos"] = nodeaxes.start(self.mesh, V, self.axis_vertices)
+            return self.layout.pack(**blocks)
+        N = face_normals(self.mesh, V)
+        blocks = {"vertices": V, "normals": N}
+        if self.target == "conical":
+            blocks["axes"], blocks["cos"] = fit_axes(N[conical.cone_faces(self.mesh)])
+        if self.target == "circular":
+            Fq = self.mesh.F[self.quads, :4]
+            blocks["centres"], blocks["radius2"] = fit_circles(V[Fq], N[self.quads])
+        return self.layout.pack(**blocks)
+
+    def terms(self, x: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
+        """All constraint residuals ``(p,)`` stacked, and their Jacobian ``(p, layout.size)``."""
+        r, J, wide = self.split_terms(x)
+        return (np.concatenate([r] + [w[0] for w in wide]),
+                sp.vstack([J] + [w[1] for w in wide], format="csr"))
+
+    def split_terms(self, x: np.ndarray, exact_angles: bool = True):
+        """``(r, J, wide)``: the compact-stencil constraints (each row within one face,
+        or one vertex and its faces' normals) and the list of wide ones as
+        ``(r_w, J_w, parts)`` with ``J_w = sum(parts)``, each part within one face
+        (the angle balance couples a whole vertex star; with ``exact_angles`` it
+        is among the compact rows instead)."""
+        if self.unknowns == "vertices":
+            return self._vertex_terms(x)
+        parts = [planarity.terms(x, self.layout, self.mesh), unit.terms(x, self.layout, "normals")]
+        wide = []
+        if self.target == "conical":
+            parts += [conical.terms(x, self.layout, self.mesh), unit.terms(x, self.layout, "axes")]
+            which = np.nonzero(self.angle_mask)[0]
+            if exact_angles:
+                parts.append(anglebalance.terms(x, self.layout, self.mesh, which=which))
+            else:
+                wide.append(anglebalance.terms(x, self.layout, self.mesh, parts=True, which=which))
+        if self.target == "circular":
+            parts += [circular.terms(x, self.layout, self.mesh), anglesum.terms(x, self.layout, self.mesh)]
+        return (np.concatenate([r for r, _ in parts]), sp.vstack([J for _, J in parts], format="csr"),
+                wide)
+
+    def _vertex_terms(self, x: np.ndarray):
+        """``split_terms`` of the vertex-only formulation (every row compact)."""
+        parts = [diagonals.terms(x, self.layout, self.mesh, self.quadruples)]
+        if len(self.ngons):
+            parts += [planarity.terms(x, self.layout, self.mesh, faces=self.ngons, block="ngon_normals"),
+                      unit.terms(x, self.layout, "ngon_normals")]
+        if self.target == "conical" and len(self.cone_vertices):
+            parts.append(anglebalance.terms(x, self.layout, self.mesh))
+        if self.target == "circular" and len(self.quads):
+            parts.append(anglesum.terms(x, self.layout, self.mesh))
+        if len(self.axis_vertices):
+            parts += [nodeaxes.cone_terms(x, self.layout, self.mesh, self.axis_vertices),
+                      unit.terms(x, self.layout, "node_axes"),
+                      nodeaxes.beam_terms(x, self.layout, self.beam_edges, self.axis_row)]
+        return (np.concatenate([r for r, _ in parts]), sp.vstack([J for _, J in parts], format="csr"),
+                [])
+
+    def axis_defects(self, x: np.ndarray) -> dict[str, np.ndarray]:
+        """With node-axis unknowns: ``{"node_cone": |n . a - c| (r,), "beam": |(e x a_v) . a_w| / |e|
+        (k,)}`` (both about radians: sines of the angles off the cone and off the beam plane)."""
+        if not len(self.axis_vertices):
+            return {}
+        a = self.layout.view(x, "node_axes")
+        unit_x = x.copy()
+        self.layout.view(unit_x, "node_axes")[:] = a / np.linalg.norm(a, axis=1, keepdims=True)
+        rc, _ = nodeaxes.cone_terms(unit_x, self.layout, self.mesh, self.axis_vertices, jacobian=False)
+        rb, _ = nodeaxes.beam_terms(unit_x, self.layout, self.beam_edges, self.axis_row, jacobian=False)
+        return {"node_cone": np.abs(rc), "beam": np.abs(rb)}
+
+    def face_blocks(self) -> np.ndarray | None:
+        """(m, b) int: per-face auxiliary unknowns (normal, and centre + radius for circular quads).
+
+        Every constraint row touches at most one face's block, so the blocks of
+        the normal matrix are independent ``b x b`` diagonal blocks: the
+        ``"eliminate"`` solver removes them first (for conical the normals still
+        couple to the vertex axes, which stay in the reduced system).
+        """
+        if self.unknowns == "vertices":
+            return None
+        N = self.layout.index("normals")
+        if self.target in ("pq", "conical"):
+            return N
+        B = np.full((self.mesh.n_faces, 7), -1, dtype=np.int64)
+        B[:, :3] = N
+        B[self.quads, 3:6] = self.layout.index("centres")
+        B[self.quads, 6] = self.layout.index("radius2")
+        return B
