@@ -14,6 +14,13 @@ caches), one after the other.  Prints a JSON line per side and the ratio.
     python benchmarks/bench_cad.py --panels 500  # quick
     python benchmarks/bench_cad.py --check       # the file check against the export it checks
     python benchmarks/bench_cad.py --handoff     # also the CAD stage with the hand-off files (issue 18)
+    python benchmarks/bench_cad.py --sections    # plate beams against RHS beams on tube hubs (issue 18)
+
+``--sections`` (issue 18 item 1): for the railway station (the run's CAD and exports stages) and the
+dome of ``--panels`` panels (build_parts and every fabrication writer), in one run: today's plate
+beams with mitred ends against RHS beams welded from six plates on tube hubs with two cap plates
+(goal: within 3x of plate-only), and the full file check of the RHS files against their export
+(goal: not longer); the new side also has insulated glass (``GLASS_INSULATED``).
 
 ``--check`` (issue 14): for the railway station (configs/railway_station.yaml,
 run with the check off) and the dome of ``--panels`` panels, one child process
@@ -200,6 +207,99 @@ def check_dome(panels: int, out: Path, occ: bool) -> dict:
             **time_checks(out, time.perf_counter() - t0, occ, time.process_time() - c0)}
 
 
+SECTIONS = {  # --sections (issue 18 item 1): today's plates with mitred ends against welded RHS beams on tube hubs
+    "plate": {"parts.beam.section": "plate", "parts.node.connection": "mitre"},
+    "rhs": {"parts.beam.section": "rhs", "parts.beam.web_mm": 5.0, "parts.beam.flange_mm": 5.0,
+            "parts.beam.flange_width_mm": 100.0, "parts.node.connection": "hub", "parts.node.hub": "tube",
+            "parts.node.radius_mm": 110.0, "parts.node.wall_mm": 10.0, "parts.node.cap_mm": 15.0},
+}
+GLASS_INSULATED: dict = {"parts.glass": {"type": "insulated", "outer": {"type": "monolithic", "thickness_mm": 10.0},
+                                          "cavity_mm": 16.0, "inner": {"type": "laminated", "plies_mm": [6.0, 6.0],
+                                                                       "interlayer": "PVB", "interlayer_mm": 1.52}}}
+"""Insulated glass 10/16/66.4 (four solids per panel) in the new side of the --sections run; the
+plate-only side keeps the config's glass (the dome: monolithic 10 mm)."""
+
+
+def _spec_overrides(variant: str) -> dict:
+    return dict(SECTIONS[variant], **(GLASS_INSULATED if variant != "plate" else {}))
+
+
+def sections_railway(variant: str, out: Path) -> dict:
+    """configs/railway_station.yaml with ``variant``'s beams and nodes: the run's CAD and exports stage
+    times (structure check, pictures and the file check off), then the full file check on its files."""
+    from fabricate.check_fast import run_check
+    from fabricate.app.config import load_config
+    from fabricate.app.pipeline import run_pipeline
+
+    over = {"outputs.check": "off", "outputs.pictures": False, "outputs.html": False, "structure.check": "off",
+            **_spec_overrides(variant)}
+    summary = run_pipeline(load_config(ROOT / "configs" / "railway_station.yaml", overrides=over), out)
+    folder = Path(summary.out_dir)
+    report = json.loads((folder / "report.json").read_text())
+    t = report["timings_s"]
+    t0 = time.perf_counter()
+    chk = run_check(folder, "full")
+    return {"case": "railway_station", "variant": variant, "parts": report["parts"]["total"]["count"],
+            "cad_s": t["cad"], "export_s": t["exports"], "cad_export_s": t["cad"] + t["exports"],
+            "check_full_s": time.perf_counter() - t0, "check_pass": chk["pass"]}
+
+
+def sections_dome(variant: str, panels: int, out: Path) -> dict:
+    """The bench's dome of ``panels`` panels with ``variant``'s beams and nodes: build_parts and every
+    fabrication writer (STEP, STL, 3MF, DXF, SVG, BOM, flat data, schedules, nested cut files, layout
+    plan, NC1), then the full file check on those files."""
+    from fabricate.cad import PartSpec, build_parts
+    from fabricate.check_fast import run_check
+    from fabricate.app.config import NestingSection
+    from fabricate.export import (write_3mf, write_bom, write_cut_files, write_dxf, write_flat,
+                                  write_glass_schedule, write_layout_plan, write_node_schedule, write_step,
+                                  write_steel_cut_list, write_stl, write_svg)
+    from fabricate.export.nc1 import write_nc1
+
+    spec: dict = {}
+    for key, value in _spec_overrides(variant).items():  # "parts.beam.section" -> {"beam": {"section": ...}}
+        path = key.split(".")[1:]
+        d = spec
+        for k in path[:-1]:
+            d = d.setdefault(k, {})
+        d[path[-1]] = value
+    s = structure(panels)
+    t0 = time.perf_counter()
+    parts = build_parts(s, PartSpec(beam_width=80.0, **spec))
+    cad = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    for name, fn in (("model.step", write_step), ("model.stl", write_stl), ("model.3mf", write_3mf),
+                     ("outlines.dxf", write_dxf), ("outlines.svg", write_svg), ("bom.csv", write_bom),
+                     ("flat.json", write_flat), ("glass_schedule.csv", write_glass_schedule),
+                     ("steel_cut_list.csv", write_steel_cut_list), ("node_schedule.csv", write_node_schedule),
+                     ("layout_plan.dxf", write_layout_plan)):
+        fn(parts, out / name)
+    write_cut_files(parts, out, NestingSection().model_dump())
+    write_nc1(parts, out / "nc1")
+    export = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    chk = run_check(out, "full")
+    return {"case": f"dome_{panels}", "variant": variant, "parts": len(parts), "cad_s": cad, "export_s": export,
+            "cad_export_s": cad + export, "check_full_s": time.perf_counter() - t0, "check_pass": chk["pass"]}
+
+
+def main_sections(panels: int) -> None:
+    """Plate-only against RHS beams on tube hubs, railway station and the dome, in one run."""
+    rows = {}
+    for case in ("railway", "dome"):
+        for variant in SECTIONS:
+            with tempfile.TemporaryDirectory(prefix="bench_sections_") as tmp:
+                rows[case, variant] = _child(f"sections_{case}_{variant}", panels, tmp)
+    glass = "insulated glass 10/16/66.4" if GLASS_INSULATED else "glass as configured"
+    for case in ("railway", "dome"):
+        p, r = rows[case, "plate"], rows[case, "rhs"]
+        print(f"{r['case']}: plate beams, mitred ends ({p['parts']} parts) CAD + export {p['cad_export_s']:.2f} s; "
+              f"RHS beams on tube hubs, {glass} ({r['parts']} parts) {r['cad_export_s']:.2f} s = "
+              f"{r['cad_export_s'] / p['cad_export_s']:.2f} x plate-only (goal <= 3.0); full check "
+              f"{r['check_full_s']:.2f} s = {r['check_full_s'] / r['export_s']:.2f} x its export "
+              f"{r['export_s']:.2f} s (goal <= 1.0), pass {r['check_pass']}")
+
+
 def child(side: str, panels: int, out: str, occ: bool = False) -> None:
     sys.path.insert(0, str(ROOT))
     import logging
@@ -209,6 +309,10 @@ def child(side: str, panels: int, out: str, occ: bool = False) -> None:
         result = check_railway(Path(out), occ)
     elif side == "dome_check":
         result = check_dome(panels, Path(out), occ)
+    elif side.startswith("sections_"):
+        _, case, variant = side.split("_")
+        result = (sections_railway(variant, Path(out)) if case == "railway"
+                  else sections_dome(variant, panels, Path(out)))
     else:
         result = {"stage": run_stage, "baseline": run_baseline, "handoff": run_handoff}[side](panels, Path(out))
     result["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
@@ -247,7 +351,11 @@ def main() -> None:
                     help="time the fast and full file check against the export (railway station, dome)")
     ap.add_argument("--occ", action="store_true", help="with --check: also the check with OpenCASCADE")
     ap.add_argument("--handoff", action="store_true", help="also time the CAD stage with the hand-off files")
-    ap.add_argument("--child", choices=("stage", "baseline", "railway", "dome_check", "handoff"),
+    ap.add_argument("--sections", action="store_true",
+                    help="plate beams with mitred ends against RHS beams on tube hubs: CAD + export and the "
+                         "full check, railway station and the dome")
+    ap.add_argument("--child", choices=("stage", "baseline", "railway", "dome_check", "handoff")
+                    + tuple(f"sections_{c}_{v}" for c in ("railway", "dome") for v in SECTIONS),
                     help=argparse.SUPPRESS)
     ap.add_argument("--out", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -256,6 +364,9 @@ def main() -> None:
         return
     if args.check:
         main_check(args.panels, args.occ)
+        return
+    if args.sections:
+        main_sections(args.panels)
         return
     with tempfile.TemporaryDirectory(prefix="bench_cad_") as tmp:
         results = {}

@@ -240,6 +240,13 @@ def _name(x) -> str:
     return str(x)
 
 
+def _holes(bom) -> dict[str, int]:
+    """Parts with holes through them (a hub tube: genus 1), from the BOM's ``member`` column."""
+    from .cad.parts import GENUS
+
+    return {r["id"]: GENUS[r["member"]] for r in bom if r.get("member") in GENUS}
+
+
 def _volumes(bom) -> dict[str, float]:
     return {r["id"]: float(r["volume_mm3"]) for r in bom}
 
@@ -316,6 +323,7 @@ def _check_step_text(path, bom):
 
     solids, facts = read_step_text(path)
     expected = _volumes(bom)
+    holes = _holes(bom)
     names = list(solids)
     missing = sorted(set(expected) - set(names))
     extra = sorted(set(names) - set(expected))
@@ -325,7 +333,7 @@ def _check_step_text(path, bom):
     worst_line = max((f["on_line_mm"] for f in solids.values()), default=0.0)
     for name, f in solids.items():
         bad = [k for k in ("closed", "loops_closed", "normals_agree", "simple") if not f[k]]
-        bad += ([f"euler {f['euler']}"] if f["euler"] != 2 else [])
+        bad += ([f"euler {f['euler']}"] if f["euler"] != 2 - 2 * holes.get(name, 0) else [])
         bad += (["vertex off its plane"] if f["on_plane_mm"] > accuracy else [])
         bad += (["vertex off its line"] if f["on_line_mm"] > accuracy else [])
         bad += (["volume not positive"] if not f["volume_mm3"] > 0 else [])
@@ -361,7 +369,16 @@ def _check_intersections(meshes, tol):
 def _check_bearing(meshes, bom, tol):
     from .export.verify import bearing
 
-    supports = {r["id"]: [n for n in r["neighbours"].split() if n.startswith("B")]
+    from .cad.parts import unit_id
+
+    plates: dict[tuple[str, str], list[str]] = {}   # (beam unit, panel) -> the plates the panel lies on
+    for r in bom:
+        if r["kind"] == "beam":
+            for n in r["neighbours"].split():
+                if n.startswith("P"):
+                    plates.setdefault((unit_id(r["id"]), n), []).append(r["id"])
+    supports = {r["id"]: [b for n in r["neighbours"].split() if n.startswith("B")
+                          for b in plates.get((n, r["id"]), [n])]
                 for r in bom if r["kind"] == "panel"}
     return bearing(meshes, supports, tol.cad_linear_mm)
 

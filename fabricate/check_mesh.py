@@ -26,8 +26,11 @@ def check_3mf(path, bom):
     from .export.threemf_text import read_3mf_text
     from .export.verify import solids_of
 
+    from .check import _holes
+
     objects = read_3mf_text(path)
     expected = _volumes(bom)
+    holes = _holes(bom)  # a hub tube is a closed surface of genus 1
     missing = sorted(set(expected) - set(objects))
     extra = sorted(set(objects) - set(expected))
     solids = solids_of(objects)
@@ -39,9 +42,10 @@ def check_3mf(path, bom):
         V = np.concatenate([objects[n][0] for n in names]).astype(np.float64)
         T = np.concatenate([objects[n][1] + b for n, b in zip(names, base)])
         whole = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=V, tri_verts=T.astype(np.uint64)))
-        if whole.status().name != "NoError" or whole.genus() != 1 - len(names):
+        genera = sum(holes.get(n, 0) for n in names)
+        if whole.status().name != "NoError" or whole.genus() != 1 - len(names) + genera:
             bad = [n for n in names if solids[n].manifold.status().name != "NoError"
-                   or solids[n].manifold.genus() != 0]
+                   or solids[n].manifold.genus() != holes.get(n, 0)]
         obj = np.repeat(np.arange(len(names)), [len(objects[n][1]) for n in names])
         first = np.repeat(base, sizes)                                 # relative to each object's first vertex
         X = V - V[first]
@@ -94,9 +98,12 @@ def check_stl(path, bom, meshes):
     area = 0.5 * float(np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1).sum())
     bound = 4 * float(np.finfo(np.float32).eps) * float(np.abs(A).max()) * area
     dv = abs(m.volume() - analytic)
-    ok = status == "NoError" and comps == len(order) and m.genus() == 1 - len(order) and dv <= bound
+    from .check import _holes
+
+    expected_genus = 1 - len(order) + sum(_holes(bom).values())  # hub tubes have genus 1
+    ok = status == "NoError" and comps == len(order) and m.genus() == expected_genus and dv <= bound
     return {"pass": ok, "status": status, "triangles": len(P), "components": comps, "parts": len(order),
-            "genus": int(m.genus()), "expected_genus": 1 - len(order), "volume_mm3": m.volume(),
+            "genus": int(m.genus()), "expected_genus": expected_genus, "volume_mm3": m.volume(),
             "volume_error_mm3": dv, "float32_bound_mm3": bound, "origin_mm": header["origin"].tolist()}
 
 

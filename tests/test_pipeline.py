@@ -312,7 +312,8 @@ def test_atrium_roof_goes_from_a_triangle_surface_to_cut_files(tmp_path):
     kinds = [r["kind"] for r in rows]
     units = {r["unit"] for r in rows if r["kind"] == "panel"}  # an insulated unit: 4 solids (plies, PVB)
     assert len(units) == mesh.n_faces and kinds.count("panel") == 4 * mesh.n_faces
-    assert kinds.count("beam") == len(mesh.topology.edges)
+    beams = {r["unit"] for r in rows if r["kind"] == "beam"}   # one beam of plates (an RHS: six) per edge
+    assert len(beams) == len(mesh.topology.edges) and kinds.count("beam") == 6 * len(beams)
     for name in ("model.step", "model.stl", "outlines.dxf", "outlines.svg", "bom.csv"):
         assert (out / name).stat().st_size > 0
 

@@ -374,11 +374,21 @@ def _cross_checks(cfg: RunConfig, source: Path, lines: dict[tuple, int]) -> None
                               "design run); expected fewer quads (the design's count parameters) or fewer "
                               "subdivision.levels")
     parts = cfg.parts
-    if parts.joint_gap >= parts.beam_width:
-        where = _at(source, lines, ("parts", "joint_gap"), ("parts", "beam_width"))
+    flanged = parts.beam.section != "plate"
+    bearing, bkey = ((parts.beam.flange_width_mm, "beam.flange_width_mm") if flanged
+                     else (parts.beam_width, "beam_width"))
+    if parts.joint_gap >= bearing:
+        where = _at(source, lines, ("parts", "joint_gap"), ("parts",) + tuple(bkey.split(".")))
         raise ConfigError(f"{where}: parts.joint_gap: {parts.joint_gap:g} mm is not "
-                          f"below parts.beam_width {parts.beam_width:g} mm; expected a smaller gap so that the "
+                          f"below parts.{bkey} {bearing:g} mm; expected a smaller gap so that the "
                           "panels bear on the beams")
+    from ..cad.spec import PartSpec
+
+    try:  # the section and connection rules that join several keys (flange vs web, hub radius)
+        PartSpec(**parts.model_dump())
+    except ConfigError as exc:
+        key = tuple(str(exc).split(" ", 1)[0].split("."))
+        raise ConfigError(f"{_at(source, lines, key, ('parts',))}: {exc}") from None
     if cfg.offset.distances is not None and "beam_depth" in cfg.parts.model_fields_set:
         span = abs(cfg.offset.distances[-1] - cfg.offset.distances[0])
         if abs(span - cfg.parts.beam_depth) > 1e-9 * max(span, 1.0):

@@ -67,6 +67,26 @@ class LimitsSection(Section):
     _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
 
 
+class BeamSection(Section):
+    """The beam section welded from plates (see ``fabricate.cad.spec.BeamSpec``), mm."""
+
+    section: Literal["plate", "rhs", "tee", "i"] = "plate"
+    web_mm: float | None = Field(default=None, gt=0, le=2000.0)
+    flange_mm: float = Field(default=12.0, gt=0, le=500.0)
+    flange_width_mm: float = Field(default=200.0, gt=0, le=5000.0)
+
+
+class NodeSection(Section):
+    """How the beams meet at a node (see ``fabricate.cad.spec.NodeSpec``), mm."""
+
+    connection: Literal["hub", "mitre", "none"] | None = None
+    hub: Literal["tube", "solid"] = "tube"
+    radius_mm: float | None = Field(default=None, gt=0, le=5000.0)
+    wall_mm: float = Field(default=10.0, gt=0, le=1000.0)
+    cap_mm: float = Field(default=15.0, gt=0, le=1000.0)
+    gap_mm: float = Field(default=20.0, ge=0, le=5000.0)
+
+
 class PartsSection(Section):
     """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
 
@@ -81,6 +101,8 @@ class PartsSection(Section):
     node_sides: int = Field(default=24, ge=6, le=256)
     steel_grade: str = Field(default="S355", min_length=1, max_length=40)
     limits: LimitsSection = Field(default_factory=LimitsSection)
+    beam: BeamSection = Field(default_factory=BeamSection)
+    node: NodeSection = Field(default_factory=NodeSection)
     glass: GlassSection | None = None
 
     @model_validator(mode="after")

@@ -219,7 +219,9 @@ def stage_cad(cfg, opt: OptimizeRecord, off: OffsetRecord) -> PartsRecord:
         # there is (mesh, layers, report) and end marked as a missed tolerance (exit 3)
         return skipped(f"no panels or beams built from the unconverged mesh (optimization {result.status}: "
                        f"{result.message}): {exc}", f"skipped: optimization {result.status}, parts cannot be built")
-    counts = {k: sum(len(g) for g in parts.of_kind(k)) for k in ("panel", "beam", "node")}
+    from ..cad.parts import unit_id
+
+    counts = {k: len({unit_id(i) for g in parts.of_kind(k) for i in g.ids}) for k in ("panel", "beam", "node")}
     return PartsRecord(spec=spec, parts=parts, line=", ".join(f"{n} {k}s" for k, n in counts.items()))
 
 

@@ -13,8 +13,12 @@ The beam is a plate cut from flat stock: the polyhedron bounded by ten planes:
   bisector planes, through the node axis, between this beam and its angular
   neighbour on each side (so neighbouring beams meet in one plane and never
   overlap; a side with no neighbour within 180 degrees gets a square end);
-  with nodes, one plane normal to the beam, set back from the axis by the
-  node radius or more (enough that neighbours cannot touch).
+  with square ends (a hub, ``parts.node.connection: none``), one plane normal
+  to the beam, set back from the axis by the hub radius or gap or more
+  (enough that neighbours as wide as the section's flanges cannot touch).
+
+The flanges and the second web of a section (:mod:`fabricate.cad.sections`)
+are cut from the same planes (returned as ``planes``).
 
 The centre line corners are the quad's own corners, on the node axes: the
 end planes are hinged on the node axis itself (the same line, computed from
@@ -150,18 +154,27 @@ def _end_planes(A0, A1, toward, n, alpha, setback):
     return nu, off
 
 
-def beam_solids(structure, P0: np.ndarray, width: float, node_radius: float, s_beam: float) -> dict:
-    """Vertices and face planes of every beam.
+def beam_solids(structure, P0: np.ndarray, width: float, node_radius: float, s_beam: float,
+                half_width: float | None = None, square: bool | None = None) -> dict:
+    """Vertices and face planes of every beam (its plate, or the web of a section).
 
     P0 : (n, 3) vertex positions at the first layer (glass side).
-    width : beam width (mm); node_radius : 0 for bisector ends, else the node
-    prism radius; s_beam : +1 when the last layer lies on the normals' side
-    of the first, else -1.
+    width : plate (web) width (mm); node_radius : the least distance of square
+    ends from the node axis (a hub radius, the gap of ``none``);
+    s_beam : +1 when the last layer lies on the normals' side of the first,
+    else -1; half_width : the section's half width across the beam plane
+    (flanges), default ``width / 2``: square ends are set back far enough that
+    neighbours this wide cannot touch; square : square ends (default
+    ``node_radius > 0``), else bisector ends.
     Returns ``vertices (e, 12, 3)``, ``normals (e, 10, 3)`` (outward, in the
     order of :data:`FACES`), ``planarity_mm (e,)``, ``setback (e, 2)`` mm
     (the distance of the end planes from the node axes, 0 for bisectors),
     ``neighbour_beams (e, 2, 2)``, ``faces (e, 2)`` (the mesh face on the
-    ``+`` and ``-`` side; the same face twice on the boundary).
+    ``+`` and ``-`` side; the same face twice on the boundary), ``planes``:
+    the bounding planes as ``name -> (normal (e, 3), offset (e,))`` (outward
+    for the plate: ``F+ F- T0+ T0- T1+ T1- Ea+ Ea- Eb+ Eb-``) and ``mid``
+    (the beam plane, normal toward ``+``), from which
+    :mod:`fabricate.cad.sections` cuts the flanges.
     """
     bp = beam_planes(structure)
     Q, n, off = bp["quad"], bp["normal"], bp["offset"]
@@ -189,13 +202,15 @@ def beam_solids(structure, P0: np.ndarray, width: float, node_radius: float, s_b
     # end planes
     nb = angular_neighbours(structure, P0, n)
     alpha = np.minimum(nb["gap"] / 2, np.pi / 2)
-    if node_radius > 0:
+    square = node_radius > 0 if square is None else square
+    half_width = 0.5 * width if half_width is None else half_width
+    if square:
         tan_min = np.tan(np.minimum(alpha[..., 0], alpha[..., 1]))
-        need = np.where(tan_min > 1e-12, 0.5 * width / np.maximum(tan_min, 1e-12), np.inf)
+        need = np.where(tan_min > 1e-12, half_width / np.maximum(tan_min, 1e-12), np.inf)
         setback = np.maximum(node_radius, need)
     else:
         setback = np.zeros((len(Q), 2))
-    sb = (lambda i: setback[:, i]) if node_radius > 0 else (lambda i: None)
+    sb = (lambda i: setback[:, i]) if square else (lambda i: None)
     Ea, ea = _end_planes(A0, A1, B0 - A0, n, alpha[:, 0], sb(0))
     Eb, eb = _end_planes(B0, B1, A0 - B0, n, alpha[:, 1], sb(1))
     half = 0.5 * width
@@ -215,8 +230,13 @@ def beam_solids(structure, P0: np.ndarray, width: float, node_radius: float, s_b
     X[:, 10], _ = meet3(T1m, t1m, Fm, fm, Eb[:, 1], eb[:, 1])
     X[:, 11], _ = meet3(T1m, t1m, Fm, fm, Ea[:, 1], ea[:, 1])
     normals = np.stack([Fp, Fm, T0p, T0m, T1p, T1m, Ea[:, 0], Ea[:, 1], Eb[:, 0], Eb[:, 1]], axis=1)
+    planes = dict(zip(FACE_NAMES, ((Fp, fp), (Fm, fm), (T0p, t0p), (T0m, t0m), (T1p, t1p), (T1m, t1m),
+                                   (Ea[:, 0], ea[:, 0]), (Ea[:, 1], ea[:, 1]), (Eb[:, 0], eb[:, 0]),
+                                   (Eb[:, 1], eb[:, 1]))))
+    planes["mid"] = (n, off)
     return {"vertices": X, "normals": normals, "planarity_mm": bp["planarity_mm"],
-            "setback": setback, "neighbour_beams": nb["beam"], "faces": np.stack([f_plus, f_minus], axis=1)}
+            "setback": setback, "neighbour_beams": nb["beam"], "faces": np.stack([f_plus, f_minus], axis=1),
+            "planes": planes}
 
 
 def _face_centroids(mesh) -> np.ndarray:

@@ -15,14 +15,16 @@ import numpy as np
 
 from optimize.errors import ConfigError, MeshError
 
-from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, RING, beam_planes, beam_solids
+from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, RING, _face_centroids, beam_planes, beam_solids
 from .errors import PartError
 from .diagnose import CONVEX_MIN, beam_hint, min_turn, panel_failure
 from .flat import flat_data
 from .limits import check_limits
 from .geometry import dot, polygon_area_2d, unit, volumes
+from .hubs import tube_hubs
 from .nodes import node_solids
-from .parts import PartGroup, Parts, part_ids
+from .sections import BOX_FACES, BOX_NAMES, BOX_RING, MEMBERS as SECTION_MEMBERS, flange_plates
+from .parts import PartGroup, Parts, part_ids, unit_id
 from .spec import PartSpec
 
 log = logging.getLogger(__name__)
@@ -48,7 +50,7 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
     pid = np.array(part_ids("panel", np.arange(mesh.n_faces)))
     bid = np.array(part_ids("beam", np.arange(len(topo.edges))))
     nid = np.array(part_ids("node", np.arange(mesh.n_vertices)))
-    with_nodes = spec.node_radius > 0
+    with_nodes = spec.connection == "hub"
     bp = beam_planes(structure)
     from .panels import panel_solids
 
@@ -82,7 +84,11 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                                  hint=None if j == bearing else _ply_hint(ly, spec)))
     if multi:                                          # the beams carry the bearing ply
         pid = np.char.add(pid, f".{bearing + 1}")
-    beams = beam_solids(structure, P0, spec.beam_width, spec.node_radius, s_beam)
+    section = spec.beam.section
+    web = spec.web if section != "plate" else spec.beam_width
+    square = spec.connection != "mitre"
+    beams = beam_solids(structure, P0, web, spec.end_setback, s_beam,
+                        half_width=0.5 * max(web, spec.bearing_width), square=square)
     e = np.arange(len(topo.edges))
     Qb = bp["quad"]  # the beam's edge at the last layer as a fraction of it at the first (< 0: reversed)
     shrink = dot(Qb[:, 2] - Qb[:, 3], Qb[:, 1] - Qb[:, 0]) / np.maximum(dot(Qb[:, 1] - Qb[:, 0],
@@ -90,29 +96,72 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
     X = beams["vertices"]
     along = unit(X[:, 1] - X[:, 0])
     proj = dot(X, along[:, None, :])
+    length = proj.max(axis=1) - proj.min(axis=1)
+    members = SECTION_MEMBERS[section]
+    uid = lambda k: bid if section == "plate" else np.char.add(bid, f".{k}")  # noqa: E731
     nb = []
     for i, (fp, fm) in enumerate(beams["faces"].tolist()):
         others = [b for b in beams["neighbour_beams"][i].ravel().tolist() if b != i]
         nb.append(tuple(pid[sorted({fp, fm})]) + tuple(bid[sorted(set(others))])
                   + (tuple(nid[topo.edges[i]]) if with_nodes else ()))
-    _validate("beam", bid, e, X, FACES, beams["normals"],
-              lambda i: beam_hint(float(beams["planarity_mm"][i]), spec.beam_width, float(shrink[i]),
-                                  abs(d[-1] - d[0])))
-    groups.append(_group("beam", bid, e, X, FACES, beams["normals"], OUTLINE_FACE, BEVEL_FACE,
-                         beams["planarity_mm"], np.full(len(e), spec.beam_width),
-                         proj.max(axis=1) - proj.min(axis=1), nb, spec))
+    hint = lambda i: beam_hint(float(beams["planarity_mm"][i]), web, float(shrink[i]),  # noqa: E731
+                               abs(d[-1] - d[0]))
+    centre = X[:, :4].copy()
+    plates = []
+    if section != "rhs":  # the plate, or the web of a tee / I
+        _validate("beam", bid, e, X, FACES, beams["normals"], hint)
+        plates.append((X, FACES, beams["normals"], OUTLINE_FACE, BEVEL_FACE, RING, web, "top"))
+    for pl in flange_plates(beams["planes"], section, web, spec.beam.flange_mm, spec.beam.flange_width_mm):
+        t = web if pl["member"].startswith("web") else spec.beam.flange_mm
+        plates.append((pl["vertices"], BOX_FACES, pl["normals"], 0, 1, BOX_RING, t, "bottom"))
+    side = beams["faces"].copy()
+    edge_side = side[:, 0] == side[:, 1]     # a boundary beam: its one panel lies on one side of the plane
+    on_plus = dot(_face_centroids(mesh)[side[:, 0]] - Qb[:, 0], bp["normal"]) >= 0
+    side = np.where((edge_side & ~on_plus)[:, None], np.stack([np.full(len(e), -1), side[:, 1]], axis=1), side)
+    side = np.where((edge_side & on_plus)[:, None], np.stack([side[:, 0], np.full(len(e), -1)], axis=1), side)
+    for k, (member, (V, faces, normals, outline, bevel, ring, t, dashed)) in enumerate(zip(members, plates), 1):
+        ids = uid(k)
+        if section == "plate":
+            near = nb
+        else:  # a plate touches its unit's other plates, the panel on its side, the unit's neighbours
+            sibs = tuple(f".{j}" for j in range(1, len(members) + 1) if j != k)
+            which = (0 if "+" in member else 1) if member != "web" else None
+            # what the glass bears on: the top flanges, and the web when it reaches under the panels
+            glass = (member == "web" and web > spec.joint_gap) or member.startswith("top flange")
+            near = [(tuple(pid[sorted({f for f in side[i] if f >= 0} if which is None else
+                                      {f for f in side[i, which:which + 1] if f >= 0})]) if glass else ())
+                    + tuple(bid[i] + s for s in sibs) + row[len(set(beams["faces"][i].tolist())):]
+                    for i, row in enumerate(nb)]
+        _validate("beam", ids, e, V, faces, normals, hint)
+        groups.append(_group("beam", ids, e, V, faces, normals, outline, bevel, beams["planarity_mm"],
+                             np.full(len(e), float(t)), length, near, spec, ring=ring, dashed=dashed,
+                             member=member, centre_line=centre))
     node_facts = {}
     if with_nodes:
-        nodes = node_solids(structure, P0, P1, spec.node_radius, spec.node_sides)
+        nodes = node_solids(structure, P0, P1, spec.hub_radius, spec.node_sides)
         v = np.arange(mesh.n_vertices)
         inc = [[] for _ in v]
         for i, (a, b) in enumerate(topo.edges.tolist()):  # incidence lists, built once
             inc[a].append(i)
             inc[b].append(i)
         nb = [tuple(bid[row]) for row in inc]
-        groups.append(_group("node", nid, v, nodes["vertices"], nodes["faces"], nodes["normals"], 0, 1,
-                             np.zeros(len(v)), np.full(len(v), 2 * spec.node_radius), nodes["length"], nb, spec))
-        node_facts = {"theta_max_deg": float(np.degrees(nodes["theta_max"].max()))}
+        diameter = np.full(len(v), 2 * spec.hub_radius)
+        if spec.hub_kind == "solid":
+            groups.append(_group("node", nid, v, nodes["vertices"], nodes["faces"], nodes["normals"], 0, 1,
+                                 np.zeros(len(v)), diameter, nodes["length"], nb, spec))
+        else:
+            pieces = tube_hubs(nodes, spec.node.wall_mm, spec.node.cap_mm, nid, v)
+            for k, pc in enumerate(pieces, 1):
+                sibs = tuple(f".{j}" for j in range(1, len(pieces) + 1) if j != k)
+                near = [row + tuple(nid[i] + s for s in sibs) for i, row in enumerate(nb)]
+                groups.append(_group("node", np.char.add(nid, f".{k}"), v, pc["vertices"], pc["faces"],
+                                     pc["normals"], 0, pc.get("back", 1), np.zeros(len(v)), diameter, pc["length"], near, spec,
+                                     member=pc["member"]))
+        node_facts = {"theta_max_deg": float(np.degrees(nodes["theta_max"].max())), "hub": spec.hub_kind,
+                      "radius_mm": spec.hub_radius, "height_mm_min": float(nodes["length"].min()),
+                      "height_mm_max": float(nodes["length"].max())}
+        if spec.hub_kind == "tube":
+            node_facts.update(wall_mm=spec.node.wall_mm, cap_mm=spec.node.cap_mm)
     report = _report(groups, spec, mode, s_beam, d, beams, node_facts)
     report["limits"] = check_limits(groups, spec)
     return Parts(groups=tuple(groups), spec=spec, edge_mode=mode, report=report, mesh=mesh)
@@ -156,8 +205,13 @@ def _touching(j: int, build_up) -> list[int]:
 
 
 def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thickness, length,
-           neighbours, spec, member: str = "", material: str = "", hint=None) -> PartGroup:
-    """Validate one batch and derive volumes, outlines and residuals."""
+           neighbours, spec, ring=None, dashed="bottom", member: str = "", centre_line=None,
+           material: str = "", hint=None) -> PartGroup:
+    """Validate one batch and derive volumes, outlines and residuals.
+
+    ring : the outline's vertices (default the outline face's); dashed : which sheet face
+    ``flat_bevel`` draws (``top`` for the beam plate: its + face; else the opposite face).
+    """
     element = np.asarray(element)
     _validate(kind, ids, element, V, faces, normals, hint)
     vol = volumes(V, faces)
@@ -170,19 +224,19 @@ def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thi
     for fi, face in enumerate(faces):  # loop over the faces of one combinatorial type
         h = dot(V[:, list(face)], normals[:, fi][:, None, :])
         residual = np.maximum(residual, h.max(axis=1) - h.min(axis=1))
-    ring = RING if kind == "beam" else tuple(faces[outline])
+    ring = tuple(faces[outline]) if ring is None else tuple(ring)
     fd = flat_data(V, normals, faces, ring, outline, bevel)
     area = polygon_area_2d(fd["outline"])
     return PartGroup(kind=kind, ids=tuple(str(i) for i in ids), element=element, vertices=V, faces=tuple(faces),
                      normals=normals, volume_mm3=vol, outline_face=outline, bevel_face=bevel, flat=fd["outline"],
-                     flat_bevel=fd["bottom_flat"] if kind != "beam" else fd["top_flat"], rect=fd["rect"],
+                     flat_bevel=fd["bottom_flat"] if dashed == "bottom" else fd["top_flat"], rect=fd["rect"],
                      bevel_ref=fd["ref"], bevel_ref_z=fd["ref_z"], bevel_deg=fd["bevel_deg"],
                      transform=fd["transform"],
                      flat_faces=(fd["top_flat"], fd["bottom_flat"]), cuts=fd["cuts"], ring=ring, area_mm2=area, length_mm=np.asarray(length, dtype=float),
                      thickness_mm=np.asarray(thickness, dtype=float),
                      planarity_mm=np.asarray(planarity, dtype=float), residual_mm=residual,
                      neighbours=tuple(tuple(str(x) for x in nb) for nb in neighbours), member=member,
-                     material=material)
+                     centre_line=centre_line, material=material)
 
 
 HINTS = {"panel": "parts.joint_gap may be too large for this face, or the face is degenerate",
@@ -203,7 +257,7 @@ def _validate(kind, ids, element, V, faces, normals, hint=None) -> None:
     if (turn < CONVEX_MIN).any():
         i = int(np.argmin(turn))
         fi = int(where[i])
-        name = FACE_NAMES[fi] if kind == "beam" else ("lower" if fi == 0 else "upper" if fi == 1
+        name = (FACE_NAMES[fi] if len(faces) == len(FACE_NAMES) else BOX_NAMES[fi]) if kind == "beam" else ("lower" if fi == 0 else "upper" if fi == 1
                                                       else f"side {fi - 2}")
         raise PartError(f"{kind} {ids[i]} (element {int(element[i])}): face {name} is folded or "
                         f"collapsed (corner turn {turn[i]:.3g}, expected > 0); {hint(i) if hint else HINTS[kind]}",
@@ -253,7 +307,13 @@ def _report(groups, spec, mode, s_beam, distances, beams, node_facts) -> dict:
             "residual_mm_max": float(res.max()), "residual_worst": ids[int(np.argmax(res))]}
     sb = beams["setback"]
     out["beams"]["end_setback_mm"] = {"min": float(sb.min()), "max": float(sb.max())}
-    out["beams"]["bearing_width_mm"] = 0.5 * (spec.beam_width - spec.joint_gap) - spec.glass.step_mm  # stepped unit
+    out["beams"]["bearing_width_mm"] = 0.5 * (spec.bearing_width - spec.joint_gap) - spec.glass.step_mm  # stepped unit
+    out["beams"]["section"] = spec.beam.section
+    out["beams"]["connection"] = spec.connection
+    for kind in ("beam", "node"):
+        units = {unit_id(i) for g in groups if g.kind == kind for i in g.ids}
+        if units:
+            out[kind + "s"]["units"] = len(units)
     out["beams"]["depth_mm"] = abs(distances[-1] - distances[0])
     panel_faces = [g.element for g in groups if g.kind == "panel"]
     units = int(len(np.unique(np.concatenate(panel_faces)))) if panel_faces else 0

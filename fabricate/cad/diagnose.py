@@ -122,5 +122,7 @@ def beam_hint(planarity_mm: float, width: float, shrink: float = 1.0, depth: flo
     if planarity_mm > 0.25 * width:
         return (f"its quad twists: corners up to {planarity_mm:.1f} mm off the plate's mid-plane (beam width "
                 f"{width:g} mm), the mesh is not conical there; optimize.target: conical makes the beams "
-                "planar, or use a wider parts.beam_width")
-    return "the beam may be shorter than its end trims: reduce parts.beam_width or parts.node_radius"
+                "planar, or use a wider parts.beam_width (parts.beam.web_mm for a section)")
+    return ("the beam may be shorter than its end trims: reduce parts.beam_width (a section: "
+            "parts.beam.flange_width_mm) or the hub (parts.node.radius_mm, parts.node_radius), or use "
+            "parts.node.connection: mitre")

@@ -42,7 +42,10 @@ def check_limits(groups, spec) -> dict:
     for g in groups:
         if g.kind not in ("panel", "beam") or getattr(g, "material", ""):
             continue  # an interlayer is not cut from sheet
-        edge = edge_lengths(g.bevel_ref).min(axis=1)
+        L = edge_lengths(g.bevel_ref)
+        if g.kind == "beam" and len(g.faces) == 6:  # a flange or box web: its end cuts are as long as it is wide
+            L = L[:, [0, 2]]
+        edge = L.min(axis=1)
         found["edge"] += [(i, float(e)) for i, e in zip(g.ids, edge) if e < lim.min_edge_mm]
         if g.kind != "panel":
             continue

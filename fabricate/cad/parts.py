@@ -30,6 +30,10 @@ def part_ids(kind: str, element: np.ndarray) -> tuple[str, ...]:
     return tuple(f"{PREFIX[kind]}{int(i) + 1:0{width}d}" for i in element)
 
 
+GENUS = {"tube": 1}
+"""Holes through a part by its ``member`` (a hub tube has one); every other part is genus 0."""
+
+
 def unit_id(part_id: str) -> str:
     """The unit a solid belongs to: ``P0001.2`` -> ``P0001``; a one-solid part is its own unit."""
     return part_id.split(".", 1)[0]
@@ -84,6 +88,8 @@ class PartGroup:
         several groups, one per member, each naming what it is in the unit
         (``"ply 1"``, ``"web"``, ``"top flange +"``); their ids are
         ``<unit id>.<k>`` (``P0001.1``, ``B0012.3``, k from 1), see :func:`unit_id`.
+    centre_line : (p, 4, 3) float or None: beams: the beam quad ``A0 B0 B1 A1`` (corners on the
+        node axes) of the beam each plate belongs to, the same for every member of a unit.
     material : ``""`` for the kind's material (panel glass, beam and node steel), else what the
         solids are made of (a glass unit's interlayer: ``PVB``, ``SGP``); see ``PartSpec.group_density``.
     """
@@ -114,6 +120,7 @@ class PartGroup:
     residual_mm: np.ndarray
     neighbours: tuple[tuple[str, ...], ...]
     member: str = ""
+    centre_line: np.ndarray | None = None
     material: str = ""
 
     def __len__(self) -> int:

@@ -10,6 +10,76 @@ from optimize.errors import ConfigError
 from .glass import BuildUp
 
 EDGE_OPTIONS = ("auto", "axis", "perpendicular")
+SECTIONS = ("plate", "rhs", "tee", "i")
+CONNECTIONS = ("hub", "mitre", "none")
+HUBS = ("tube", "solid")
+
+
+def _number(key: str, value, low: float = 0.0, strict: bool = True) -> None:
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or (value <= low if strict else value < low):
+        raise ConfigError(f"{key} = {value!r}: expected a number {'>' if strict else '>='} {low:g} (mm)")
+
+
+@dataclass(frozen=True)
+class BeamSpec:
+    """The beam section, welded from flat plates (mm); see :mod:`fabricate.cad.sections`.
+
+    section : ``plate`` (one plate ``beam_width`` thick, today's beam), ``tee`` (web and a top
+        flange on the glass side), ``i`` (web, top and bottom flange), ``rhs`` (two webs parallel
+        to the beam plane, symmetric about it, top and bottom flange: a welded box).
+    web_mm : web plate thickness (each of the two webs of an ``rhs``); None: ``beam_width``.
+    flange_mm : flange plate thickness.
+    flange_width_mm : overall width across the beam plane (the flanges; an ``rhs``'s outside width).
+    The depth is the layer span (``beam_depth`` / ``offset.distances``): the beam fills it.
+    """
+
+    section: str = "plate"
+    web_mm: float | None = None
+    flange_mm: float = 12.0
+    flange_width_mm: float = 200.0
+
+    def __post_init__(self) -> None:
+        if self.section not in SECTIONS:
+            raise ConfigError(f"parts.beam.section = {self.section!r}: expected one of {', '.join(SECTIONS)}")
+        if self.web_mm is not None:
+            _number("parts.beam.web_mm", self.web_mm)
+        _number("parts.beam.flange_mm", self.flange_mm)
+        _number("parts.beam.flange_width_mm", self.flange_width_mm)
+
+
+@dataclass(frozen=True)
+class NodeSpec:
+    """How beams meet at a node (mm); see :mod:`fabricate.cad.hubs`.
+
+    connection : ``mitre`` (ends in the bisector planes through the node axis, no node part),
+        ``hub`` (a hub on the node axis between the layers; the beams stop at it with square
+        ends), ``none`` (square ends ``gap_mm`` short of the axis, no node part: the shop
+        connects them), or None: ``hub`` when ``parts.node_radius`` > 0, else ``mitre``.
+    hub : ``tube`` (a steel tube with a top and a bottom cap plate, three parts) or ``solid``
+        (a solid polygonal hub, one part).
+    radius_mm : hub outside radius (circumradius of its ``sides``-gon); None: ``node_radius``.
+    wall_mm : tube wall; cap_mm : cap plate thickness; gap_mm : ``none``: end distance from the axis.
+    """
+
+    connection: str | None = None
+    hub: str = "tube"
+    radius_mm: float | None = None
+    wall_mm: float = 10.0
+    cap_mm: float = 15.0
+    gap_mm: float = 20.0
+
+    def __post_init__(self) -> None:
+        if self.connection is not None and self.connection not in CONNECTIONS:
+            raise ConfigError(f"parts.node.connection = {self.connection!r}: expected one of "
+                              f"{', '.join(CONNECTIONS)}")
+        if self.hub not in HUBS:
+            raise ConfigError(f"parts.node.hub = {self.hub!r}: expected one of {', '.join(HUBS)}")
+        if self.radius_mm is not None:
+            _number("parts.node.radius_mm", self.radius_mm)
+        _number("parts.node.wall_mm", self.wall_mm)
+        _number("parts.node.cap_mm", self.cap_mm)
+        _number("parts.node.gap_mm", self.gap_mm, strict=False)
 
 
 @dataclass(frozen=True)
@@ -17,7 +87,7 @@ class Limits:
     """What the shops can make (mm, degrees, kg); parts beyond them are flagged by id.
 
     min_corner_deg : smallest panel corner a glass supplier cuts without a special order.
-    min_edge_mm : shortest panel or beam outline edge.
+    min_edge_mm : shortest panel or beam outline edge (of a flange plate: its edges along the beam).
     sheet_mm : the largest glass sheet (jumbo / PLF 6000 x 3210): a panel's stock rectangle must fit.
     max_panel_kg : heaviest panel the site can lift into place.
     """
@@ -66,6 +136,7 @@ class PartSpec:
     node_sides : number of sides of the node prism (a polygonal cylinder, so
         that STEP, STL and the analytic volume describe the same solid).
     steel_grade : written on the steel cut list (EN 10025 grade, e.g. S355).
+    beam : :class:`BeamSpec` (the section); node : :class:`NodeSpec` (the connection).
     limits : :class:`Limits` the parts are held to (flagged in the report).
     """
 
@@ -80,11 +151,14 @@ class PartSpec:
     node_sides: int = 24
     steel_grade: str = "S355"
     limits: Limits = Limits()
+    beam: BeamSpec = BeamSpec()
+    node: NodeSpec = NodeSpec()
     glass: Any = None
 
     def __post_init__(self) -> None:
-        if isinstance(self.limits, dict):
-            object.__setattr__(self, "limits", Limits(**self.limits))
+        for key, cls in (("limits", Limits), ("beam", BeamSpec), ("node", NodeSpec)):
+            if isinstance(getattr(self, key), dict):
+                object.__setattr__(self, key, cls(**getattr(self, key)))
         positive = ("glass_thickness", "beam_width", "beam_depth", "density_glass", "density_steel")
         for key in positive:
             value = getattr(self, key)
@@ -96,9 +170,23 @@ class PartSpec:
                 raise ConfigError(f"parts.{key} = {value!r}: expected a number >= 0 (mm)")
         if self.edge not in EDGE_OPTIONS:
             raise ConfigError(f"parts.edge = {self.edge!r}: expected one of {', '.join(EDGE_OPTIONS)}")
-        if self.joint_gap >= self.beam_width:
-            raise ConfigError(f"parts.joint_gap = {self.joint_gap:g} mm is not below parts.beam_width = "
-                              f"{self.beam_width:g} mm: the panels would not bear on the beams")
+        if self.joint_gap >= self.bearing_width:
+            key = "parts.beam_width" if self.beam.section == "plate" else "parts.beam.flange_width_mm"
+            raise ConfigError(f"parts.joint_gap = {self.joint_gap:g} mm is not below {key} = "
+                              f"{self.bearing_width:g} mm: the panels would not bear on the beams")
+        b = self.beam
+        if b.section in ("tee", "i") and b.flange_width_mm <= self.web:
+            raise ConfigError(f"parts.beam.flange_width_mm = {b.flange_width_mm:g} mm: expected more than the web "
+                              f"({self.web:g} mm) for a {b.section} section")
+        if b.section == "rhs" and b.flange_width_mm <= 2 * self.web:
+            raise ConfigError(f"parts.beam.flange_width_mm = {b.flange_width_mm:g} mm: expected more than two "
+                              f"webs ({2 * self.web:g} mm) for an rhs section")
+        if self.connection == "hub" and self.hub_radius <= 0:
+            raise ConfigError("parts.node.connection = 'hub': expected parts.node.radius_mm (or "
+                              "parts.node_radius) > 0 (mm)")
+        if self.connection == "hub" and self.node.hub == "tube" and self.node.wall_mm >= self.hub_radius:
+            raise ConfigError(f"parts.node.wall_mm = {self.node.wall_mm:g} mm: expected less than the hub "
+                              f"radius {self.hub_radius:g} mm")
         if not (isinstance(self.node_sides, int) and self.node_sides >= 6):
             raise ConfigError(f"parts.node_sides = {self.node_sides!r}: expected an integer >= 6")
         if isinstance(self.glass, dict) and all(v is None for v in self.glass.values()):
@@ -108,7 +196,41 @@ class PartSpec:
         object.__setattr__(self, "glass", build_up)
         if given:
             object.__setattr__(self, "glass_thickness", build_up.weight_thickness_mm(float(self.density_glass)))
-        self.glass.check_bearing(0.5 * (self.beam_width - self.joint_gap))
+        self.glass.check_bearing(0.5 * (self.bearing_width - self.joint_gap))
+
+    @property
+    def web(self) -> float:
+        """Web plate thickness (mm): ``beam.web_mm`` or ``beam_width``."""
+        return float(self.beam.web_mm if self.beam.web_mm is not None else self.beam_width)
+
+    @property
+    def bearing_width(self) -> float:
+        """Width across the beam plane the glass bears on (mm): the plate or the flanges."""
+        return self.beam_width if self.beam.section == "plate" else float(self.beam.flange_width_mm)
+
+    @property
+    def connection(self) -> str:
+        """``hub`` | ``mitre`` | ``none`` (``parts.node.connection``, None resolved from ``node_radius``)."""
+        if self.node.connection is not None:
+            return self.node.connection
+        return "hub" if self.node_radius > 0 else "mitre"
+
+    @property
+    def hub_kind(self) -> str:
+        """``tube`` | ``solid``: today's ``node_radius`` alone builds the solid polygonal hub."""
+        return self.node.hub if self.node.connection == "hub" else "solid"
+
+    @property
+    def hub_radius(self) -> float:
+        """Hub outside radius (mm), 0 without hubs."""
+        if self.connection != "hub":
+            return 0.0
+        return float(self.node.radius_mm if self.node.radius_mm is not None else self.node_radius)
+
+    @property
+    def end_setback(self) -> float:
+        """How far the square beam ends stand off the node axis at least (mm); 0: mitred ends."""
+        return {"hub": self.hub_radius, "none": float(self.node.gap_mm), "mitre": 0.0}[self.connection]
 
     def edge_mode(self, is_conical: bool) -> str:
         """``axis`` or ``perpendicular``: ``auto`` resolved for a structure."""

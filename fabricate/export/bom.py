@@ -10,7 +10,7 @@ the source polygon was from the plane the part was built in),
 ``residual_mm`` (construction round-off), ``neighbours`` (ids in contact,
 space separated), ``unit`` (the part a solid belongs to: ``P0001`` for the plies
 ``P0001.1 ...`` of a glass unit, else its own id), ``member`` (what the solid is in
-its unit: ``ply 1``, ``inner interlayer 1``; empty for a one-solid part),
+its unit: ``ply 1``, ``inner interlayer 1``, ``web``, ``top flange +``, ``tube``; empty for a one-solid part),
 ``material`` (``glass``, ``PVB``, ``SGP``, ``steel``; its density gives the weight).
 """
 from __future__ import annotations

@@ -33,7 +33,15 @@ def edge_table(faces: tuple[tuple[int, ...], ...]) -> tuple[np.ndarray, list[lis
 
 
 def group_solids(group) -> list:
-    """``TopoDS_Solid`` of every part of a :class:`fabricate.cad.PartGroup`, in group order."""
+    """``TopoDS_Solid`` of every part of a :class:`fabricate.cad.PartGroup`, in group order.
+
+    A hub tube (``member == "tube"``) is built by build123d (:func:`fabricate.cad.hubs.tube_breps`:
+    its ends are annuli, faces with a hole); every other part, convex faces, by ``BRep_Builder``.
+    """
+    if group.kind == "node" and group.member == "tube":
+        from fabricate.cad.hubs import tube_breps
+
+        return tube_breps(group)
     from OCP.BRep import BRep_Builder
     from OCP.Geom import Geom_Line, Geom_Plane
     from OCP.gp import gp_Dir, gp_Pnt

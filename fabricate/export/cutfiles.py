@@ -126,8 +126,10 @@ def plan_groups(parts) -> list[tuple]:
     from fabricate.cad.glass import bearing_groups
     from fabricate.cad.parts import unit_id
 
+    from .schedules import beam_units
+
     out = [(g, tuple(unit_id(i) for i in g.ids)) for g in bearing_groups(parts) if len(g)]
-    return out + [(g, g.ids) for g in parts.of_kind("beam") if len(g)]
+    return out + [(g, tuple(unit_id(i) for i in g.ids)) for g in beam_units(parts) if len(g)]  # a beam once
 
 
 def write_layout_plan(parts, path) -> dict:
@@ -144,7 +146,8 @@ def write_layout_plan(parts, path) -> dict:
     for g, ids in plan_groups(parts):
         P = g.vertices[:, list(g.ring)][..., :2]
         if g.kind == "beam":
-            P = P[:, :2]                                   # the glass-side edge A0 B0
+            C = g.centre_line if g.centre_line is not None else g.vertices[:, :4]
+            P = C[:, :2, :2]                               # the glass-side edge A0 B0
         size = np.linalg.norm(P.max(axis=1) - P.min(axis=1), axis=1)
         h = np.clip(0.06 * size, 20.0, 400.0)
         centre = P.mean(axis=1)

@@ -7,8 +7,9 @@ Structure of the file::
     IfcCurtainWall aggregates
         one IfcPlate  (CURTAIN_PANEL) per glass unit    P0001 ...  (its plies P0001.1 ... as the
                                                                  items of one body representation)
-        one IfcMember (MULLION)       per beam          B0001 ...
-        one IfcMember (USERDEFINED 'NODE') per node hub N0001 ...
+        one IfcMember (MULLION)       per beam          B0001 ...  (a section's plates B0001.1 ...
+                                                                 as the items of its body)
+        one IfcMember (USERDEFINED 'NODE') per node hub N0001 ...  (a tube hub: tube and caps)
 
 ``Name`` and ``Tag`` of every element are the part id of the STEP file and
 the bill of materials.  Geometry is exact: every part is a planar-faced
@@ -169,18 +170,24 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
     layers = _glass_layers(w, parts.spec)
     members: dict[str, list] = {"panel": [], "beam": [], "node": []}
     _glass_units(w, parts, wall_place, members["panel"])
+    from fabricate.cad.parts import unit_id
+
+    solids_of: dict[tuple[str, str], list] = {}   # a beam welded from plates, a hub of tube and caps: one element
     for g in parts.groups:
-        if g.kind == "panel":
-            continue
-        cls, predefined, object_type = CLASS[g.kind]
-        density = parts.spec.group_density(g)
-        for i, pid in enumerate(g.ids):
-            el = f.create_entity(cls, GlobalId=w.guid(), Name=pid, Description=g.kind,
-                                 ObjectType=object_type, ObjectPlacement=w.placement(wall_place),
-                                 Representation=w.shape(w.solid(g.vertices[i], g.faces)), Tag=pid,
-                                 PredefinedType=predefined)
-            members[g.kind].append(el)
-            _describe(w, el, g, i, density)
+        if g.kind != "panel":
+            for i, pid in enumerate(g.ids):
+                solids_of.setdefault((g.kind, unit_id(pid)), []).append((g, i))
+    for (kind, uid), items in solids_of.items():  # one element per unit, one face set per solid
+        cls, predefined, object_type = CLASS[kind]
+        rep = f.createIfcShapeRepresentation(w.body, "Body", "Tessellation",
+                                             [w.solid(g.vertices[i], g.faces) for g, i in items])
+        el = f.create_entity(cls, GlobalId=w.guid(), Name=uid, Description=kind,
+                             ObjectType=object_type, ObjectPlacement=w.placement(wall_place),
+                             Representation=f.createIfcProductDefinitionShape(None, None, [rep]), Tag=uid,
+                             PredefinedType=predefined)
+        members[kind].append(el)
+        g, i = items[0]
+        _describe(w, el, g, i, parts.spec.group_density(g), items if len(items) > 1 else None, parts.spec)
     w.aggregate(wall, [e for kind in members for e in members[kind]])
     if members["panel"]:
         f.createIfcRelAssociatesMaterial(w.guid(), None, None, None, members["panel"], layers)
@@ -235,12 +242,23 @@ def _glass_units(w: _Writer, parts, wall_place, out: list) -> None:
             w.props(el, PSET, fab)
 
 
-def _describe(w: _Writer, el, g, i: int, density: float) -> None:
-    """Quantities and fabrication figures of part ``i`` of group ``g``."""
+def _describe(w: _Writer, el, g, i: int, density: float, unit=None, spec=None) -> None:
+    """Quantities and fabrication figures of part ``i`` of group ``g``; ``unit``: ``[(group, i)]`` of
+    every solid of a unit of several (a beam's plates, a hub's tube and caps): volumes and weights
+    summed, the solids listed."""
+    from fabricate.cad.parts import unit_id
+
     volume_m3 = float(g.volume_mm3[i]) * 1e-9
     weight = volume_m3 * density
     fab = {"PartId": g.ids[i], "MeshElement": int(g.element[i]),
            "Residual_mm": float(g.residual_mm[i]), "Neighbours": " ".join(g.neighbours[i])}
+    if unit is not None:
+        uid = unit_id(g.ids[i])
+        volume_m3 = sum(float(h.volume_mm3[k]) for h, k in unit) * 1e-9
+        weight = sum(float(h.volume_mm3[k]) * spec.group_density(h) for h, k in unit) * 1e-9
+        near = {n for h, k in unit for n in h.neighbours[k] if unit_id(n) != uid}
+        fab.update(PartId=uid, Solids=" ".join(h.ids[k] for h, k in unit), Neighbours=" ".join(sorted(near)),
+                   Residual_mm=max(float(h.residual_mm[k]) for h, k in unit))
     if g.kind == "panel":
         area = float(g.area_mm2[i]) * 1e-6
         w.quantities(el, "Qto_PlateBaseQuantities", {

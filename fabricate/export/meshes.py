@@ -39,6 +39,9 @@ def manifold_of(X: np.ndarray, T: np.ndarray):
     return manifold3d.Manifold(mesh)
 
 
+from fabricate.cad.parts import GENUS  # noqa: E402
+
+
 def validate_manifold(parts, origin: np.ndarray | None = None) -> dict:
     """Check every group with manifold3d; return facts; raise ExportError naming a bad part.
 
@@ -60,12 +63,13 @@ def validate_manifold(parts, origin: np.ndarray | None = None) -> dict:
                     raise ExportError(f"{g.ids[i]}: manifold3d rejects the solid ({s}); "
                                       "expected a closed oriented 2-manifold")
             raise ExportError(f"{g.kind} group: manifold3d status {status}")
-        if m.genus() != 1 - len(g):  # each part is one closed surface; all spheres iff genus = 1 - p
+        holes = GENUS.get(g.member, 0)   # a hub tube has one hole
+        if m.genus() != 1 - len(g) + holes * len(g):  # each part one closed surface of its genus
             raise ExportError(f"{g.kind} group: manifold3d genus {m.genus()} for {len(g)} parts, "
-                              f"expected {1 - len(g)} (every part a closed genus-0 surface)")
+                              f"expected {1 - len(g) + holes * len(g)} (every part a closed genus-{holes} surface)")
         total += m.volume()
         analytic += float(g.volume_mm3.sum())
         comps += len(g)
-        genus += m.genus() - 1  # genus of a union of c spheres is 1 - c
+        genus += m.genus() - 1  # genus of a union of c closed surfaces is 1 - c + their genera
     return {"status": "NoError", "components": comps, "genus": genus + 1, "volume_mm3": total,
             "volume_rel_error": abs(total - analytic) / max(analytic, 1e-300)}

@@ -1,5 +1,9 @@
 """DSTV NC1 files for steel CNC lines: one ``<id>.nc1`` per beam plate, in a ``nc1/`` folder.
 
+A beam welded from plates (tee, I, RHS) gets one file per plate (``B0012.1.nc1`` the web ...): a
+plate line cuts each from flat stock with its own contour and end cuts; the steel cut list says
+which beam and member each is.
+
 Written from the DSTV standard ("Standard Description for Information
 Exchange in Steel Construction", NC data interface), ASCII, one value per
 line, millimetres and degrees:
@@ -28,12 +32,15 @@ separately from this writer, from the same description.
 """
 from __future__ import annotations
 
+import contextlib
+import os
+import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from optimize.atomic import atomic_open
+from optimize.atomic import umask
 from optimize.errors import ExportError
 
 NUM = "{:10.3f}"
@@ -68,7 +75,7 @@ def nc1_text(group, i: int, *, order: str, grade: str, density: float, angles: d
     head = [order, "conical-fab", "1", pid, grade, "1", f"PL{t:g}", "B"]
     numbers = [length, height, 0.0, 0.0, t, 0.0, weight / (length * 1e-3), paint, web[0], web[1],
                bevel[0], bevel[1]]
-    texts = [order, group.kind, f"mesh edge {int(group.element[i])}", " ".join(group.neighbours[i])[:60]]
+    texts = [order, group.member or group.kind, f"mesh edge {int(group.element[i])}", " ".join(group.neighbours[i])[:60]]
     lines = ["ST", f"** {pid}.nc1 written by conical-fab"]
     lines += [f"  {v}" for v in head] + ["  " + NUM.format(v).strip() for v in numbers] + [f"  {v}" for v in texts]
     lines.append("AK")
@@ -78,6 +85,20 @@ def nc1_text(group, i: int, *, order: str, grade: str, density: float, angles: d
     cx, cy = Q.mean(axis=0)
     lines += ["SI", f"  v {NUM.format(cx)} {NUM.format(cy)} {NUM.format(0.0)} 10 {pid}", "EN", ""]
     return "\n".join(lines)
+
+
+def _write_atomic(target: Path, data: bytes, mode: int) -> None:
+    """``data`` to a temporary file beside ``target``, then renamed to it (removed on failure)."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+            os.fchmod(fh.fileno(), mode)
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
 
 def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -> dict:
@@ -91,15 +112,16 @@ def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -
     files, size = 0, 0
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        mode = 0o666 & ~umask()                 # read once: thousands of small files
         for g in parts.of_kind("beam"):
             density = parts.spec.density(g.kind)
             angles = beam_angles(g)
             for i, pid in enumerate(g.ids):
                 text = nc1_text(g, i, order=order, grade=grade, density=density, angles=angles)
-                with atomic_open(folder / f"{pid}.nc1", "w", encoding="ascii", newline="\r\n") as fh:
-                    fh.write(text)
+                data = text.replace("\n", "\r\n").encode("ascii")
+                _write_atomic(folder / f"{pid}.nc1", data, mode)
                 files += 1
-                size += len(text)
+                size += len(data)
     except OSError as exc:
         raise ExportError(f"{folder}: cannot write the NC1 files ({exc.strerror or exc})") from None
     return {"file": folder.name + "/", "files": files, "bytes": size, "seconds": time.perf_counter() - t0}

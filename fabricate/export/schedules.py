@@ -12,16 +12,22 @@
   included), warp (mm: distance between the diagonals of the mesh face, the
   planarity times the mean diagonal; n-gons: twice the largest distance from
   the plane), the limits it breaks.
-- ``steel_cut_list.csv``: one row per beam: section, grade, length (node axis
-  to node axis along the glass edge), the stock blank, both end cuts as mitre
-  (in the plate, degrees from square, positive when the beam is longer on the
-  glass side) and bevel (through the thickness, ``+`` and ``-`` side), the
-  ridge under the glass, the dihedral between the two panels it carries
-  (inside the beam; 180 flat), weight, the limits it breaks.
+- ``steel_cut_list.csv``: one row per beam: section (``plate 60 x 212``,
+  ``RHS 200x100x8``, ``T 200x120x10/12``: depth x width x web / flange, mm),
+  ``member`` (``beam``), how many plates it is welded from, grade, length (node
+  axis to node axis along the glass edge, or to the hub), both end cuts as
+  mitre (in the plate, degrees from square, positive when the beam is longer
+  on the glass side) and bevel (through the thickness, ``+`` and ``-`` side),
+  the ridge under the glass, the dihedral between the two panels it carries
+  (inside the beam; 180 flat), weight (all its plates), the limits it breaks.
+  A section of several plates is followed by one row per plate (``B0012.1``
+  ...: ``PL<t>``, the member it is, its stock blank and its own end cuts and
+  weight).  A plate beam is one row, its own blank.
 - ``node_schedule.csv``: one row per node: position, axis direction (glass
   toward beams), the incoming beams with their angle around the axis
   (azimuth, from the first one, counter-clockwise seen along the axis) and
-  their elevation from the plane normal to the axis, the hub.
+  their elevation from the plane normal to the axis, the hub (text; outside
+  diameter, tube wall and height in mm; empty without a hub).
 """
 from __future__ import annotations
 
@@ -40,11 +46,11 @@ from fabricate.cad.limits import corner_angles_deg, edge_lengths
 GLASS_COLUMNS = ("id", "face", "build_up", "thickness_mm", "solids", "spacer_setback_mm", "area_m2", "blank_w_mm",
                  "blank_h_mm", "edge_lengths_mm", "corner_angles_deg", "edge_bevels_deg", "beams", "neighbours",
                  "weight_kg", "warp_mm", "planarity", "flags")
-STEEL_COLUMNS = ("id", "edge", "section", "grade", "length_mm", "blank_w_mm", "blank_h_mm",
+STEEL_COLUMNS = ("id", "edge", "section", "member", "plates", "grade", "length_mm", "blank_w_mm", "blank_h_mm",
                  "end_a_mitre_deg", "end_a_bevel_deg", "end_b_mitre_deg", "end_b_bevel_deg", "top_bevel_deg",
                  "dihedral_deg", "weight_kg", "panels", "nodes", "flags")
 NODE_COLUMNS = ("id", "vertex", "x_mm", "y_mm", "z_mm", "axis_x", "axis_y", "axis_z", "valence", "beams",
-                "azimuth_deg", "elevation_deg", "hub")
+                "azimuth_deg", "elevation_deg", "hub", "hub_diameter_mm", "hub_wall_mm", "hub_height_mm")
 
 
 def _flags(parts) -> dict[str, list[str]]:
@@ -122,8 +128,11 @@ def write_glass_schedule(parts, path) -> dict:
     flags: dict[str, list[str]] = {}
     for pid, fl in _flags(parts).items():  # a ply's flags are its unit's
         flags.setdefault(unit_id(pid), []).extend(f for f in fl if f not in flags.get(unit_id(pid), []))
-    beam_panels = {pid: [unit_id(n) for n in g.neighbours[i] if n[0] == "P"]
-                   for g in parts.of_kind("beam") for i, pid in enumerate(g.ids)}
+    beam_panels: dict[str, list[str]] = {}   # the glass units each beam carries (on any of its plates)
+    for g in parts.of_kind("beam"):
+        for i, pid in enumerate(g.ids):
+            got = beam_panels.setdefault(unit_id(pid), [])
+            got += [unit_id(n) for n in g.neighbours[i] if n[0] == "P" and unit_id(n) not in got]
     spec = parts.spec
     build_up = build_up_text(spec)
     solids = spec.glass.solids()
@@ -165,68 +174,171 @@ def write_glass_schedule(parts, path) -> dict:
             "solids_per_unit": len(solids), "seconds": time.perf_counter() - t0}
 
 
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-300)
+
+
 def beam_angles(g) -> dict[str, np.ndarray]:
-    """End cuts and dihedrals of a beam group (degrees): ``mitre (p, 2)`` at ends a, b (positive: longer
-    on the glass side), ``end_bevel (p, 2, 2)`` [end, side], ``top_bevel (p, 2)``, ``dihedral (p,)``."""
-    R = g.bevel_ref                                          # A0, B0, B1, A1 in the plate
-    t = R[:, 1] - R[:, 0]
-    t = t / np.linalg.norm(t, axis=1, keepdims=True)
+    """End cuts and dihedrals of one beam plate group (degrees): ``mitre (p, 2)`` at ends a, b (in the
+    plate, from square; positive: longer on its outline edge 0, the glass side of a plate or web, the
+    weld edge of a flange), ``end_bevel (p, 2, 2)`` [end, side], ``top_bevel (p, 2)`` (edge 0),
+    ``dihedral (p,)`` (between the ridge planes of a plate or web; NaN for other plates)."""
+    R = g.bevel_ref                                          # 4 corners: edge 0, end, edge 2, end
+    t = _unit(R[:, 1] - R[:, 0])
 
     def along(e):
-        return np.einsum("pi,pi->p", t, e / np.linalg.norm(e, axis=1, keepdims=True))
+        return np.einsum("pi,pi->p", t, _unit(e))
 
-    mitre_a = -np.degrees(np.arcsin(np.clip(along(R[:, 0] - R[:, 3]), -1, 1)))
-    mitre_b = -np.degrees(np.arcsin(np.clip(along(R[:, 2] - R[:, 1]), -1, 1)))
-    n_p, n_m = g.normals[:, 2], g.normals[:, 3]             # T0+ and T0- (the glass bears on them)
-    dihedral = 180.0 - np.degrees(np.arccos(np.clip(np.einsum("pi,pi->p", n_p, n_m), -1, 1)))
-    return {"mitre": np.stack([mitre_a, mitre_b], axis=1), "end_bevel": g.bevel_deg[:, [3, 1]],
-            "top_bevel": g.bevel_deg[:, 0], "dihedral": dihedral}
+    first = -np.degrees(np.arcsin(np.clip(along(R[:, 0] - R[:, 3]), -1, 1)))
+    second = -np.degrees(np.arcsin(np.clip(along(R[:, 2] - R[:, 1]), -1, 1)))
+    a_first = np.ones(len(g), dtype=bool)
+    if g.centre_line is not None:  # which end of the ring is end a (a mirrored flange starts at b)
+        V0 = g.vertices[:, g.ring[0]]
+        C = g.centre_line
+        a_first = np.linalg.norm(V0 - C[:, 0], axis=1) <= np.linalg.norm(V0 - C[:, 1], axis=1)
+    mitre = np.where(a_first[:, None], np.stack([first, second], 1), np.stack([second, first], 1))
+    bev = g.bevel_deg[:, [3, 1]]
+    end_bevel = np.where(a_first[:, None, None], bev, bev[:, ::-1])
+    dihedral = np.full(len(g), np.nan)
+    if len(g.faces) == 10:                                  # the plate / web: T0+ and T0- (the glass bears on them)
+        dihedral = _dihedral(g.normals[:, 2], g.normals[:, 3])
+    return {"mitre": mitre, "end_bevel": end_bevel, "top_bevel": g.bevel_deg[:, 0], "dihedral": dihedral}
+
+
+def _dihedral(n_p, n_m) -> np.ndarray:
+    return 180.0 - np.degrees(np.arccos(np.clip(np.einsum("pi,pi->p", n_p, n_m), -1, 1)))
+
+
+def beam_units(parts) -> list:
+    """The first plate group of every beam (the plate, a web, an RHS's ``web +``): one per unit."""
+    from fabricate.cad.sections import MEMBERS
+
+    firsts = {m[0] for m in MEMBERS.values()}
+    return [g for g in parts.of_kind("beam") if g.member in firsts]
+
+
+def unit_facts(parts) -> dict[str, np.ndarray]:
+    """Per beam (mesh edge index ``e``): ``weight_kg (e,)`` of all its plates, ``dihedral (e,)`` deg,
+    ``mitre (e, 2)`` deg from the beam's centre line (end a, b), ``length (e,)`` mm along its glass edge."""
+    gs = parts.of_kind("beam")
+    n = 1 + max(int(g.element.max()) for g in gs)
+    weight = np.zeros(n)
+    dihedral = np.full(n, np.nan)
+    ridge: dict[str, np.ndarray] = {}
+    for g in gs:
+        np.add.at(weight, g.element, g.volume_mm3 * parts.spec.density("beam") * 1e-9)
+        if len(g.faces) == 10:
+            dihedral[g.element] = _dihedral(g.normals[:, 2], g.normals[:, 3])
+        elif g.member in ("top flange +", "top flange -"):
+            ridge[g.member[-1]] = (g.element, g.normals[:, 0])
+    if len(ridge) == 2 and np.isnan(dihedral).all():  # an rhs: the top flanges lie in T0+ and T0-
+        (e, n_p), (_, n_m) = ridge["+"], ridge["-"]
+        dihedral[e] = _dihedral(n_p, n_m)
+    C = np.zeros((n, 4, 3))
+    for g in beam_units(parts):
+        C[g.element] = g.centre_line if g.centre_line is not None else g.vertices[:, :4]
+    t = _unit(C[:, 1] - C[:, 0])
+    mitre_a = -np.degrees(np.arcsin(np.clip(np.einsum("pi,pi->p", t, _unit(C[:, 0] - C[:, 3])), -1, 1)))
+    mitre_b = -np.degrees(np.arcsin(np.clip(np.einsum("pi,pi->p", t, _unit(C[:, 2] - C[:, 1])), -1, 1)))
+    return {"weight_kg": weight, "dihedral": dihedral, "mitre": np.stack([mitre_a, mitre_b], axis=1),
+            "length": np.linalg.norm(C[:, 1] - C[:, 0], axis=1)}
 
 
 def write_steel_cut_list(parts, path) -> dict:
-    """Write ``steel_cut_list.csv`` (atomic).  Returns facts: ``file, bytes, rows, seconds``."""
+    """Write ``steel_cut_list.csv`` (atomic): one row per beam (its section, its weight) and, for a
+    section welded from several plates, one row per plate below it (``<beam>.<k>``, ``member`` naming
+    it, ``PL<t>``, its own blank, end cuts and weight).  Returns facts: ``file, bytes, rows, seconds``."""
+    from fabricate.cad.parts import part_ids, unit_id
+    from fabricate.cad.sections import section_text
+
     t0 = time.perf_counter()
     path = Path(path)
     flags = _flags(parts)
     spec = parts.spec
     topo = parts.mesh.topology if parts.mesh is not None else None
-    from fabricate.cad.parts import part_ids, unit_id
+    plate = spec.beam.section == "plate"
+    depth = abs(np.diff(parts.report.get("layers_mm", [0.0, spec.beam_depth]))[0])
+    uf = unit_facts(parts) if parts.of_kind("beam") else None
+    by_edge: dict[int, list] = {}
+    for g in parts.of_kind("beam"):
+        a = beam_angles(g)
+        weight = g.volume_mm3 * spec.group_density(g) * 1e-9
+        length = np.linalg.norm(g.bevel_ref[:, 1] - g.bevel_ref[:, 0], axis=1)
+        for i, pid in enumerate(g.ids):  # the rows, grouped by beam
+            by_edge.setdefault(int(g.element[i]), []).append((g, i, pid, a, weight[i], length[i]))
+
+    def angles(a, i, mitre=None):
+        m = a["mitre"][i] if mitre is None else mitre
+        return (f"{m[0]:+.2f}", _num(a["end_bevel"][i, 0], "{:+.2f}"), f"{m[1]:+.2f}",
+                _num(a["end_bevel"][i, 1], "{:+.2f}"), _num(a["top_bevel"][i], "{:+.2f}"))
 
     def rows():
-        for g in parts.of_kind("beam"):
-            a = beam_angles(g)
-            weight = g.volume_mm3 * spec.group_density(g) * 1e-9
-            length = np.linalg.norm(g.bevel_ref[:, 1] - g.bevel_ref[:, 0], axis=1)
-            nodes = (part_ids("node", topo.edges[g.element].ravel()) if topo is not None else ())
-            for i, pid in enumerate(g.ids):
-                panels = [unit_id(n) for n in g.neighbours[i] if n[0] == "P"]
-                two = len(panels) == 2
-                yield (pid, int(g.element[i]), f"plate {spec.beam_width:g} x {g.rect[i, 1]:.0f}", spec.steel_grade,
-                       f"{length[i]:.1f}", f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}",
-                       f"{a['mitre'][i, 0]:+.2f}", _num(a["end_bevel"][i, 0], "{:+.2f}"),
-                       f"{a['mitre'][i, 1]:+.2f}", _num(a["end_bevel"][i, 1], "{:+.2f}"),
-                       _num(a["top_bevel"][i], "{:+.2f}"), f"{a['dihedral'][i]:.2f}" if two else "",
-                       f"{weight[i]:.2f}", " ".join(panels), " ".join(nodes[2 * i:2 * i + 2]) if nodes else "",
-                       "; ".join(flags.get(pid, [])))
+        for e in sorted(by_edge):
+            plates = by_edge[e]
+            g0, i0, pid0, a0 = plates[0][:4]
+            unit = unit_id(pid0)
+            panels = sorted({unit_id(n) for p in plates for n in p[0].neighbours[p[1]] if n[0] == "P"})
+            nodes = " ".join(part_ids("node", topo.edges[e])) if topo is not None else ""
+            two = len(panels) == 2 and np.isfinite(uf["dihedral"][e])
+            dihedral = f"{uf['dihedral'][e]:.2f}" if two else ""
+            unit_flags = sorted({f for p in plates for f in flags.get(p[2], [])} | set(flags.get(unit, [])))
+            if plate:
+                g, i, pid, a, w, L = plates[0]
+                yield (pid, e, f"plate {spec.beam_width:g} x {g.rect[i, 1]:.0f}", "",
+                       f"{len(plates)}", spec.steel_grade, f"{L:.1f}", f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}",
+                       *angles(a, i), dihedral, f"{w:.2f}", " ".join(panels), nodes, "; ".join(unit_flags))
+                continue
+            cuts = angles(a0, i0, uf["mitre"][e])[:4] + ("",)   # end cuts of the first plate; ridges: per plate
+            yield (unit, e, section_text(spec, depth), "beam", f"{len(plates)}", spec.steel_grade,
+                   f"{uf['length'][e]:.1f}", "", "", *cuts, dihedral,
+                   f"{uf['weight_kg'][e]:.2f}", " ".join(panels), nodes, "; ".join(unit_flags))
+            for g, i, pid, a, w, L in plates:
+                yield (pid, e, f"PL{g.thickness_mm[i]:g}", g.member, "", spec.steel_grade, f"{L:.1f}",
+                       f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}", *angles(a, i), "", f"{w:.2f}",
+                       " ".join(unit_id(n) for n in g.neighbours[i] if n[0] == "P"), nodes, "; ".join(flags.get(pid, [])))
     n = _write(path, STEEL_COLUMNS, rows())
-    return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "seconds": time.perf_counter() - t0}
+    return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "beams": len(by_edge),
+            "section": section_text(spec, depth), "seconds": time.perf_counter() - t0}
 
 
 def node_table(parts) -> dict[str, np.ndarray]:
     """Per beam end: ``vertex (2e,)``, ``beam (2e,)`` ids index, ``axis (2e, 3)`` unit (glass toward beams),
     ``direction (2e, 3)`` unit from the node along the beam's glass edge, sorted by vertex."""
-    gs = parts.of_kind("beam")
-    X = np.concatenate([g.vertices for g in gs])
-    ids = np.array([i for g in gs for i in g.ids])
+    from fabricate.cad.parts import unit_id
+
+    gs = beam_units(parts)
+    X = np.concatenate([g.centre_line if g.centre_line is not None else g.vertices[:, :4] for g in gs])
+    ids = np.array([unit_id(i) for g in gs for i in g.ids])
     E = parts.mesh.topology.edges[np.concatenate([g.element for g in gs])]
     vert = np.concatenate([E[:, 0], E[:, 1]])
     axis = np.concatenate([X[:, 3] - X[:, 0], X[:, 2] - X[:, 1]])
     direction = np.concatenate([X[:, 1] - X[:, 0], X[:, 0] - X[:, 1]])
     beam = np.concatenate([ids, ids])
     order = np.argsort(vert, kind="stable")
-    unit = lambda v: v / np.linalg.norm(v, axis=1, keepdims=True)  # noqa: E731
-    return {"vertex": vert[order], "beam": beam[order], "axis": unit(axis[order]),
-            "direction": unit(direction[order])}
+    return {"vertex": vert[order], "beam": beam[order], "axis": _unit(axis[order]),
+            "direction": _unit(direction[order])}
+
+
+def hub_columns(parts, n: int) -> tuple[list[str], np.ndarray, float, np.ndarray]:
+    """Per vertex ``(n,)``: the hub text, its height (mm, NaN without a hub), its outside diameter and wall
+    (mm, 0 for a solid hub): what the node schedule lists."""
+    spec = parts.spec
+    height = np.full(n, np.nan)
+    for g in parts.of_kind("node"):
+        if g.member in ("", "tube"):
+            height[g.element] = g.length_mm
+        elif g.member in ("top cap", "bottom cap"):
+            height[g.element] += g.length_mm
+    conn = spec.connection
+    if conn != "hub" or not parts.of_kind("node"):
+        text = {"mitre": "none (mitred ends)", "none": f"none (square ends {spec.node.gap_mm:g} mm off the axis)"}
+        return [text.get(conn, "none")] * n, height, 0.0, np.zeros(n)
+    d = 2 * spec.hub_radius
+    if spec.hub_kind == "tube":
+        wall = spec.node.wall_mm
+        texts = [f"tube {spec.node_sides}-gon D{d:g} x {wall:g}, caps {spec.node.cap_mm:g}, h {h:.1f}" for h in height]
+        return texts, height, d, np.full(n, wall)
+    return [f"solid {spec.node_sides}-gon D{d:g}, h {h:.1f}" for h in height], height, d, np.zeros(n)
 
 
 def write_node_schedule(parts, path) -> dict:
@@ -253,7 +365,7 @@ def write_node_schedule(parts, path) -> dict:
     starts = np.flatnonzero(np.r_[True, v[1:] != v[:-1]])
     stops = np.r_[starts[1:], len(v)]
     nid = part_ids("node", np.arange(mesh.n_vertices))
-    hub = f"hub r {parts.spec.node_radius:g} mm" if parts.spec.node_radius > 0 else "none (mitred ends)"
+    hub, height, diameter, wall = hub_columns(parts, mesh.n_vertices)
 
     def rows():
         for s, e in zip(starts.tolist(), stops.tolist()):  # one row per node
@@ -261,6 +373,8 @@ def write_node_schedule(parts, path) -> dict:
             x = mesh.V[i]
             a = axis[s]
             yield (nid[i], i, f"{x[0]:.1f}", f"{x[1]:.1f}", f"{x[2]:.1f}", f"{a[0]:.6f}", f"{a[1]:.6f}",
-                   f"{a[2]:.6f}", e - s, " ".join(beam[s:e]), _num(az[s:e]), _num(elev[s:e]), hub)
+                   f"{a[2]:.6f}", e - s, " ".join(beam[s:e]), _num(az[s:e]), _num(elev[s:e]), hub[i],
+                   f"{diameter:g}" if diameter else "", f"{wall[i]:g}" if wall[i] else "",
+                   f"{height[i]:.1f}" if np.isfinite(height[i]) else "")
     n = _write(path, NODE_COLUMNS, rows())
     return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "seconds": time.perf_counter() - t0}

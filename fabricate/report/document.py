@@ -64,7 +64,8 @@ def parts_summary(parts) -> dict[str, Any] | None:
         vol = float(sum(float(np.sum(g.volume_mm3)) for g in groups))
         density = parts.spec.density(kind)
         mass = sum(float(np.sum(g.volume_mm3)) * parts.spec.group_density(g) for g in groups) * 1e-9
-        out[kind + "s"] = {"count": int(sum(len(g) for g in groups)), "volume_mm3": vol,
+        out[kind + "s"] = {"count": int(sum(len(g) for g in groups)),    # solids (plates, plies, hub pieces)
+                           "units": len({i.split(".", 1)[0] for g in groups for i in g.ids}), "volume_mm3": vol,
                            "mass_kg": mass, "density_kg_m3": density}
     from fabricate.cad.glass import bearing_groups
 

@@ -59,6 +59,7 @@ def client_totals(parts) -> dict | None:
     if parts is None:
         return None
     from fabricate.cad.glass import bearing_groups
+    from fabricate.cad.parts import unit_id
 
     panels = parts.of_kind("panel")
     area = 0.0
@@ -75,14 +76,16 @@ def client_totals(parts) -> dict | None:
     density = parts.spec.density("beam")
     steel_kg = sum(float(np.sum(g.volume_mm3)) for g in steel) * 1e-9 * density
     glass_kg = sum(float(np.sum(g.volume_mm3)) * parts.spec.group_density(g) for g in panels) * 1e-9
-    length = sum(float(np.sum(g.length_mm)) for g in parts.of_kind("beam"))
+    from fabricate.export.schedules import beam_units
+
+    length = sum(float(np.sum(g.length_mm)) for g in beam_units(parts))   # one length per beam, not per plate
     return {"glass_area_m2": area * 1e-6, "panels": sum(len(g) for g in units),
             "build_up": parts.spec.glass.short() if hasattr(parts.spec, "glass") else "",
             "distinct_panel_sizes": sizes, "most_panels_of_one_size": largest,
             "size_tolerance_mm": SIZE_TOL_MM,
             "size_rule": "congruent flat outlines (corner distances, mirror images differ) and equal "
                          f"thickness, within {SIZE_TOL_MM:g} mm",
-            "glass_mass_kg": glass_kg, "beams": sum(len(g) for g in parts.of_kind("beam")),
+            "glass_mass_kg": glass_kg, "beams": len({unit_id(i) for g in parts.of_kind("beam") for i in g.ids}),
             "steel_length_m": length * 1e-3, "steel_mass_kg": steel_kg, "steel_mass_t": steel_kg * 1e-3,
             "steel_includes": "beams and nodes"}
 

@@ -16,7 +16,7 @@ from .frame import Frame, frame_from_offset
 from .loads import basic_cases
 from .options import ALPHA, GRADES
 from .results import Results, evaluate, worst
-from .sections import SectionProperties, plate, slender_part
+from .sections import SectionProperties, built_section, slender_part
 
 UTILIZATION_NOTE = ("max of the elastic cross-section check |N|/Npl + |My|/Mel,y + |Mz|/Mel,z (EN 1993-1-1 "
                     "6.2.1(7)) and the same with the compression over chi Npl (flexural buckling 6.3.1, "
@@ -59,11 +59,12 @@ class StructureCheck:
 
 
 def configured_section(options, spec, structure) -> SectionProperties:
-    """``structure.section`` or, when null, the parts' plate: ``beam_width`` x the layer span."""
+    """``structure.section`` or, when null, the section the parts are welded from (``parts.beam``: the
+    plate, tee, I or RHS of the layer span's depth, :func:`built_section`)."""
     if options.section is not None:
         return options.section.properties("structure.section")
     d0, d1 = structure.beam_span
-    return plate(spec.beam_width, abs(d1 - d0), "parts")
+    return built_section(spec, abs(d1 - d0))
 
 
 def default_span(V: np.ndarray, up) -> float:

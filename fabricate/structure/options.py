@@ -135,7 +135,7 @@ class StructureOptions:
 
 
 _NESTED = {
-    "section": (SectionOption | None, Field(default=None)),  # null: the parts' plate, beam_width x layer span
+    "section": (SectionOption | None, Field(default=None)),  # null: the section the parts are welded from (parts.beam)
     "loads": (LoadsOption, Field(default_factory=LoadsOption)),
     "combinations": (list[CombinationOption] | None, Field(default=None)),  # null: DEFAULT_COMBINATIONS
     "sizing": (SizingOption, Field(default_factory=SizingOption)),

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from .check import beam_table, check_structure, report
+from .sections import built_section
 
 
 def check_run(opt, structure, spec) -> tuple:
@@ -24,11 +25,11 @@ def check_run(opt, structure, spec) -> tuple:
     chk = check_structure(structure, opt, spec)
     rep = report(chk)
     d0, d1 = structure.beam_span
-    built_name = f"plate {spec.beam_width:g}x{abs(d1 - d0):g}"
+    built_name = built_section(spec, abs(d1 - d0)).name
     notes = []
     if chk.section.name != built_name:
         notes.append(f"checked section {chk.section.name} (structure.section); the CAD stage cut the beams as "
-                     f"{built_name} (parts.beam_width x the layer span): the cut list's weights are those of the plates")
+                     f"{built_name} (parts.beam and the layer span): the cut list's weights are those of the plates")
     over = int((chk.results.utilization > 1.0).sum())
     if over and opt.check == "report":
         notes.append(f"{over} beam(s) exceed utilization 1 (max {chk.max_utilization:.3g}); not enforced "

@@ -38,11 +38,12 @@ class SectionProperties:
 
     @property
     def name(self) -> str:
-        """``plate 80x300``, ``rhs 300x100x8``, ``i 300x150x7.1x10.7`` (h x b x tw x tf)."""
+        """``plate 80x300``, ``rhs 300x100x8`` (``x8x12`` when web and flange differ),
+        ``i 300x150x7.1x10.7`` (h x b x tw x tf)."""
         if self.shape == "plate":
             return f"plate {self.b:g}x{self.h:g}"
         if self.shape == "rhs":
-            return f"rhs {self.h:g}x{self.b:g}x{self.tw:g}"
+            return f"rhs {self.h:g}x{self.b:g}x{self.tw:g}" + ("" if self.tf == self.tw else f"x{self.tf:g}")
         return f"{self.shape} {self.h:g}x{self.b:g}x{self.tw:g}x{self.tf:g}"
 
     def mass_per_m(self, density: float = 7850.0) -> float:
@@ -132,6 +133,36 @@ def section(shape: str, *, depth: float, width: float, web: float | None = None,
             raise ConfigError(f"{key}.{missing[0]}: missing, a {shape} section needs web and flange (mm)")
         return (tee if shape == "tee" else i_section)(depth, width, web, flange, key)
     raise ConfigError(f"{key}.shape = {shape!r}: expected one of {', '.join(SHAPES)}")
+
+
+def built_section(spec, depth: float) -> SectionProperties:
+    """The section the CAD stage welds from plates (``parts.beam``, :mod:`fabricate.cad.sections`), ``depth``
+    the layer span (mm): area, ``Iy``, ``Iz`` and the centroid summed over the plates' rectangles (parallel
+    axes; flat flanges, i.e. a 180 degree dihedral: the flanges of a real beam tilt by up to the panels'
+    half dihedral, which changes ``Iz`` by ``1 - cos`` of it), ``J``: thin-walled, ``sum b t^3 / 3`` for open
+    sections (plate: Roark), Bredt's ``4 Am^2 / sum(s / t)`` for the RHS box."""
+    from fabricate.cad.sections import section_rectangles
+
+    shape = spec.beam.section
+    if shape == "plate":
+        return plate(spec.beam_width, depth, "parts")
+    R = [(y0, y1, z0, z1) for y0, y1, z0, z1 in section_rectangles(spec, depth)]
+    b = [y1 - y0 for y0, y1, _, _ in R]
+    h = [z1 - z0 for _, _, z0, z1 in R]
+    a = [bi * hi for bi, hi in zip(b, h)]
+    A = sum(a)
+    zc = sum(ai * (z0 + z1) / 2 for ai, (_, _, z0, z1) in zip(a, R)) / A
+    yc = sum(ai * (y0 + y1) / 2 for ai, (y0, y1, _, _) in zip(a, R)) / A
+    Iy = sum(bi * hi ** 3 / 12 + ai * ((z0 + z1) / 2 - zc) ** 2 for bi, hi, ai, (_, _, z0, z1) in zip(b, h, a, R))
+    Iz = sum(hi * bi ** 3 / 12 + ai * ((y0 + y1) / 2 - yc) ** 2 for bi, hi, ai, (y0, y1, _, _) in zip(b, h, a, R))
+    tw, tf, width = spec.web, spec.beam.flange_mm, spec.beam.flange_width_mm
+    if shape == "rhs":
+        Am = (width - tw) * (depth - tf)
+        J = 4 * Am ** 2 / (2 * (width - tw) / tf + 2 * (depth - tf) / tw)
+    else:  # open: the web over the full depth, the flange outstands
+        J = (depth * tw ** 3 + sum(max(bi, hi) * min(bi, hi) ** 3 for bi, hi in zip(b[1:], h[1:]))) / 3.0
+    zmax = max(zc, depth - zc)
+    return SectionProperties(shape, depth, width, tw, tf, A, Iy, Iz, J, Iy / zmax, 2 * Iz / width, zc)
 
 
 def slender_part(sec: SectionProperties, fy: float) -> str | None:

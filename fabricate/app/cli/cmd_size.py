@@ -11,7 +11,7 @@ def register(sub) -> None:
                     "candidates in structure.sizing.sections, the lightest section per beam group "
                     "(structure.sizing.group_by) that passes the check (utilization <= 1, deflections within "
                     "their limits) by a full OpenSees solve; reports the steel saved against the configured "
-                    "section (structure.section, or the parts' plate).",
+                    "section (structure.section, or the section the parts are welded from: parts.beam).",
         epilog="Exit codes: 0 a passing choice, 2 bad input, 3 no candidate passes (the heaviest is reported).")
     p.add_argument("config", help="YAML run configuration with structure.sizing.sections")
     p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], dest="sets",

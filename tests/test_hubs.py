@@ -1,0 +1,150 @@
+"""Node connections (parts.node): tube hubs with cap plates, solid hubs, mitres, square ends; their files."""
+import csv
+import functools
+import json
+
+import numpy as np
+import pytest
+from cad_fixtures import dome_structure
+
+from fabricate.cad import PartSpec, build_parts
+from fabricate.export.meshes import group_triangles, manifold_of
+
+TUBE = dict(connection="hub", hub="tube", radius_mm=90.0, wall_mm=8.0, cap_mm=12.0)
+
+
+@functools.lru_cache(maxsize=None)
+def built(node: tuple, section: str = "plate"):
+    beam = {"plate": {}, "rhs": dict(section="rhs", web_mm=6, flange_mm=8, flange_width_mm=120)}[section]
+    return build_parts(dome_structure(n_around=6, k=3), PartSpec(node=dict(node), beam=beam))
+
+
+def _ngon_area(r, k):
+    return 0.5 * k * r * r * np.sin(2 * np.pi / k)
+
+
+def test_tube_hub_is_a_tube_and_two_caps_of_the_right_volume():
+    parts = built(tuple(TUBE.items()))
+    nodes = {g.member: g for g in parts.of_kind("node")}
+    assert list(nodes) == ["tube", "top cap", "bottom cap"]
+    assert nodes["tube"].ids[:2] == ("N0001.1", "N0002.1") and nodes["top cap"].ids[0] == "N0001.2"
+    k, r, wall, cap = 24, 90.0, 8.0, 12.0
+    r_in = r - wall / np.cos(np.pi / k)
+    np.testing.assert_allclose(nodes["tube"].volume_mm3,
+                               (_ngon_area(r, k) - _ngon_area(r_in, k)) * nodes["tube"].length_mm, rtol=1e-9)
+    for name in ("top cap", "bottom cap"):
+        np.testing.assert_allclose(nodes[name].volume_mm3, _ngon_area(r, k) * cap, rtol=1e-9)
+    # the hub's height comes from the layers: tube + caps = the solid hub between the recessed caps
+    solid = built((("connection", "hub"), ("hub", "solid"), ("radius_mm", 90.0)))
+    s = solid.of_kind("node")[0]
+    assert s.member == "" and s.ids[0] == "N0001"
+    np.testing.assert_allclose(nodes["tube"].length_mm + 2 * cap, s.length_mm, rtol=1e-12)
+    assert s.length_mm.max() < 200.0                                    # recessed inside the 200 mm layers
+
+
+def test_tube_is_one_closed_surface_with_one_hole_and_its_brep_has_annular_ends():
+    from fabricate.export.brep import group_solids, solid_facts
+
+    g = built(tuple(TUBE.items())).of_kind("node")[0]
+    X, T = group_triangles(g, np.zeros(3))
+    m = manifold_of(X[:1], T)
+    assert m.status().name == "NoError" and m.genus() == 1
+    solids = group_solids(g)[:3]
+    for i, shape in enumerate(solids):   # built by build123d: outside + inside + one annulus per end
+        f = solid_facts(shape)
+        assert f["valid"] and f["faces"] == 2 * 24 + 2
+        assert f["volume_mm3"] == pytest.approx(g.volume_mm3[i], rel=1e-9)
+
+
+def test_beams_stop_at_the_hub_and_do_not_enter_it():
+    parts = built(tuple(TUBE.items()), "rhs")
+    beams = parts.of_kind("beam")
+    hubs = parts.of_kind("node")
+    ms_h = []
+    for g in hubs:
+        X, T = group_triangles(g, np.zeros(3))
+        ms_h += [manifold_of(X[i:i + 1], T) for i in range(len(g))]
+    worst = 0.0
+    for g in beams:
+        X, T = group_triangles(g, np.zeros(3))
+        for i in range(len(g)):
+            b = manifold_of(X[i:i + 1], T)
+            for v in parts.mesh.topology.edges[g.element[i]].tolist():
+                for h in (ms_h[v], ms_h[len(ms_h) // 3 + v], ms_h[2 * len(ms_h) // 3 + v]):
+                    worst = max(worst, (b ^ h).volume())
+    assert worst < 1e-6
+    sb = parts.report["beams"]["end_setback_mm"]
+    assert sb["min"] >= 90.0 and parts.report["beams"]["connection"] == "hub"
+
+
+def test_mitre_none_and_the_old_node_radius():
+    mitre = built((("connection", "mitre"),))
+    assert not mitre.of_kind("node") and mitre.report["beams"]["end_setback_mm"]["max"] == 0.0
+    none = built((("connection", "none"), ("gap_mm", 25.0)))
+    assert not none.of_kind("node") and none.report["beams"]["end_setback_mm"]["min"] >= 25.0
+    old = build_parts(dome_structure(n_around=6, k=3), PartSpec(node_radius=40.0))   # today's configs
+    g = old.of_kind("node")
+    assert len(g) == 1 and g[0].member == "" and old.spec.connection == "hub" and old.spec.hub_kind == "solid"
+
+
+def test_node_schedule_lists_the_hub_per_node(tmp_path):
+    from fabricate.export import write_node_schedule
+
+    parts = built(tuple(TUBE.items()))
+    write_node_schedule(parts, tmp_path / "nodes.csv")
+    with open(tmp_path / "nodes.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    tube = {i: g for g in parts.of_kind("node") for i in [g.member]}["tube"]
+    assert len(rows) == parts.mesh.n_vertices
+    for r in rows:
+        v = int(r["vertex"])
+        assert float(r["hub_diameter_mm"]) == 180.0 and float(r["hub_wall_mm"]) == 8.0
+        assert float(r["hub_height_mm"]) == pytest.approx(tube.length_mm[v] + 24.0, abs=0.06)
+        assert r["hub"].startswith("tube 24-gon D180 x 8, caps 12")
+    write_node_schedule(built((("connection", "mitre"),)), tmp_path / "mitre.csv")
+    with open(tmp_path / "mitre.csv", newline="") as fh:
+        assert all(r["hub"] == "none (mitred ends)" and r["hub_height_mm"] == "" for r in csv.DictReader(fh))
+
+
+def test_to_build123d_labels_the_tube_parts():
+    a = built(tuple(TUBE.items())).to_build123d(kinds=("node",))
+    nodes = a.children[0]
+    assert nodes.label == "nodes" and nodes.children[0].label == "N0001.1"
+    assert len(nodes.children[0].faces()) == 50
+
+
+def test_a_run_with_rhs_beams_and_tube_hubs_passes_its_checks(tmp_path):
+    """The files of a small run: STEP reads back with every plate and hub id, the full check (STEP, 3MF,
+    STL, IFC, flat data, NC1, bearing, clashes) passes, the cut files hold each plate thickness, the IFC
+    has one member per beam and per hub."""
+    from _pipeline_fixtures import tiny_config
+
+    from fabricate.check import check_outputs
+    from fabricate.app.pipeline import run_pipeline
+
+    outputs = {"step": True, "stl": True, "3mf": True, "dxf": True, "svg": False, "bom": True, "pictures": False,
+               "html": False, "ifc": True, "3dm": False, "nc1": True, "gltf": False, "check": "off"}
+    cfg = tiny_config(tmp_path, "rhs_hubs", outputs=outputs,
+                      parts={"beam": dict(section="rhs", web_mm=6, flange_mm=8, flange_width_mm=120),
+                             "node": dict(TUBE)})
+    run_pipeline(cfg, tmp_path / "out")
+    out = tmp_path / "out" / "rhs_hubs"
+    res = check_outputs(out)
+    failed = {k: v.get("why") for k, v in res["checks"].items() if v.get("pass") is False}
+    assert res["pass"], failed
+    assert res["checks"]["flat"]["pass"] and res["checks"]["step"]["pass"] and res["checks"]["ifc"]["pass"]
+    import ifcopenshell
+
+    members = {e.Name: e for e in ifcopenshell.open(str(out / "model.ifc")).by_type("IfcMember")}
+    assert len(members["B0001"].Representation.Representations[0].Items) == 6     # one member, six plates
+    assert len(members["N0001"].Representation.Representations[0].Items) == 3     # tube and two caps
+    from fabricate.export.step_text import read_step_text
+
+    solids, _ = read_step_text(out / "model.step")
+    assert {"B0001.1", "B0001.6", "N0001.1", "N0001.3"} <= set(solids)
+    assert (out / "cut_steel_6mm.dxf").exists() and (out / "cut_steel_8mm.dxf").exists()
+    assert len(list((out / "nc1").glob("B0001.*.nc1"))) == 6
+    facts = json.loads((out / "report.json").read_text())
+    assert facts["parts"]["cad_report"]["beams"]["section"] == "rhs"
+    beams = facts["parts"]["beams"]
+    assert beams["count"] == 6 * beams["units"] and facts["parts"]["nodes"]["count"] == 3 * facts["parts"]["nodes"]["units"]
