@@ -20,7 +20,7 @@ peak of Python + numpy memory that must stay below :data:`PER_BYTE` times the fi
 size plus :data:`BASE` (memory proportional to the file).
 
 The example budget is fixed and the search derandomized, so CI runs the same cases in
-a few seconds.  A longer campaign: ``FUZZ_EXAMPLES=3000 pytest -s tests/test_fuzz_readers.py``
+a few seconds.  A longer campaign: ``FUZZ_EXAMPLES=3000 pytest -s tests/test_fuzz_readers.py tests/test_fuzz_cosmetic.py``
 prints, per input class, how many inputs were tried and how each ended.
 """
 from __future__ import annotations
@@ -32,14 +32,12 @@ import select
 import struct
 import subprocess
 import sys
-from collections import Counter
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
-EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "40"))
 MEM_CAP = 768 << 20  # address space a worker may add to its size at start (bytes)
 TIME_CAP = 10.0  # seconds per case (traced: tracemalloc slows parsing several times)
 PER_BYTE, BASE = 128, 24 << 20  # traced peak allowed: PER_BYTE x file size + BASE
@@ -211,20 +209,9 @@ NUMBER = re.compile(rb"[-+]?\d+(\.\d*)?([eE][-+]?\d+)?")
 
 
 # -- hypothesis strategies -------------------------------------------------------------------------
-from hypothesis import HealthCheck, given, settings  # noqa: E402
+from _fuzz_common import FUZZ, TALLY, Case, print_tally  # noqa: E402
+from hypothesis import given  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
-
-FUZZ = settings(max_examples=EXAMPLES, derandomize=True, deadline=None, database=None,
-                suppress_health_check=list(HealthCheck), print_blob=True)
-TALLY: Counter = Counter()
-
-
-class Case(tuple):
-    """(labels, extension, bytes) with a short repr (hypothesis prints failing cases)."""
-
-    def __repr__(self):
-        labels, ext, data = self
-        return f"Case({labels}, {ext!r}, {len(data)} bytes: {data[:160]!r}...)"
 
 
 @st.composite
@@ -368,17 +355,7 @@ def worker(tmp_path_factory):
     yield w
     w.stop()
     if os.environ.get("FUZZ_EXAMPLES"):  # the campaign's figures (shown with -s)
-        _print_tally()
-
-
-def _print_tally() -> None:
-    classes = sorted({c for c, _ in TALLY})
-    outcomes = sorted({o for _, o in TALLY})
-    print(f"\n{'input class':40s} {'tried':>6s} {'clean':>6s} " + " ".join(f"{o:>11s}" for o in outcomes))
-    for c in classes:
-        tried = sum(TALLY[c, o] for o in outcomes)
-        clean = sum(TALLY[c, o] for o in CLEAN)
-        print(f"{c:40s} {tried:6d} {clean:6d} " + " ".join(f"{TALLY[c, o]:11d}" for o in outcomes))
+        print_tally(CLEAN)
 
 
 def _check(worker, case) -> None:
@@ -404,105 +381,6 @@ def test_mutated_real_files_end_in_a_mesh_or_a_mesh_error(worker, case):
 @given(case=soup())
 def test_generated_soups_end_in_a_mesh_or_a_mesh_error(worker, case):
     _check(worker, case)
-
-
-# -- valid files in every cosmetic variant are read, and read the same --------------------------------
-def _grid():
-    from optimize.modelling import shapes
-
-    return shapes.grid(4, 3, height=lambda x, y: 0.1 * x * y, name="grid")
-
-
-STL_NAMES = ["loop", "vertex", "facet normal", "endloop", "", "\u540d\u524d roof", "endsolid"]
-
-
-@st.composite
-def cosmetic(draw):
-    """(labels, extension, bytes): a valid grid file with cosmetic variations a real exporter makes."""
-    g = _grid()
-    fmt = draw(st.sampled_from(["obj", "off", "ply-ascii", "stl-ascii"]))
-    labels = [f"valid {fmt}"]
-    vs = ["%r %r %r" % tuple(v) for v in g.V.tolist()]
-    if fmt == "obj":
-        style = draw(st.sampled_from(["plain", "v//vn", "v/vt/vn", "relative"]))
-        labels.append(f"valid obj faces {style}")
-        lines = ["# caf\u00e9 \u00b2", "o grid", "g panels", "s off", "usemtl glass"] + ["v " + v for v in vs]
-        for i, f in enumerate(g.faces_list()):
-            if style == "relative":
-                idx = [str(j - g.n_vertices) for j in f]
-            else:
-                idx = [str(j + 1) + {"plain": "", "v//vn": "//1", "v/vt/vn": "/1/1"}[style] for j in f]
-            lines.append("f " + " ".join(idx))
-        ext = "obj"
-    elif fmt == "off":
-        inline = draw(st.booleans())
-        head = [f"OFF {g.n_vertices} {g.n_faces} 0"] if inline else ["OFF", "# comment", f"{g.n_vertices} {g.n_faces} 0"]
-        labels.append("valid off counts on the header line" if inline else "valid off counts below")
-        lines = head + vs + [f"{len(f)} " + " ".join(map(str, f)) for f in g.faces_list()]
-        ext = "off"
-    elif fmt == "ply-ascii":
-        junk = draw(st.booleans())
-        head = ["ply", "format ascii 1.0", "comment \u00e9crit", f"element vertex {g.n_vertices}",
-                "property double x", "property double y", "property double z", f"element face {g.n_faces}",
-                "property list uchar int vertex_indices"]
-        body = vs + [f"{len(f)} " + " ".join(map(str, f)) for f in g.faces_list()]
-        if junk:
-            head += ["element material 2", "property float shine"]
-            body += ["0.5", "1"]
-            labels.append("valid ply extra element")
-        lines = head + ["end_header"] + body
-        ext = "ply"
-    else:
-        name = draw(st.sampled_from(STL_NAMES))
-        upper = draw(st.booleans())
-        labels.append(f"valid stl solid named '{name}'")
-        lines = [f"solid {name}"]
-        for t in g.V[g.triangulate()].tolist():
-            lines += ["facet normal 0 0 1", "outer loop"] + ["vertex %r %r %r" % tuple(v) for v in t]
-            lines += ["endloop", "endfacet"]
-        lines.append(f"endsolid {name}")
-        if upper:
-            lines = [ln.upper() if not ln.startswith("vertex") else "VERTEX" + ln[6:] for ln in lines]
-            labels.append("valid stl upper case")
-        ext = "stl"
-    if draw(st.booleans()):
-        lines = [("\t" if draw(st.booleans()) else "  ") + ln + " " for ln in lines]
-        labels.append("valid indented, trailing blanks")
-    if draw(st.booleans()) and fmt != "ply-ascii":
-        lines = [x for ln in lines for x in (ln, "")]
-        labels.append("valid empty lines")
-    sep = draw(st.sampled_from(["\n", "\r\n"]))
-    labels.append("valid CRLF" if sep == "\r\n" else "valid LF")
-    data = (sep.join(lines) + sep).encode()
-    if draw(st.booleans()):
-        data = b"\xef\xbb\xbf" + data
-        labels.append("valid BOM")
-    return Case((labels, ext, data))
-
-
-@FUZZ
-@given(case=cosmetic())
-def test_valid_files_in_any_cosmetic_variant_read_the_same(tmp_path_factory, case):
-    from optimize.mesh.io import read_mesh
-
-    labels, ext, data = case
-    path = tmp_path_factory.mktemp("valid") / f"grid.{ext}"
-    path.write_bytes(data)
-    try:
-        mesh = read_mesh(path)
-    except Exception as exc:
-        for label in labels:
-            TALLY[label, "refused"] += 1
-        raise AssertionError((labels, str(exc)))
-    g = _grid()
-    if ext == "stl":  # welded: the same vertices in another order, two triangles per quad
-        got, want = mesh.V[np.lexsort(mesh.V.T)], g.V[np.lexsort(g.V.T)]
-        ok = np.array_equal(got, want) and mesh.n_faces == 2 * g.n_faces
-    else:
-        ok = np.array_equal(mesh.V, g.V) and np.array_equal(mesh.F, g.F)
-    for label in labels:
-        TALLY[label, "mesh" if ok else "misread"] += 1
-    assert ok, labels
 
 
 def test_the_worker_reports_what_it_is_asked_to_catch(worker):
