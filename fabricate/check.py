@@ -179,22 +179,24 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
             if name in names:
                 checks[name] = _one_check(name, key, needs, run, paths, skip, written, read)
 
-    child = None
-    if only is None and "step" not in skip and check_lanes.worth_a_child(paths["step"], step_reader):
-        child = check_lanes.start(out, skip)
+    groups = [] if only is not None else check_lanes.lanes_for(paths, skip, step_reader)
+    children: list = []
     try:
-        run_checks(only if only is not None else
-                   {t[0] for t in table} - (check_lanes.CHILD_CHECKS if child else frozenset()))
-        if child is not None:
-            theirs = check_lanes.collect(child)
+        for names in groups:
+            children.append((names, check_lanes.start(out, names, skip)))
+        elsewhere = frozenset().union(*[names for names, child in children if child is not None])
+        run_checks(only if only is not None else {t[0] for t in table} - elsewhere)
+        for names, child in children:
+            theirs = None if child is None else check_lanes.collect(child)
             if theirs is None:
-                run_checks(check_lanes.CHILD_CHECKS)
-            else:
-                checks.update(theirs)
-                if "error" in theirs.get("step", {}):   # no solids read: the flat data against the 3MF, here
-                    run_checks({"flat"})
+                run_checks(names)
+                continue
+            checks.update(theirs)
+            if "error" in theirs.get("step", {}):   # no solids read: the flat data against the 3MF, here
+                run_checks({"flat"})
     finally:
-        check_lanes.stop(child)
+        for _, child in children:
+            check_lanes.stop(child)
     checks = {k: checks[k] for k in ["bom"] + [t[0] for t in table] if k in checks}
     failed = [k for k, v in checks.items() if v.get("pass") is False]
     return {"outdir": str(out), "pass": not failed, "failed": failed, "checks": checks,

@@ -1,17 +1,20 @@
-"""The full check in two lanes: the STEP read and the checks that need it in a child process,
-the others in this one, at the same time.
+"""The full check in lanes: the STEP read and the checks that need it in one child process, the
+IFC check in another, the others in this one, at the same time.
 
 The text reader's STEP check is the longest single check of a big run (a 165 MB file: about
 4 s of CPU); nothing else waits for it but the flat data check (which compares each part with
-its STEP solid) and the DXF check (which looks up every outline's solid by name).  So
-:data:`CHILD_CHECKS` run in ``python -m fabricate.check_lanes`` while this process runs the
-3MF, STL, intersection, bearing, SVG and exchange-file checks; the child's results are merged
-in the usual order.  The results are the same as one lane's (a test holds it so): the child
-runs :func:`fabricate.check._check_outputs` itself, on the same files, with the same readers.
+its STEP solid) and the DXF check (which looks up every outline's solid by name).  The IFC
+check's schema validation (ifcopenshell's, in Python: about 10 s for the railway station's
+12,000 elements) needs nothing else.  So each group of :data:`LANES` whose file is big enough
+runs in a child (``python -c 'from fabricate.check_lanes import main; main()'``) while this
+process runs the 3MF, STL, intersection, bearing, SVG, 3dm and NC1 checks; the children's
+results are merged in the usual order.  The results are the same as one lane's (a test holds
+it so): a child runs :func:`fabricate.check._check_outputs` itself, on the same files, with the
+same readers.
 
-Only where it pays: a STEP file of at least :data:`LANE_BYTES` (the child's start, about
-0.5 s of imports, is hidden behind this lane's work), on Linux, with two CPUs free to this
-process.  When the child cannot be started or fails (no such interpreter, killed, a result
+Only where it pays: a file of at least its lane's bytes (a child's start, about 0.5 s of
+imports, is hidden behind this lane's work), the text reader, on Linux, with two CPUs free to
+this process.  When a child cannot be started or fails (no such interpreter, killed, a result
 that does not unpickle) its checks run here after all, so a check is never lost.
 """
 from __future__ import annotations
@@ -25,32 +28,38 @@ import sys
 from pathlib import Path
 
 log = logging.getLogger(__name__)
-CHILD_CHECKS = frozenset({"step", "flat", "dxf"})
-LANE_BYTES = 16 << 20
+LANES = ((frozenset({"step", "flat", "dxf"}), "step"), (frozenset({"ifc"}), "ifc"))
+"""Checks run together in a child, and the key (of ``fabricate.check.FILES``) of the file whose size decides."""
+LANE_BYTES = {"step": 16 << 20, "ifc": 4 << 20}
 
 
-def worth_a_child(step_path: Path, step_reader: str) -> bool:
-    """Whether the STEP check of ``step_path`` goes to a child process (see the module's text)."""
+def lanes_for(paths: dict[str, Path], skip: frozenset[str], step_reader: str) -> list[frozenset[str]]:
+    """The groups of :data:`LANES` that go to child processes here (see the module's text)."""
     if step_reader != "text" or not sys.platform.startswith("linux") or len(os.sched_getaffinity(0)) < 2:
-        return False
-    try:
-        return step_path.stat().st_size >= LANE_BYTES
-    except OSError:
-        return False
+        return []
+    out = []
+    for names, key in LANES:
+        try:
+            if key not in skip and paths[key].stat().st_size >= LANE_BYTES[key]:
+                out.append(names)
+        except OSError:
+            continue
+    return out
 
 
-def start(outdir: Path, skip: frozenset[str]) -> subprocess.Popen | None:
-    """The child running :data:`CHILD_CHECKS` on ``outdir``; None when it cannot be started."""
+def start(outdir: Path, names: frozenset[str], skip: frozenset[str]) -> subprocess.Popen | None:
+    """The child running the checks ``names`` on ``outdir``; None when it cannot be started."""
     import fabricate
 
     root = str(Path(fabricate.__file__).resolve().parents[1])   # the child imports this very package
     code = (f"import sys; sys.path.insert(0, {root!r}); "
             "from fabricate.check_lanes import main; main()")
     try:
-        return subprocess.Popen([sys.executable, "-c", code, str(outdir), ",".join(sorted(skip))],
+        return subprocess.Popen([sys.executable, "-c", code, str(outdir), ",".join(sorted(names)),
+                                 ",".join(sorted(skip))],
                                 stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     except OSError as exc:
-        log.warning("check: the STEP read runs in this process (no child: %s)", exc)
+        log.warning("check: %s run in this process (no child: %s)", ", ".join(sorted(names)), exc)
         return None
 
 
@@ -82,11 +91,12 @@ def stop(proc: subprocess.Popen | None) -> None:
 
 
 def main() -> None:
-    """The child: ``OUTDIR SKIP`` (comma list) -> pickled ``{name: result}`` of CHILD_CHECKS on stdout."""
+    """The child: ``OUTDIR NAMES SKIP`` (comma lists) -> pickled ``{name: result}`` of NAMES on stdout."""
     signal.signal(signal.SIGINT, lambda *_: os._exit(130))       # Ctrl-C reaches the parent, which cleans up
     from .check import _check_outputs, heap_reuse
 
-    outdir, skip = Path(sys.argv[1]), frozenset(s for s in sys.argv[2].split(",") if s)
+    outdir = Path(sys.argv[1])
+    names, skip = (frozenset(s for s in arg.split(",") if s) for arg in sys.argv[2:4])
     with heap_reuse():
-        checks = _check_outputs(outdir, skip=skip, only=CHILD_CHECKS)["checks"]
-    sys.stdout.buffer.write(pickle.dumps({k: v for k, v in checks.items() if k in CHILD_CHECKS}))
+        checks = _check_outputs(outdir, skip=skip, only=names)["checks"]
+    sys.stdout.buffer.write(pickle.dumps({k: v for k, v in checks.items() if k in names}))

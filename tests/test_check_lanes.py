@@ -1,4 +1,4 @@
-"""The full check's two lanes (the STEP read in a child process) give the same results as one
+"""The full check's lanes (the STEP read, the IFC check in child processes) give the same results as one
 lane, fall back to one lane when the child fails, and leave no child behind; the STEP reader's
 reals near the end of a file; numpy's huge-page advice restored after the check."""
 import os
@@ -10,8 +10,8 @@ import pytest
 from cad_fixtures import dome_parts
 
 import fabricate.check_lanes as lanes
+import fabricate.export as ex
 from fabricate.check import check_outputs, heap_reuse
-from fabricate.export import write_3mf, write_bom, write_dxf, write_flat, write_step, write_stl, write_svg
 from fabricate.export.step_tokens import Records
 from optimize.errors import ExportError
 
@@ -22,9 +22,9 @@ pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="tw
 def run_dir(tmp_path_factory):
     parts = dome_parts(5, 3)
     folder = tmp_path_factory.mktemp("lanes")
-    for name, fn in (("model.step", write_step), ("model.stl", write_stl), ("model.3mf", write_3mf),
-                     ("outlines.dxf", write_dxf), ("outlines.svg", write_svg), ("flat.json", write_flat),
-                     ("bom.csv", write_bom)):
+    for name, fn in (("model.step", ex.write_step), ("model.stl", ex.write_stl), ("model.3mf", ex.write_3mf),
+                     ("outlines.dxf", ex.write_dxf), ("outlines.svg", ex.write_svg), ("flat.json", ex.write_flat),
+                     ("model.ifc", ex.write_ifc), ("bom.csv", ex.write_bom)):
         fn(parts, folder / name)
     return folder
 
@@ -34,12 +34,12 @@ def _without_seconds(result: dict) -> dict:
 
 
 def _checked(folder, monkeypatch, two: bool) -> dict:
-    monkeypatch.setattr(lanes, "LANE_BYTES", 0 if two else 1 << 62)
+    monkeypatch.setattr(lanes, "LANE_BYTES", dict.fromkeys(lanes.LANE_BYTES, 0 if two else 1 << 62))
     started = []
     real_start = lanes.start
     monkeypatch.setattr(lanes, "start", lambda *a: started.append(1) or real_start(*a))
     result = check_outputs(folder)
-    assert bool(started) == (two and len(os.sched_getaffinity(0)) >= 2)
+    assert len(started) == (len(lanes.LANES) if two and len(os.sched_getaffinity(0)) >= 2 else 0)
     return result
 
 
@@ -48,7 +48,7 @@ def test_two_lanes_give_the_results_of_one(run_dir, monkeypatch):
     assert one["pass"] and two["pass"]
     assert list(two["checks"]) == list(one["checks"])              # the usual order
     assert _without_seconds(two) == _without_seconds(one)
-    assert two["checks"]["flat"]["against"] == "step" and two["checks"]["dxf"]["pass"]
+    assert two["checks"]["flat"]["against"] == "step" and two["checks"]["dxf"]["pass"] and two["checks"]["ifc"]["pass"]
 
 
 def test_a_broken_step_file_reads_the_same_in_the_child(run_dir, tmp_path, monkeypatch):
@@ -69,16 +69,16 @@ def test_a_failed_child_means_the_checks_run_here(run_dir, monkeypatch, how, cap
         monkeypatch.setattr(sys, "executable", "/nonexistent/python")
     else:                                    # exits 1 / answers with its arguments, not a pickle
         monkeypatch.setattr(sys, "executable", "/bin/false" if how == "fails" else "/bin/echo")
-    monkeypatch.setattr(lanes, "LANE_BYTES", 0)
+    monkeypatch.setattr(lanes, "LANE_BYTES", dict.fromkeys(lanes.LANE_BYTES, 0))
     result = check_outputs(run_dir)
     assert _without_seconds(result) == one
-    assert "runs in this process" in caplog.text or "its checks run here" in caplog.text
+    assert "run in this process" in caplog.text or "its checks run here" in caplog.text
 
 
 def test_an_interrupted_check_leaves_no_child(run_dir, monkeypatch):
     children = []
     real_start = lanes.start
-    monkeypatch.setattr(lanes, "LANE_BYTES", 0)
+    monkeypatch.setattr(lanes, "LANE_BYTES", dict.fromkeys(lanes.LANE_BYTES, 0))
     monkeypatch.setattr(lanes, "start", lambda *a: children.append(real_start(*a)) or children[-1])
 
     def interrupted(*a, **k):
