@@ -183,7 +183,7 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     children: list = []
     try:
         for names in groups:
-            children.append((names, check_lanes.start(out, names, skip)))
+            children.append((names, check_lanes.start(out, names, skip, tol)))
         elsewhere = frozenset().union(*[names for names, child in children if child is not None])
         run_checks(only if only is not None else {t[0] for t in table} - elsewhere)
         for names, child in children:

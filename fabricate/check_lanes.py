@@ -47,20 +47,28 @@ def lanes_for(paths: dict[str, Path], skip: frozenset[str], step_reader: str) ->
     return out
 
 
-def start(outdir: Path, names: frozenset[str], skip: frozenset[str]) -> subprocess.Popen | None:
-    """The child running the checks ``names`` on ``outdir``; None when it cannot be started."""
+def start(outdir: Path, names: frozenset[str], skip: frozenset[str], tol) -> subprocess.Popen | None:
+    """The child running the checks ``names`` on ``outdir`` with the tolerances ``tol`` (pickled to
+    its stdin); None when it cannot be started."""
     import fabricate
 
     root = str(Path(fabricate.__file__).resolve().parents[1])   # the child imports this very package
     code = (f"import sys; sys.path.insert(0, {root!r}); "
             "from fabricate.check_lanes import main; main()")
     try:
-        return subprocess.Popen([sys.executable, "-c", code, str(outdir), ",".join(sorted(names)),
+        proc = subprocess.Popen([sys.executable, "-c", code, str(outdir), ",".join(sorted(names)),
                                  ",".join(sorted(skip))],
-                                stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     except OSError as exc:
         log.warning("check: %s run in this process (no child: %s)", ", ".join(sorted(names)), exc)
         return None
+    stdin, proc.stdin = proc.stdin, None      # communicate() later reads only
+    try:
+        with stdin:
+            stdin.write(pickle.dumps(tol))
+    except OSError:                # it ended already: collect() says why
+        pass
+    return proc
 
 
 def collect(proc: subprocess.Popen) -> dict | None:
@@ -97,6 +105,7 @@ def main() -> None:
 
     outdir = Path(sys.argv[1])
     names, skip = (frozenset(s for s in arg.split(",") if s) for arg in sys.argv[2:4])
+    tol = pickle.loads(sys.stdin.buffer.read())
     with heap_reuse():
-        checks = _check_outputs(outdir, skip=skip, only=names)["checks"]
+        checks = _check_outputs(outdir, tol, skip=skip, only=names)["checks"]
     sys.stdout.buffer.write(pickle.dumps({k: v for k, v in checks.items() if k in names}))
