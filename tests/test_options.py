@@ -81,3 +81,40 @@ def test_the_optimize_section_and_command_take_the_optimizers_defaults():
     args = build_parser().parse_args(["optimize", "in.obj", "-o", "out.obj"])
     assert (args.fairness, args.closeness, args.max_iter) == (opt.DEFAULTS.fairness, opt.DEFAULTS.closeness,
                                                                opt.DEFAULTS.max_iter)
+
+
+@pytest.mark.parametrize("name", ["PartSpec", "Limits", "BeamSpec", "NodeSpec"])
+def test_the_parts_sections_are_derived_from_the_part_spec(name):
+    """Defaults and bounds of ``parts`` are the frozen part dimensions' (fabricate.cad.spec), written once."""
+    from fabricate.app import config_parts
+    from fabricate.cad import spec
+
+    cls = getattr(spec, name)
+    section = {"PartSpec": config_parts.PartsSection, "Limits": config_parts.LimitsSection,
+               "BeamSpec": config_parts.BeamSection, "NodeSpec": config_parts.NodeSection}[name]
+    assert OPTIONS[section.__mro__[1]] is cls
+    assert section().to_options() == cls()  # the nested sections back as their frozen objects too
+    for f in dataclasses.fields(cls):
+        key = section.model_fields[f.name]
+        if not dataclasses.is_dataclass(f.default) and f.name != "glass":
+            assert _frozen(key.get_default(call_default_factory=True)) == f.default, f.name
+        for bound in ("ge", "gt", "le", "lt"):
+            if bound in f.metadata:
+                assert any(getattr(m, bound, None) == f.metadata[bound] for m in key.metadata), (f.name, bound)
+
+
+def test_the_joint_gap_rule_is_the_part_specs_with_the_line_of_a_key_it_names(tmp_path):
+    from fabricate.app.config import load_config
+    from fabricate.cad.spec import PartSpec
+    from optimize.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="parts.joint_gap = 10 mm is not below parts.beam_width = 8 mm"):
+        PartSpec(beam_width=8.0)
+    path = tmp_path / "job.yaml"
+    path.write_text("name: job\ninput: {shape: {name: dome}}\nparts:\n  edge: axis\n  beam_width: 8\n")
+    with pytest.raises(ConfigError) as err:  # joint_gap is not in the file: the line of beam_width
+        load_config(path)
+    assert str(err.value).startswith(f"{path}:5: parts.joint_gap = 10 mm is not below parts.beam_width"), err.value
+    path.write_text("name: job\ninput: {shape: {name: dome}}\nparts:\n  beam_width: 8\n  joint_gap: 9\n")
+    with pytest.raises(ConfigError, match=r"job.yaml:5: parts.joint_gap = 9 mm"):
+        load_config(path)

@@ -54,7 +54,7 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
                  order: typing.Sequence[str] | None = None) -> type[Section]:
     """A :class:`Section` whose keys are the fields of the frozen dataclass ``options``: each key's
     default is the field's, its bounds, alias, unit and help those of the field metadata
-    (:func:`fabricate.app.options.option`; ``meta`` adds to it by field name, for an option class that has
+    (:func:`fabricate.fields.option`; ``meta`` adds to it by field name, for an option class that has
     none, like :class:`optimize.tolerances.Tolerances`).  A ``tuple[X, ...]`` field is a YAML list
     (with ``items`` bounds on each item).  ``extra``: further keys ``{name: (annotation, Field)}`` of
     the section only (nested sections); ``order``: the order of the keys.  Subclass the result to add
@@ -90,6 +90,10 @@ def _schema_type(annotation, items: dict | None):
 
 
 def _frozen_value(value):
+    """A section's value as its option object takes it: a nested derived section as its option
+    object, another section as its dict, a list as a tuple."""
+    if isinstance(value, Section):
+        return value.to_options() if any(c in OPTIONS for c in type(value).__mro__) else value.model_dump()
     return tuple(value) if isinstance(value, list) else value
 
 

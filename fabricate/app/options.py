@@ -18,30 +18,16 @@ The optimizer's section stays as it is until ``optimize`` has its own frozen opt
 """
 from __future__ import annotations
 
-from dataclasses import MISSING, dataclass, field
-from typing import Any, Literal
+from dataclasses import dataclass
+from typing import Literal
 
-MAX_MM = 10_000.0
-"""Largest |layer distance| and beam depth (mm): 10 m."""
+from ..fields import MAX_MM, option  # also re-exported
 
 CHECK_AUTO_MAX_PARTS = 3000
 """``outputs.check: auto`` runs the full check up to this many parts, the fast one above."""
 
 UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 """Millimetres per unit of ``units``."""
-
-
-def option(default: Any = MISSING, *, unit: str = "", help: str = "", alias: str | None = None,
-           ge: float | None = None, gt: float | None = None, le: float | None = None, lt: float | None = None,
-           min_length: int | None = None, max_length: int | None = None, pattern: str | None = None,
-           items: dict | None = None):
-    """A dataclass field with what its config key needs in the metadata: bounds (``ge`` ... ``lt``,
-    ``min_length`` / ``max_length``, ``pattern``), the bounds of each item of a tuple (``items``),
-    the YAML name when it is not a Python name (``alias``), the unit and a one-line help."""
-    meta = {k: v for k, v in dict(unit=unit, help=help, alias=alias, ge=ge, gt=gt, le=le, lt=lt,
-                                  min_length=min_length, max_length=max_length, pattern=pattern,
-                                  items=items).items() if v not in (None, "")}
-    return field(default=default, metadata=meta)
 
 
 @dataclass(frozen=True)
