@@ -8,11 +8,14 @@ from pydantic import ValidationError
 from fabricate.app import options
 from fabricate.app.config import OffsetSection, OutputsSection, RunConfig, TolerancesSection
 from fabricate.app.config_section import OPTIONS, Section
-from fabricate.structure.options import LoadsOption, LoadsOptions, StructureOptions, StructureSection
+from fabricate.app.config_structure import LoadsOption, StructureSection
+from fabricate.structure.options import LoadsOptions, StructureOptions
 from optimize.tolerances import Tolerances
 
 
 def _frozen(value):
+    if isinstance(value, Section):  # a nested section: its frozen object
+        return value.to_options()
     return tuple(value) if isinstance(value, list) else value
 
 
@@ -49,6 +52,13 @@ def test_a_derived_key_keeps_its_bounds_alias_and_strictness():
 
 def test_the_structure_section_is_on_the_strict_base():
     assert issubclass(StructureSection, Section) and issubclass(LoadsOption, Section)
+    data = {"section": {"shape": "rhs", "depth": 200, "width": 60, "web": 4}, "supports": [0, 3],
+            "combinations": [{"name": "ULS", "kind": "uls", "factors": {"snow": 1.5}}],
+            "sizing": {"sections": [{"depth": 200, "width": 8}]}}
+    frozen = StructureSection.model_validate(data).to_options()  # what the structure stage takes
+    assert frozen.section.properties().name == StructureOptions(section=frozen.section).section.properties().name
+    assert frozen.supports == (0, 3) and frozen.combination_list() == [("ULS", "uls", {"snow": 1.5})]
+    assert frozen.sizing.sections[0].shape == "plate" and frozen.sizing.sections[0].width == 8
     for bad in ({"loads": {"snow": float("inf")}}, {"loads": {"snow": "0.8"}}, {"gamma_m0": True}):
         with pytest.raises(ValidationError):
             StructureSection.model_validate(bad)

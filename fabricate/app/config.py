@@ -49,10 +49,10 @@ from .config_errors import format_errors
 from .config_parts import LimitsSection, NestingSection, PartsSection, SheetSection  # noqa: F401 - re-exported
 from .config_section import MAX_MM, Section, section_base  # noqa: F401 - MAX_MM re-exported
 from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
+from .config_structure import StructureSection
 from .config_yaml import MAX_DEPTH, read_config
 from .options import (CHECK_AUTO_MAX_PARTS, TOLERANCE_KEYS, UNIT_TO_MM, OffsetOptions,  # noqa: F401 - re-exported
                       OutputsOptions, RunOptions)
-from ..structure.options import StructureSection
 
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
 

@@ -64,7 +64,8 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
     for f in dataclasses.fields(options):
         md = {**f.metadata, **(meta or {}).get(f.name, {})}
         annotation = _schema_type(hints[f.name], md.get("items"))
-        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+        default = (f.default if f.default is not dataclasses.MISSING else ... if f.default_factory is dataclasses.MISSING
+                   else f.default_factory())  # ...: a required key
         help_ = md.get("help", "") + (f" ({md['unit']})" if md.get("unit") else "")
         if annotation is not hints[f.name] and isinstance(default, tuple):
             default = list(default)  # the default of a YAML list
@@ -94,7 +95,7 @@ def _frozen_value(value):
     object, another section as its dict, a list as a tuple."""
     if isinstance(value, Section):
         return value.to_options() if any(c in OPTIONS for c in type(value).__mro__) else value.model_dump()
-    return tuple(value) if isinstance(value, list) else value
+    return tuple(_frozen_value(v) for v in value) if isinstance(value, list) else value
 
 
 _FALSE, _TRUE = ("off", "no", "false"), ("on", "yes", "true")

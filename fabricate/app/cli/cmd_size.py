@@ -40,7 +40,7 @@ def run(args) -> int:
         raise ConfigError(f"{cfg.source}: structure.sizing.sections: empty, expected a list of candidate sections "
                           "(e.g. - {shape: rhs, depth: 200, width: 100, web: 6})")
     off = stages.stage_offset(cfg, stages.stage_optimize(cfg, stages.stage_input(cfg)))
-    sz = size_sections(off.structure, cfg.structure, stages.part_spec(cfg))
+    sz = size_sections(off.structure, cfg.structure.to_options(), stages.part_spec(cfg))
     d = sz.as_dict()
     print(f"{cfg.name}: sizing {sum(d['beams'].values())} beams ({cfg.structure.grade}, "
           f"{len(cfg.structure.sizing.sections)} candidates, group_by {cfg.structure.sizing.group_by})")
