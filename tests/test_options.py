@@ -128,3 +128,22 @@ def test_the_joint_gap_rule_is_the_part_specs_with_the_line_of_a_key_it_names(tm
     path.write_text("name: job\ninput: {shape: {name: dome}}\nparts:\n  beam_width: 8\n  joint_gap: 9\n")
     with pytest.raises(ConfigError, match=r"job.yaml:5: parts.joint_gap = 9 mm"):
         load_config(path)
+
+
+def test_the_shared_command_line_arguments_parse_alike(tmp_path, capsys):
+    """--set / --out / --force / -o of several subcommands come from fabricate.app.cli.args."""
+    from fabricate.app.cli import build_parser, main
+
+    parser = build_parser()
+    for argv in (["run", "c.yaml"], ["size", "c.yaml"], ["batch", "c.yaml"]):
+        args = parser.parse_args(argv + ["--set", "a.b=1", "--set", "c=2"])
+        assert args.sets == ["a.b=1", "c=2"], argv
+    run = parser.parse_args(["run", "c.yaml", "--force", "-q"])
+    assert (run.force, run.quiet, run.out) == (True, True, options.COMMAND.out_root)
+    for argv in (["optimize", "m.obj", "-o", "x.obj"], ["remesh", "s.obj", "--edge-length", "1", "--output", "x.obj"],
+                 ["shapes", "dome", "-o", "x.obj"]):
+        assert parser.parse_args(argv).output == "x.obj", argv
+    path = tmp_path / "c.yaml"
+    path.write_text("name: c\ninput: {shape: {name: dome}}\n")
+    assert main(["size", str(path), "--set", "parts.joint_gap=8,9"]) == 2
+    assert "--set parts.joint_gap: fabricate size takes one value per key" in capsys.readouterr().err
