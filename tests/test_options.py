@@ -104,6 +104,8 @@ def test_the_parts_sections_are_derived_from_the_part_spec(name):
                "BeamSpec": config_parts.BeamSection, "NodeSpec": config_parts.NodeSection}[name]
     assert OPTIONS[section.__mro__[1]] is cls
     assert section().to_options() == cls()  # the nested sections back as their frozen objects too
+    if name == "Limits":  # a YAML list for a fixed-length tuple key, taken by every derived section
+        assert section.model_validate({"sheet_mm": [3000, 2000]}).to_options().sheet_mm == (3000.0, 2000.0)
     for f in dataclasses.fields(cls):
         key = section.model_fields[f.name]
         if not dataclasses.is_dataclass(f.default) and f.name != "glass":

@@ -47,7 +47,7 @@ from optimize.tolerances import Tolerances
 from .config_design import MAX_FACES, DesignParamError, check_design, subdivided_faces
 from .config_errors import format_errors
 from .config_parts import LimitsSection, NestingSection, PartsSection, SheetSection  # noqa: F401 - re-exported
-from .config_section import MAX_MM, Section, section_base  # noqa: F401 - MAX_MM re-exported
+from .config_section import MAX_MM, Section, section_base, tuples  # noqa: F401 - MAX_MM re-exported
 from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
 from .config_structure import StructureSection
 from .config_yaml import MAX_DEPTH, read_config
@@ -132,10 +132,7 @@ class InputSection(Section):
 
     _paths = field_validator("mesh", "control", "surface", mode="before")(_resolve_path)
 
-    @field_validator("side", mode="before")
-    @classmethod
-    def _side_list(cls, v):
-        return tuple(v) if isinstance(v, list) else v
+    _side_list = tuples("side")
 
     @field_validator("layer", "object", mode="before")
     @classmethod

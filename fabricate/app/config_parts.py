@@ -3,14 +3,13 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator, model_serializer, model_validator
+from pydantic import Field, model_serializer, model_validator
 from pydantic_core import PydanticCustomError
 
 from ..cad.glass import BOUNDS, GASES, INTERLAYER_DENSITY, TYPES
 from ..cad.spec import BeamSpec, Limits, NodeSpec, PartSpec
-from .config_section import Section, section_base
+from .config_section import Section, section_base, tuples
 
-_tuple = field_validator("plies_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
 _Interlayer = Literal[tuple(INTERLAYER_DENSITY)]
 
 
@@ -30,7 +29,7 @@ class PaneSection(Section):
     interlayer: _Interlayer | None = None
     interlayer_mm: float | None = _mm("interlayer_mm")
 
-    _plies = _tuple
+    _plies = tuples("plies_mm")
 
 
 class GlassSection(Section):
@@ -50,7 +49,7 @@ class GlassSection(Section):
     edge_seal_mm: float | None = _mm("edge_seal_mm")
     step_mm: float | None = _mm("step_mm")
 
-    _plies = _tuple
+    _plies = tuples("plies_mm")
 
     @model_validator(mode="after")
     def _consistent(self) -> "GlassSection":
@@ -68,8 +67,6 @@ class GlassSection(Section):
 class LimitsSection(section_base(Limits)):
     """What the shops can make; parts beyond it are flagged by id (defaults, bounds:
     :class:`fabricate.cad.spec.Limits`)."""
-
-    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
 
 
 class BeamSection(section_base(BeamSpec)):
@@ -121,7 +118,7 @@ class SheetSection(Section):
     kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
     rotation: bool = True
 
-    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+    _sheet_list = tuples("sheet_mm")
 
 
 class NestingSection(Section):

@@ -71,10 +71,12 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
             default = list(default)  # the default of a YAML list
         fields[f.name] = (annotation, Field(default=default, description=help_ or None,
                                             **{k: md[k] for k in _BOUNDS if k in md}))
+    fixed = [f.name for f in dataclasses.fields(options) if _fixed_tuple(hints[f.name]) and f.name not in (extra or {})]
     fields.update(extra or {})
     if order is not None:
         fields = {k: fields[k] for k in order}
-    model = create_model(f"{options.__name__}Keys", __base__=Section, __module__=__name__, **fields)
+    model = create_model(f"{options.__name__}Keys", __base__=Section, __module__=__name__,
+                         __validators__={"_yaml_tuples": tuples(*fixed)} if fixed else None, **fields)
     OPTIONS[model] = options
     return model
 
@@ -88,6 +90,25 @@ def _schema_type(annotation, items: dict | None):
         item = Annotated[args[0], Field(**items)] if items else args[0]
         return list[item]
     return annotation
+
+
+def tuples(*names: str):
+    """A before-validator that takes a YAML list given to the tuple keys ``names`` as the tuple
+    (strict types refuse a list for a tuple).  :func:`section_base` adds it to every fixed-length
+    tuple field by itself."""
+    return field_validator(*names, mode="before")(_as_tuple)
+
+
+def _as_tuple(value):
+    return tuple(value) if isinstance(value, list) else value
+
+
+def _fixed_tuple(annotation) -> bool:
+    """Whether ``annotation`` is, or has in a union, a fixed-length ``tuple[X, Y, ...]``."""
+    origin, args = get_origin(annotation), get_args(annotation)
+    if origin in (typing.Union, types.UnionType):
+        return any(_fixed_tuple(a) for a in args)
+    return origin is tuple and not (len(args) == 2 and args[1] is Ellipsis)
 
 
 def _frozen_value(value):

@@ -68,11 +68,6 @@ class StructureSection(section_base(StructureOptions, extra=_NESTED)):
     """The structural check of the beam frame (``fabricate.structure``); ``check: off`` skips it
     (defaults: :class:`fabricate.structure.options.StructureOptions`)."""
 
-    @field_validator("up", mode="before")
-    @classmethod
-    def _up_list(cls, v):  # YAML gives a list; the strict tuple takes it converted
-        return tuple(v) if isinstance(v, list) else v
-
     @field_validator("supports")
     @classmethod
     def _supports(cls, v):
