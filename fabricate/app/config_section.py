@@ -64,8 +64,9 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
     for f in dataclasses.fields(options):
         md = {**f.metadata, **(meta or {}).get(f.name, {})}
         annotation = _schema_type(hints[f.name], md.get("items"))
-        default = (f.default if f.default is not dataclasses.MISSING else ... if f.default_factory is dataclasses.MISSING
-                   else f.default_factory())  # ...: a required key
+        default = (f.default if f.default is not dataclasses.MISSING
+                   else ... if f.default_factory is dataclasses.MISSING  # ...: a required key
+                   else f.default_factory())
         help_ = md.get("help", "") + (f" ({md['unit']})" if md.get("unit") else "")
         if annotation is not hints[f.name] and isinstance(default, tuple):
             default = list(default)  # the default of a YAML list

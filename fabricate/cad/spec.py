@@ -122,7 +122,7 @@ class PartSpec:
 
     glass_thickness: float = option(10.0, **GLASS_THICKNESS, unit="mm", help="monolithic panel thickness")
     joint_gap: float = option(10.0, ge=0, le=1000.0, unit="mm", help="gap between neighbouring panels")
-    edge: Literal["auto", "axis", "perpendicular"] = option("auto", help="panel side faces: axis, perpendicular or auto")
+    edge: Literal["auto", "axis", "perpendicular"] = option("auto", help="panel sides: axis, perpendicular or auto")
     beam_width: float = option(60.0, gt=0, le=2000.0, unit="mm", help="beam thickness across its plane")
     beam_depth: float = option(200.0, gt=0, le=MAX_MM, unit="mm", help="layer distance of the default layers")
     node_radius: float = option(0.0, ge=0, le=5000.0, unit="mm", help="0: no nodes; else the hub radius")
