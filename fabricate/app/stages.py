@@ -179,10 +179,9 @@ def stage_offset(cfg, opt: OptimizeRecord) -> OffsetRecord:
 
 # -- CAD -----------------------------------------------------------------------------
 def part_spec(cfg):
-    """The :class:`fabricate.cad.PartSpec` of the config's ``parts`` section."""
-    from fabricate.cad import PartSpec
-
-    return PartSpec(**cfg.parts.model_dump())
+    """The :class:`fabricate.cad.PartSpec` of the config's ``parts`` section (the frozen object it
+    is derived from, :meth:`fabricate.app.config_section.Section.to_options`)."""
+    return cfg.parts.to_options()
 
 
 def stage_cad(cfg, opt: OptimizeRecord, off: OffsetRecord) -> PartsRecord:
