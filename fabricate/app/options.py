@@ -1,7 +1,7 @@
 """The one source of the application's defaults: frozen option objects.
 
 Each class is a frozen dataclass whose fields carry their default, their
-bounds, unit and help in the field metadata (:func:`option`).  The config
+bounds, unit and help in the field metadata (:func:`fabricate.fields.option`).  The config
 sections of :mod:`fabricate.app.config` are derived from them
 (:func:`fabricate.app.config_section.section_base`), and the command line reads
 its defaults from them, so every default is written once.  This module imports
@@ -13,6 +13,10 @@ no pydantic and nothing heavy (``fabricate --help`` reads it).
   :class:`optimize.tolerances.Tolerances`' (the one tolerance object);
 - :class:`RunOptions`      the top-level keys of a run config (name, units, scale);
 - :class:`CommandOptions`  what ``fabricate run`` / ``batch`` take on the command line.
+
+The options of a stage live with the stage: ``parts`` in :class:`fabricate.cad.spec.PartSpec`,
+``structure`` in :class:`fabricate.structure.options.StructureOptions`; their sections are derived
+the same way (:mod:`fabricate.app.config_parts`, :mod:`fabricate.app.config_structure`).
 
 The optimizer's section stays as it is until ``optimize`` has its own frozen options.
 """
