@@ -323,11 +323,25 @@ class Problem:
         Y, _ = self.foot_search.closest(V)
         record_shape(res, self.mesh, np.linalg.norm(V - Y, axis=1), self.ref.bbox_diagonal)
         record_net(res, self.mesh, self.target)
-        return check_folds(res, self.mesh.V, PAPER_FOLD_ADVICE)
+        return check_folds(res, self.mesh.V, fold_advice(self.target, method))
 
 
 PAPER_FOLD_ADVICE = ("the paper's methods do not keep faces convex; the default method does "
                      "(method 'default', --method default)")
+
+
+def fold_advice(target: str, method: str) -> str:
+    """The way forward a folded run's message ends with.  For ``target`` pq, conical and
+    circular the default method keeps faces convex; a strip has only the paper's methods
+    (``--method default`` runs penalty there), so the advice names the others than ``method``
+    and the fairness weight."""
+    if target != "strip":
+        return PAPER_FOLD_ADVICE
+    others = [m for m in ("penalty", "sqp", "hybrid") if m != method]
+    names = ", ".join(f"'{m}'" for m in others)
+    return (f"the paper's methods do not keep faces convex, and target 'strip' has no other method "
+            f"(the default method does not take strips); try another of them (method {names}, "
+            f"--method {others[0]}) or a larger fairness weight (fairness, --fairness)")
 
 
 def node_axes(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
