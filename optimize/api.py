@@ -155,7 +155,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     x0 = form.start(norm.V)
     keep = None
     if convex:
-        corners, floor = convexity.floors(norm, norm.V)
+        corners, floor = convexity.floors(norm, norm.V, tol.fold)
         keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0
     run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=fairness,
@@ -187,7 +187,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     record_net(res, mesh, target)
     if keep is not None:
         _held(res, norm, Xn, keep, tol)
-    check_folds(res, mesh.V, FOLD_ADVICE if convex else NO_CONVEX_FOLD_ADVICE)
+    check_folds(res, mesh.V, FOLD_ADVICE if convex else NO_CONVEX_FOLD_ADVICE, tol.fold)
     log.info("optimize_mesh(%s, %s): %s", mesh.name, target, res.message)
     return res
 

@@ -323,7 +323,7 @@ class Problem:
         Y, _ = self.foot_search.closest(V)
         record_shape(res, self.mesh, np.linalg.norm(V - Y, axis=1), self.ref.bbox_diagonal)
         record_net(res, self.mesh, self.target)
-        return check_folds(res, self.mesh.V, fold_advice(self.target, method))
+        return check_folds(res, self.mesh.V, fold_advice(self.target, method), self.tol.fold)
 
 
 PAPER_FOLD_ADVICE = ("the paper's methods do not keep faces convex; the default method does "
