@@ -240,3 +240,17 @@ def test_fold_advice_fits_the_target():
     assert "target 'strip' has no other method" in res.message and "--method penalty" in res.message
     with pytest.raises(ConfigError, match="strip"):
         optimize_mesh(band, "strip", method="default")  # the method the pq advice names is no option here
+
+
+def test_the_fold_threshold_is_the_runs_tolerance():
+    """``Tolerances.fold`` reaches the fold check: the face that folds on this grid turns its
+    corner to a sine below -0.3, so a threshold of 0.9 lets it pass and the run converges."""
+    from optimize import Tolerances
+
+    grid = shapes.perturbed(shapes.grid(5, 4, (4.0, 3.0)), 0.1, seed=4)
+    strict = optimize_mesh(grid, "pq", method="sqp")
+    assert strict.status == "folded" and strict.defects["folded"]["count"] > 0
+    loose = optimize_mesh(grid, "pq", method="sqp", tol=Tolerances(fold=0.9))
+    assert loose.status == "converged" and loose.defects["folded"]["count"] == 0, loose.message
+    assert not measures.folded_faces(grid, loose.mesh.V, tol=0.9).any()
+    assert measures.folded_faces(grid, loose.mesh.V).any()  # the default threshold still sees the fold
