@@ -82,28 +82,47 @@ def heap_reuse():
     next one (``mallopt`` mmap and trim thresholds at 1 GiB), so that the readers' many large
     temporaries do not each fault in fresh pages (on this project's 165 MB STEP file a first read
     spent 40 % of its time in page faults); afterwards the thresholds go back to glibc's defaults
-    and the heap is trimmed.  A no-op where there is no glibc."""
+    and the heap is trimmed.  A no-op where there is no glibc.
+
+    numpy's transparent-huge-page advice on its big arrays is turned off meanwhile: served from a
+    reused heap they gain nothing from it, and each advised range costs the kernel a 2 MiB page
+    to zero and compact (the dome's STEP read: a fifth of its system time)."""
+    hugepage = _madvise_hugepage(False)
     try:
         libc = ctypes.CDLL(None)
         mallopt, trim = libc.mallopt, libc.malloc_trim
     except (OSError, AttributeError, TypeError):
-        yield
+        try:
+            yield
+        finally:
+            _madvise_hugepage(hugepage)
         return
     on = mallopt(M_MMAP_THRESHOLD, 1 << 30) and mallopt(M_TRIM_THRESHOLD, 1 << 30)
     try:
         yield
     finally:
+        _madvise_hugepage(hugepage)
         if on:
             mallopt(M_MMAP_THRESHOLD, 128 * 1024)
             mallopt(M_TRIM_THRESHOLD, 128 * 1024)
             trim(0)
 
 
+def _madvise_hugepage(enabled: bool | None) -> bool | None:
+    """Set numpy's huge-page advice for new arrays; returns the previous setting (None: this numpy
+    has no such switch, and ``enabled=None`` changes nothing)."""
+    try:
+        from numpy._core.multiarray import _set_madvise_hugepage
+    except ImportError:
+        return None
+    return None if enabled is None else bool(_set_madvise_hugepage(enabled))
+
+
 M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3   # glibc's mallopt parameters
 
 
 def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset(),
-                   step_reader: str = "text") -> dict:
+                   step_reader: str = "text", only: frozenset[str] | None = None) -> dict:
     """Run every check on ``outdir``; returns ``{"outdir", "pass", "checks": {name: {...}}, "seconds"}``.
 
     ``pass`` is False when any check failed (``pass: False``); skipped checks
@@ -115,9 +134,12 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     ``step_reader``: ``"text"`` (default: :mod:`fabricate.export.step_text`, an
     independent parser of the planar B-rep, as fast as the export) or ``"occ"``
     (OpenCASCADE reads the file back: BRepCheck per solid, about 10 ms a part).
+    A big STEP file is read, with the checks that need it, in a child process while this one
+    runs the others (:mod:`fabricate.check_lanes`); ``only``: run just these checks, here.
     """
     if step_reader not in ("text", "occ"):
         raise ValueError(f"step_reader {step_reader!r}: expected 'text' or 'occ'")
+    from . import check_lanes
     from .export import exchange_check
     from .export.bom import read_bom
 
@@ -132,49 +154,74 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     written = written_files(out)
     checks: dict[str, dict] = {"bom": _check_bom(bom)}
     read: dict[str, object] = {}  # what one check read and the next ones use: STEP solids, 3MF meshes
-    for name, key, needs, run in (
-            ("step", "step", None, lambda: (_check_step if step_reader == "occ" else _check_step_text)(
-                paths["step"], bom, tol)),
-            ("3mf", "3mf", None, lambda: _check_3mf(paths["3mf"], bom, tol)),
-            ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
-            ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
-            ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
-            ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
-            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"],
-                                                       None if step_reader == "occ" else "text", tol), None)),
-            ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
-            ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
-                                                                     full="ifc_geometry" not in skip,
-                                                                     kernel=step_reader == "occ", tol=tol), None)),
-            ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
-            ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None))):
-        t1 = time.perf_counter()
-        if key in skip:
-            checks[name] = {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
-            continue
-        if not paths[key].exists():
-            if FILES[key] in written:
-                checks[name] = {"pass": False, "missing": FILES[key],
-                                "why": [f"{FILES[key]} is missing: the run wrote it "
-                                        f"({written[FILES[key]]} bytes, listed in {REPORT})"]}
-            else:
-                checks[name] = {"pass": None, "skipped": f"{FILES[key]} was not written"}
-            continue
-        if needs and read.get(needs) is None:
-            checks[name] = {"pass": None, "skipped": f"needs a readable {FILES[needs]}"}
-            continue
-        try:
-            result, read[name] = run()
-        except ExportError as exc:
-            result = {"pass": False, "error": str(exc)}
-        result["seconds"] = round(time.perf_counter() - t1, 3)
-        if result.get("pass") is False:
-            result.setdefault("why", failure_reasons(result))
-        checks[name] = result
-        log.info("check %s: %s", name, {True: "ok", False: "FAILED"}.get(result.get("pass"), "skipped"))
+    table = (
+        ("step", "step", None, lambda: (_check_step if step_reader == "occ" else _check_step_text)(
+            paths["step"], bom, tol)),
+        ("3mf", "3mf", None, lambda: _check_3mf(paths["3mf"], bom, tol)),
+        ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
+        ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
+        ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
+        ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
+        ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"],
+                                                   None if step_reader == "occ" else "text", tol), None)),
+        ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
+        ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
+                                                                 full="ifc_geometry" not in skip,
+                                                                 kernel=step_reader == "occ", tol=tol), None)),
+        ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
+        ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None)))
+
+    def run_checks(names) -> None:
+        for name, key, needs, run in table:
+            if name in names:
+                checks[name] = _one_check(name, key, needs, run, paths, skip, written, read)
+
+    groups = [] if only is not None else check_lanes.lanes_for(paths, skip, step_reader)
+    children: list = []
+    try:
+        for names in groups:
+            children.append((names, check_lanes.start(out, names, skip, tol)))
+        elsewhere = frozenset().union(*[names for names, child in children if child is not None])
+        run_checks(only if only is not None else {t[0] for t in table} - elsewhere)
+        for names, child in children:
+            theirs = None if child is None else check_lanes.collect(child)
+            if theirs is None:
+                run_checks(names)
+                continue
+            checks.update(theirs)
+            if "error" in theirs.get("step", {}):   # no solids read: the flat data against the 3MF, here
+                run_checks({"flat"})
+    finally:
+        for _, child in children:
+            check_lanes.stop(child)
+    checks = {k: checks[k] for k in ["bom"] + [t[0] for t in table] if k in checks}
     failed = [k for k, v in checks.items() if v.get("pass") is False]
     return {"outdir": str(out), "pass": not failed, "failed": failed, "checks": checks,
             "seconds": round(time.perf_counter() - t0, 3)}
+
+
+def _one_check(name, key, needs, run, paths, skip, written, read) -> dict:
+    """One check's result (``read[name]``: what it read, for the checks after it)."""
+    t1 = time.perf_counter()
+    if key in skip:
+        return {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
+    if not paths[key].exists():
+        if FILES[key] in written:
+            return {"pass": False, "missing": FILES[key],
+                    "why": [(f"{FILES[key]} is missing: the run wrote it "
+                             f"({written[FILES[key]]} bytes, listed in {REPORT})")]}
+        return {"pass": None, "skipped": f"{FILES[key]} was not written"}
+    if needs and read.get(needs) is None:
+        return {"pass": None, "skipped": f"needs a readable {FILES[needs]}"}
+    try:
+        result, read[name] = run()
+    except ExportError as exc:
+        result = {"pass": False, "error": str(exc)}
+    result["seconds"] = round(time.perf_counter() - t1, 3)
+    if result.get("pass") is False:
+        result.setdefault("why", failure_reasons(result))
+    log.info("check %s: %s", name, {True: "ok", False: "FAILED"}.get(result.get("pass"), "skipped"))
+    return result
 
 
 def written_files(outdir: Path) -> dict[str, int]:
@@ -364,9 +411,8 @@ def _check_intersections(meshes, tol):
 
 
 def _check_bearing(meshes, bom, tol):
-    from .export.verify import bearing
-
     from .cad.parts import unit_id
+    from .export.verify import bearing
 
     plates: dict[tuple[str, str], list[str]] = {}   # (beam unit, panel) -> the plates the panel lies on
     for r in bom:
