@@ -32,8 +32,8 @@ with it:
 - ``dxf``: read by an independent reader (:mod:`fabricate.export.dxf_text`: lint
   of codes, sections, handles, closed outlines; ``--occ``: ezdxf loads and
   audits the whole file), units mm, one CUT outline (id in XDATA) and
-  one ETCH id per panel and beam, and each outline has the area (``1e-9``
-  relative) and the edge lengths (``1e-6`` mm) of the flat data's outline
+  one ETCH id per panel and beam, and each outline has the area (``tol.file_area``,
+  ``1e-9`` relative) and the edge lengths (``tol.file_edge_mm``, ``1e-6`` mm) of the flat data's outline
   with the same id (without ``flat.json``: a face of the STEP solid).
 - ``svg``: parses, one group per panel and beam.
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
@@ -59,7 +59,6 @@ import numpy as np
 from optimize.errors import ExportError
 from optimize.tolerances import DEFAULT, Tolerances
 
-from .check_mesh import VOLUME_REL_TOL
 from .check_mesh import check_3mf as _check_3mf
 from .check_mesh import check_stl as _check_stl
 
@@ -68,8 +67,6 @@ FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "mod
          "dxf": "outlines.dxf", "svg": "outlines.svg", "flat": "flat.json", "ifc": "model.ifc", "3dm": "model.3dm",
          "nc1": "nc1"}
 REPORT = "report.json"
-AREA_REL_TOL = 1e-9
-EDGE_TOL_MM = 1e-6
 
 
 def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset(),
@@ -159,18 +156,18 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     read: dict[str, object] = {}  # what one check read and the next ones use: STEP solids, 3MF meshes
     table = (
         ("step", "step", None, lambda: (_check_step if step_reader == "occ" else _check_step_text)(
-            paths["step"], bom)),
-        ("3mf", "3mf", None, lambda: _check_3mf(paths["3mf"], bom)),
+            paths["step"], bom, tol)),
+        ("3mf", "3mf", None, lambda: _check_3mf(paths["3mf"], bom, tol)),
         ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
         ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
         ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
         ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
         ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"],
-                                                   None if step_reader == "occ" else "text"), None)),
+                                                   None if step_reader == "occ" else "text", tol), None)),
         ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
         ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
                                                                  full="ifc_geometry" not in skip,
-                                                                 kernel=step_reader == "occ"), None)),
+                                                                 kernel=step_reader == "occ", tol=tol), None)),
         ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
         ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None)))
 
@@ -307,15 +304,15 @@ def _check_bom(bom) -> dict:
             "nonpositive_volume": bad[:20], **kinds}
 
 
-def _volume_errors(volumes: dict[str, float], expected: dict[str, float]):
-    """``(worst relative error, its id, ids beyond VOLUME_REL_TOL)`` of solid volumes against the BOM's."""
+def _volume_errors(volumes: dict[str, float], expected: dict[str, float], tol: Tolerances):
+    """``(worst relative error, its id, ids beyond tol.file_volume)`` of solid volumes against the BOM's."""
     worst, worst_id, errors = 0.0, None, []
     for name, v in volumes.items():
         if name in expected:
             rel = abs(v - expected[name]) / expected[name]
             if rel > worst:
                 worst, worst_id = rel, name
-            if rel > VOLUME_REL_TOL:
+            if rel > tol.file_volume:
                 errors.append(name)
     return worst, worst_id, errors
 
@@ -332,7 +329,7 @@ def _colours_by_kind(names, colours: dict, bom):
     return by_kind, uncoloured, ok
 
 
-def _check_step(path, bom):
+def _check_step(path, bom, tol: Tolerances = DEFAULT):
     from .export.brep import solid_facts
     from .export.step_read import read_step
 
@@ -347,7 +344,7 @@ def _check_step(path, bom):
         if not f["valid"] or f["solids"] != 1:
             invalid.append(name)
         volumes[name] = f["volume_mm3"]
-    worst, worst_id, errors = _volume_errors(volumes, expected)
+    worst, worst_id, errors = _volume_errors(volumes, expected, tol)
     unit_mm = "SI_UNIT(.MILLI.,.METRE.)" in _head(path, 1 << 16).replace(" ", "")
     colours = facts.pop("colours", {})
     by_kind, uncoloured, coloured_by_kind = _colours_by_kind(names, colours, bom)
@@ -355,13 +352,13 @@ def _check_step(path, bom):
           and coloured_by_kind)
     return ({"pass": ok, "solids": len(names), "bom_rows": len(expected), "missing": missing[:20],
              "unexpected": extra[:20], "invalid": invalid[:20], "n_invalid": len(invalid),
-             "volume_rel_error_max": worst, "worst": worst_id, "volume_tolerance": VOLUME_REL_TOL,
+             "volume_rel_error_max": worst, "worst": worst_id, "volume_tolerance": tol.file_volume,
              "volume_failures": errors[:20], "unit_mm": unit_mm, "coloured_by_kind": coloured_by_kind,
              "colours": {k: [list(c) for c in v] for k, v in by_kind.items()}, "uncoloured": uncoloured[:20],
              **facts}, dict(solids))
 
 
-def _check_step_text(path, bom):
+def _check_step_text(path, bom, tol: Tolerances = DEFAULT):
     """The STEP file read by the independent text reader: names, validity of every solid as a closed
     planar polyhedron (edges used twice in opposite directions, V - E + F = 2, loops closed and
     counter-clockwise about their outward plane normals, simple, vertices on their planes and lines
@@ -387,7 +384,7 @@ def _check_step_text(path, bom):
         if bad:
             invalid.append(name)
             reasons.setdefault(", ".join(bad), name)
-    worst, worst_id, errors = _volume_errors({n: f["volume_mm3"] for n, f in solids.items()}, expected)
+    worst, worst_id, errors = _volume_errors({n: f["volume_mm3"] for n, f in solids.items()}, expected, tol)
     colours = {n: f["colour"] for n, f in solids.items() if f["colour"] is not None}
     by_kind, uncoloured, coloured_by_kind = _colours_by_kind(names, colours, bom)
     ok = (not missing and not extra and not invalid and not errors and facts["unit_mm"] and facts["complete"]
@@ -395,7 +392,7 @@ def _check_step_text(path, bom):
     return ({"pass": ok, "read_back": "text", "solids": facts["solids"], "bom_rows": len(expected),
              "missing": missing[:20], "unexpected": extra[:20], "invalid": invalid[:20],
              "n_invalid": len(invalid), "invalid_reasons": reasons, "volume_rel_error_max": worst,
-             "worst": worst_id, "volume_tolerance": VOLUME_REL_TOL, "volume_failures": errors[:20],
+             "worst": worst_id, "volume_tolerance": tol.file_volume, "volume_failures": errors[:20],
              "max_off_plane_mm": worst_plane, "max_off_line_mm": worst_line, "accuracy_mm": accuracy,
              "unit_mm": facts["unit_mm"], "complete": facts["complete"], "coloured_by_kind": coloured_by_kind,
              "colours": {k: [list(c) for c in v] for k, v in by_kind.items()}, "uncoloured": uncoloured[:20],
@@ -435,7 +432,7 @@ def _check_flat(path, bom, read):
     return check_flat(path, bom, step_solids=read.get("step"), meshes=read.get("3mf"))
 
 
-def _check_dxf(path, bom, solids_step, flat_path=None, reader=None):
+def _check_dxf(path, bom, solids_step, flat_path=None, reader=None, tol: Tolerances = DEFAULT):
     """CUT outlines against the flat data's outlines (which the flat check holds to the STEP solids),
     or, without flat.json, their areas against the BOM's (a beam's true outline, V ends and ridge
     included, is not a face of its solid).
@@ -474,14 +471,14 @@ def _check_dxf(path, bom, solids_step, flat_path=None, reader=None):
         if err > worst_e:
             worst_e, worst_id = err, pid
         worst_a = max(worst_a, rel)
-        if fi < 0 or rel > AREA_REL_TOL or err > EDGE_TOL_MM:
+        if fi < 0 or rel > tol.file_area or err > tol.file_edge_mm:
             failures.append({"id": pid, "face": fi, "area_rel_error": rel, "edge_error_mm": err})
     ok = (facts["audit_errors"] == 0 and facts["units"] == 4 and not missing and not failures
           and facts["texts"] >= len(flat))
     return {"pass": ok, "against": "flat.json", "outlines": len(outlines),
             "expected": len(flat), "missing": missing[:20],
             "area_rel_error_max": worst_a, "edge_error_mm_max": worst_e, "worst": worst_id,
-            "tolerances": {"area_rel": AREA_REL_TOL, "edge_mm": EDGE_TOL_MM}, "failures": failures[:20],
+            "tolerances": {"area_rel": tol.file_area, "edge_mm": tol.file_edge_mm}, "failures": failures[:20],
             "failed": len(failures), **facts}
 
 

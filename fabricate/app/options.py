@@ -87,6 +87,11 @@ TOLERANCE_KEYS = {
     "cad_linear_mm": dict(ge=1e-7, le=1.0, unit="mm", help="OpenCASCADE's modelling tolerance (1e-7 mm at least)"),
     "closeness": dict(ge=1e-12, le=1.0, unit="relative", help="distance to the reference / bbox diagonal"),
     "beam_twist_mm": dict(ge=1e-9, le=1000.0, unit="mm", help="largest twist of a beam a steel shop takes"),
+    "fold": dict(ge=1e-12, le=1.0, unit="sine", help="a convex corner whose signed sine ends below -fold is dented"),
+    "strip_parallel": dict(ge=1e-12, le=1.0, unit="sine", help="rulings of a strip closer than this are parallel"),
+    "file_volume": dict(ge=1e-12, le=1.0, unit="relative", help="solid volumes read back from the files / BOM"),
+    "file_area": dict(ge=1e-12, le=1.0, unit="relative", help="cut outline areas read back / flat data"),
+    "file_edge_mm": dict(ge=1e-9, le=1.0, unit="mm", help="cut outline edge lengths read back / flat data"),
 }
 """Bounds, units and help of the ``tolerances`` keys; their defaults are those of
 :class:`optimize.tolerances.Tolerances`."""
