@@ -1,7 +1,8 @@
 """Cut files by material and thickness, nested on stock sheets, and the layout plan of the roof.
 
 ``write_cut_files`` writes, for every material and thickness (glass panels of
-each thickness, steel plates of each thickness), ``cut_<material>_<t>mm.dxf``
+each thickness, steel plates of each thickness: beam plates and the cap plates of
+tube hubs together), ``cut_<material>_<t>mm.dxf``
 and ``.svg``: the parts nested on the material's stock sheets
 (:func:`fabricate.export.nesting.layout`: sheet size, margin, kerf,
 rotation), every sheet framed on layer SHEET with its id
@@ -25,40 +26,47 @@ from optimize.errors import ExportError
 
 from .nesting import layout
 
-MATERIAL = {"panel": "glass", "beam": "steel"}
+MATERIAL = {"panel": "glass", "beam": "steel", "node": "steel"}
 
 
 def _batches(parts):
-    """``[(material, thickness_mm, kind)]`` of the parts cut from sheet, in order (a glass unit's
-    interlayers are not: they come from the roll and are trimmed after laminating)."""
-    seen = []
+    """``[(material, thickness_mm, kinds)]`` of the parts cut from sheet, in order: one batch per material
+    and thickness, whatever kind the parts are (a 12 mm flange and a 12 mm hub cap share the 12 mm
+    plate).  A glass unit's interlayers are not cut from sheet: they come from the roll and are trimmed
+    after laminating; a hub tube is ordered as a section (:func:`fabricate.cad.parts.cut_from_sheet`)."""
+    from fabricate.cad.parts import cut_from_sheet
+
+    seen: dict[tuple[str, float], list[str]] = {}
     for g in parts.groups:
-        if g.kind in MATERIAL and len(g) and not g.material:
-            key = (MATERIAL[g.kind], round(float(g.thickness_mm[0]), 3), g.kind)
-            if key not in seen:
-                seen.append(key)
-    return seen
+        if g.kind in MATERIAL and len(g) and not g.material and cut_from_sheet(g.kind, g.member):
+            kinds = seen.setdefault((MATERIAL[g.kind], round(float(g.thickness_mm[0]), 3)), [])
+            if g.kind not in kinds:
+                kinds.append(g.kind)
+    return [(m, t, tuple(kinds)) for (m, t), kinds in seen.items()]
 
 
 def nest_cut_files(parts, nesting: dict) -> list[dict]:
     """Every material and thickness nested on its sheets (no file written).
 
     nesting : ``{"glass": {"sheet_mm", "margin_mm", "kerf_mm", "rotation"}, "steel": {...}}``.
-    Returns ``[{"stem", "material", "thickness_mm", "kind", "layout", "parts", "oversize"}]``: the
-    :class:`~fabricate.export.nesting.Layout` of ``parts`` (the parts of that batch that fit a sheet).
+    Returns ``[{"stem", "material", "thickness_mm", "kind", "kinds", "layout", "parts", "oversize"}]``: the
+    :class:`~fabricate.export.nesting.Layout` of ``parts`` (the parts of that batch that fit a sheet);
+    ``kinds`` the part kinds on it (``("beam", "node")``: beam plates and hub caps), ``kind`` the first.
     """
     import dataclasses
 
+    from fabricate.cad.parts import cut_from_sheet
+
     sheet_parts = dataclasses.replace(parts, groups=tuple(g for g in parts.groups if not g.material))
     out = []
-    for material, t, kind in _batches(parts):
+    for material, t, kinds in _batches(parts):
         opts = nesting[material]
         W, H = (float(v) for v in opts["sheet_mm"])
         margin, kerf = float(opts["margin_mm"]), float(opts["kerf_mm"])
         rot = bool(opts["rotation"])
         big = []
         for g in sheet_parts.groups:  # parts that fit no sheet are listed, not nested
-            if g.kind == kind and np.isclose(g.thickness_mm[0], t):
+            if g.kind in kinds and cut_from_sheet(g.kind, g.member) and np.isclose(g.thickness_mm[0], t):
                 w, h = g.rect[:, 0] + 2 * margin, g.rect[:, 1] + 2 * margin
                 fits = ((w <= W) & (h <= H)) | (rot & (w <= H) & (h <= W))
                 big += [i for i, ok in zip(g.ids, fits) if not ok]
@@ -66,11 +74,11 @@ def nest_cut_files(parts, nesting: dict) -> list[dict]:
         stem = f"cut_{material}_{t:g}mm"
         name = f"{material.upper()}-{t:g}"
         try:
-            lay = layout(sub, (W, H), margin, kerf=kerf, rotation=rot, kinds=(kind,), thickness=t, name=name)
+            lay = layout(sub, (W, H), margin, kerf=kerf, rotation=rot, kinds=kinds, thickness=t, name=name)
         except ValueError as exc:
             raise ExportError(f"{stem}: nesting failed ({exc})") from None
-        out.append({"stem": stem, "material": material, "thickness_mm": t, "kind": kind, "layout": lay,
-                    "parts": sub, "oversize": big})
+        out.append({"stem": stem, "material": material, "thickness_mm": t, "kind": kinds[0], "kinds": kinds,
+                    "layout": lay, "parts": sub, "oversize": big})
     return out
 
 
