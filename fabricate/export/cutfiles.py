@@ -12,7 +12,8 @@ by the sheet limit); ``outlines.dxf`` still draws it.
 
 ``write_layout_plan`` writes ``layout_plan.dxf``: the roof seen from above
 (model x, y in mm), every glass unit's bearing outline (layer PANELS, the unit id) and every
-beam's glass-side edge (layer BEAMS) with its id where it sits.
+beam's glass-side edge (layer BEAMS) with its id where it sits, readable at the plot scale and
+never on top of another id (:mod:`fabricate.export.plan_labels`).
 """
 from __future__ import annotations
 
@@ -140,36 +141,72 @@ def plan_groups(parts) -> list[tuple]:
     return out + [(g, tuple(unit_id(i) for i in g.ids)) for g in beam_units(parts) if len(g)]  # a beam once
 
 
-def write_layout_plan(parts, path) -> dict:
-    """``layout_plan.dxf``: every panel and beam with its id where it sits on the roof (plan view, mm)."""
-    import ezdxf
-
-    t0 = time.perf_counter()
-    path = Path(path)
-    doc = ezdxf.new("R2010", units=ezdxf.units.MM)
-    for name, colour in (("PANELS", 4), ("BEAMS", 8), ("IDS", 5)):
-        doc.layers.add(name, color=colour)
-    msp = doc.modelspace()
-    n = 0
+def plan_items(parts) -> list[dict]:
+    """The layout plan's parts in plan (model x, y, mm) as :func:`fabricate.export.plan_labels.place_labels`
+    takes them: per glass unit its bearing outline (``polygon``, its unit id), per beam its glass-side
+    edge A0 B0 (``segment``)."""
+    out = []
     for g, ids in plan_groups(parts):
         P = g.vertices[:, list(g.ring)][..., :2]
         if g.kind == "beam":
             C = g.centre_line if g.centre_line is not None else g.vertices[:, :4]
-            P = C[:, :2, :2]                               # the glass-side edge A0 B0
-        size = np.linalg.norm(P.max(axis=1) - P.min(axis=1), axis=1)
-        h = np.clip(0.06 * size, 20.0, 400.0)
-        centre = P.mean(axis=1)
-        layer = "PANELS" if g.kind == "panel" else "BEAMS"
-        for i, pid in enumerate(ids):  # ezdxf entities per part (a plan, not a cut file)
-            msp.add_lwpolyline(P[i].tolist(), close=g.kind == "panel", dxfattribs={"layer": layer})
-            msp.add_text(pid, height=float(h[i]) * (0.5 if g.kind == "beam" else 1.0),
-                         dxfattribs={"layer": "IDS"}).set_placement(tuple(centre[i]),
-                                                                    align=ezdxf.enums.TextEntityAlignment.MIDDLE_CENTER)
-            n += 1
+            S = C[:, :2, :2]                               # the glass-side edge A0 B0
+            out += [{"text": pid, "kind": "beam", "segment": S[i], "anchor": S[i].mean(axis=0)}
+                    for i, pid in enumerate(ids)]
+        else:
+            out += [{"text": pid, "kind": "panel", "polygon": P[i], "anchor": P[i].mean(axis=0)}
+                    for i, pid in enumerate(ids)]
+    return out
+
+
+def write_layout_plan(parts, path) -> dict:
+    """``layout_plan.dxf``: every panel and beam with its id where it sits on the roof (plan view, mm).
+
+    The ids are placed by :func:`fabricate.export.plan_labels.place_labels` for the plot scale
+    :func:`~fabricate.export.plan_labels.plot_scale` chooses (text at least 2.5 mm on paper): a panel's id
+    inside it, scaled to it; a beam's beside its line; where neither fits, on a free spot nearby with a
+    leader (layer LEADERS); the label boxes never overlap.  The scale and the counts are in the facts and
+    in a note (MTEXT, layer TITLE) under the plan."""
+    import ezdxf
+
+    from .plan_labels import PAPER_TEXT_MM, dxf_measure, label_counts, panel_fits, place_labels, plot_scale
+
+    t0 = time.perf_counter()
+    path = Path(path)
+    doc = ezdxf.new("R2010", units=ezdxf.units.MM)
+    for name, colour in (("PANELS", 4), ("BEAMS", 8), ("IDS", 5), ("LEADERS", 5), ("TITLE", 7)):
+        doc.layers.add(name, color=colour)
+    msp = doc.modelspace()
+    items = plan_items(parts)
+    shapes = [it["polygon"] if it["kind"] == "panel" else it["segment"] for it in items]
+    allp = np.concatenate(shapes) if shapes else np.zeros((1, 2))
+    lo, hi = allp.min(axis=0), allp.max(axis=0)
+    fits = panel_fits(items, dxf_measure)
+    scale = plot_scale(lo, hi, float(np.median(fits)) if len(fits) else float(np.ptp(allp[:, 0])))
+    size = PAPER_TEXT_MM * scale
+    labels = place_labels(items, dxf_measure, size, 3 * size)
+    for it, lab in zip(items, labels):  # ezdxf entities per part (a plan, not a cut file)
+        if it["kind"] == "panel":
+            msp.add_lwpolyline(it["polygon"].tolist(), close=True, dxfattribs={"layer": "PANELS"})
+        else:
+            msp.add_lwpolyline(it["segment"].tolist(), close=False, dxfattribs={"layer": "BEAMS"})
+        if lab["how"] == "skipped":
+            continue
+        msp.add_text(lab["text"], height=lab["size"], dxfattribs={"layer": "IDS"}).set_placement(
+            tuple(lab["centre"]), align=ezdxf.enums.TextEntityAlignment.MIDDLE_CENTER)
+        if lab["leader"] is not None:
+            msp.add_line(*(tuple(p) for p in lab["leader"]), dxfattribs={"layer": "LEADERS"})
+    counts = label_counts(labels)
+    note = (f"LAYOUT PLAN (plan view, mm), plot at 1:{scale}: ids {PAPER_TEXT_MM:g} to {3 * PAPER_TEXT_MM:g} mm "
+            f"on paper; {counts['inside']} inside their panel, {counts['beside']} beside their beam, "
+            f"{counts['leader']} on a leader, {counts['skipped']} left out")
+    msp.add_mtext(note, dxfattribs={"layer": "TITLE", "char_height": size}).set_location(
+        (float(lo[0]), float(lo[1]) - 3 * size))
     try:
         with atomic_open(path, "w", encoding="utf-8", newline="\n") as fh:
             doc.write(fh)
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the layout plan ({exc.strerror or exc})") from None
-    return {"file": path.name, "bytes": path.stat().st_size, "parts": n, "view": "plan (model x, y), mm",
+    return {"file": path.name, "bytes": path.stat().st_size, "parts": len(items), "view": "plan (model x, y), mm",
+            "plot_scale": f"1:{scale}", "text_mm": [size, 3 * size], "labels": counts,
             "seconds": time.perf_counter() - t0}
