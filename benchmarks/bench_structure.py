@@ -69,7 +69,8 @@ def dome(beams: int = 10000) -> dict:
     spec = PartSpec(glass_thickness=12.0, beam_width=80.0, beam_depth=300.0)
     opt = parse_config({"input": {"shape": {"name": "dome"}},
                         "structure": {"check": "report", "section": {"shape": "rhs", "depth": 300, "width": 100,
-                                                                      "web": 8}}}, source=Path("bench.yaml")).structure
+                                                                      "web": 8}}}, source=Path("bench.yaml"))
+    opt = opt.structure.to_options()
     t0 = time.perf_counter()
     build_parts(s, spec)
     cad = time.perf_counter() - t0

@@ -32,8 +32,9 @@ with it:
 - ``dxf``: read by an independent reader (:mod:`fabricate.export.dxf_text`: lint
   of codes, sections, handles, closed outlines; ``--occ``: ezdxf loads and
   audits the whole file), units mm, one CUT outline (id in XDATA) and
-  one ETCH id per part cut from sheet (panel, beam, hub cap), and each outline has the area (``1e-9``
-  relative) and the edge lengths (``1e-6`` mm) of the flat data's outline
+  one ETCH id per part cut from sheet (panel, beam, hub cap), and each outline has the area
+  (``tol.file_area``, ``1e-9`` relative) and the edge lengths (``tol.file_edge_mm``, ``1e-6`` mm) of
+  the flat data's outline
   with the same id (without ``flat.json``: a face of the STEP solid).
 - ``svg``: parses, one group per part cut from sheet.
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
@@ -60,7 +61,6 @@ from optimize.errors import ExportError
 from optimize.tolerances import DEFAULT, Tolerances
 
 from .cad.parts import cut_from_sheet
-from .check_mesh import VOLUME_REL_TOL
 from .check_mesh import check_3mf as _check_3mf
 from .check_mesh import check_stl as _check_stl
 
@@ -69,8 +69,6 @@ FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "mod
          "dxf": "outlines.dxf", "svg": "outlines.svg", "flat": "flat.json", "ifc": "model.ifc", "3dm": "model.3dm",
          "nc1": "nc1"}
 REPORT = "report.json"
-AREA_REL_TOL = 1e-9
-EDGE_TOL_MM = 1e-6
 
 
 def check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset(),
@@ -86,28 +84,47 @@ def heap_reuse():
     next one (``mallopt`` mmap and trim thresholds at 1 GiB), so that the readers' many large
     temporaries do not each fault in fresh pages (on this project's 165 MB STEP file a first read
     spent 40 % of its time in page faults); afterwards the thresholds go back to glibc's defaults
-    and the heap is trimmed.  A no-op where there is no glibc."""
+    and the heap is trimmed.  A no-op where there is no glibc.
+
+    numpy's transparent-huge-page advice on its big arrays is turned off meanwhile: served from a
+    reused heap they gain nothing from it, and each advised range costs the kernel a 2 MiB page
+    to zero and compact (the dome's STEP read: a fifth of its system time)."""
+    hugepage = _madvise_hugepage(False)
     try:
         libc = ctypes.CDLL(None)
         mallopt, trim = libc.mallopt, libc.malloc_trim
     except (OSError, AttributeError, TypeError):
-        yield
+        try:
+            yield
+        finally:
+            _madvise_hugepage(hugepage)
         return
     on = mallopt(M_MMAP_THRESHOLD, 1 << 30) and mallopt(M_TRIM_THRESHOLD, 1 << 30)
     try:
         yield
     finally:
+        _madvise_hugepage(hugepage)
         if on:
             mallopt(M_MMAP_THRESHOLD, 128 * 1024)
             mallopt(M_TRIM_THRESHOLD, 128 * 1024)
             trim(0)
 
 
+def _madvise_hugepage(enabled: bool | None) -> bool | None:
+    """Set numpy's huge-page advice for new arrays; returns the previous setting (None: this numpy
+    has no such switch, and ``enabled=None`` changes nothing)."""
+    try:
+        from numpy._core.multiarray import _set_madvise_hugepage
+    except ImportError:
+        return None
+    return None if enabled is None else bool(_set_madvise_hugepage(enabled))
+
+
 M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3   # glibc's mallopt parameters
 
 
 def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = frozenset(),
-                   step_reader: str = "text") -> dict:
+                   step_reader: str = "text", only: frozenset[str] | None = None) -> dict:
     """Run every check on ``outdir``; returns ``{"outdir", "pass", "checks": {name: {...}}, "seconds"}``.
 
     ``pass`` is False when any check failed (``pass: False``); skipped checks
@@ -119,9 +136,12 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     ``step_reader``: ``"text"`` (default: :mod:`fabricate.export.step_text`, an
     independent parser of the planar B-rep, as fast as the export) or ``"occ"``
     (OpenCASCADE reads the file back: BRepCheck per solid, about 10 ms a part).
+    A big STEP file is read, with the checks that need it, in a child process while this one
+    runs the others (:mod:`fabricate.check_lanes`); ``only``: run just these checks, here.
     """
     if step_reader not in ("text", "occ"):
         raise ValueError(f"step_reader {step_reader!r}: expected 'text' or 'occ'")
+    from . import check_lanes
     from .export import exchange_check
     from .export.bom import read_bom
 
@@ -136,49 +156,74 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     written = written_files(out)
     checks: dict[str, dict] = {"bom": _check_bom(bom)}
     read: dict[str, object] = {}  # what one check read and the next ones use: STEP solids, 3MF meshes
-    for name, key, needs, run in (
-            ("step", "step", None, lambda: (_check_step if step_reader == "occ" else _check_step_text)(
-                paths["step"], bom)),
-            ("3mf", "3mf", None, lambda: _check_3mf(paths["3mf"], bom)),
-            ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
-            ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
-            ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
-            ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
-            ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"],
-                                                       None if step_reader == "occ" else "text"), None)),
-            ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
-            ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
-                                                                     full="ifc_geometry" not in skip,
-                                                                     kernel=step_reader == "occ"), None)),
-            ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
-            ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None))):
-        t1 = time.perf_counter()
-        if key in skip:
-            checks[name] = {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
-            continue
-        if not paths[key].exists():
-            if FILES[key] in written:
-                checks[name] = {"pass": False, "missing": FILES[key],
-                                "why": [f"{FILES[key]} is missing: the run wrote it "
-                                        f"({written[FILES[key]]} bytes, listed in {REPORT})"]}
-            else:
-                checks[name] = {"pass": None, "skipped": f"{FILES[key]} was not written"}
-            continue
-        if needs and read.get(needs) is None:
-            checks[name] = {"pass": None, "skipped": f"needs a readable {FILES[needs]}"}
-            continue
-        try:
-            result, read[name] = run()
-        except ExportError as exc:
-            result = {"pass": False, "error": str(exc)}
-        result["seconds"] = round(time.perf_counter() - t1, 3)
-        if result.get("pass") is False:
-            result.setdefault("why", failure_reasons(result))
-        checks[name] = result
-        log.info("check %s: %s", name, {True: "ok", False: "FAILED"}.get(result.get("pass"), "skipped"))
+    table = (
+        ("step", "step", None, lambda: (_check_step if step_reader == "occ" else _check_step_text)(
+            paths["step"], bom, tol)),
+        ("3mf", "3mf", None, lambda: _check_3mf(paths["3mf"], bom, tol)),
+        ("stl", "stl", "3mf", lambda: (_check_stl(paths["stl"], bom, read["3mf"]), None)),
+        ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
+        ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
+        ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
+        ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"],
+                                                   None if step_reader == "occ" else "text", tol), None)),
+        ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
+        ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
+                                                                 full="ifc_geometry" not in skip,
+                                                                 kernel=step_reader == "occ", tol=tol), None)),
+        ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
+        ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None)))
+
+    def run_checks(names) -> None:
+        for name, key, needs, run in table:
+            if name in names:
+                checks[name] = _one_check(name, key, needs, run, paths, skip, written, read)
+
+    groups = [] if only is not None else check_lanes.lanes_for(paths, skip, step_reader)
+    children: list = []
+    try:
+        for names in groups:
+            children.append((names, check_lanes.start(out, names, skip, tol)))
+        elsewhere = frozenset().union(*[names for names, child in children if child is not None])
+        run_checks(only if only is not None else {t[0] for t in table} - elsewhere)
+        for names, child in children:
+            theirs = None if child is None else check_lanes.collect(child)
+            if theirs is None:
+                run_checks(names)
+                continue
+            checks.update(theirs)
+            if "error" in theirs.get("step", {}):   # no solids read: the flat data against the 3MF, here
+                run_checks({"flat"})
+    finally:
+        for _, child in children:
+            check_lanes.stop(child)
+    checks = {k: checks[k] for k in ["bom"] + [t[0] for t in table] if k in checks}
     failed = [k for k, v in checks.items() if v.get("pass") is False]
     return {"outdir": str(out), "pass": not failed, "failed": failed, "checks": checks,
             "seconds": round(time.perf_counter() - t0, 3)}
+
+
+def _one_check(name, key, needs, run, paths, skip, written, read) -> dict:
+    """One check's result (``read[name]``: what it read, for the checks after it)."""
+    t1 = time.perf_counter()
+    if key in skip:
+        return {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
+    if not paths[key].exists():
+        if FILES[key] in written:
+            return {"pass": False, "missing": FILES[key],
+                    "why": [(f"{FILES[key]} is missing: the run wrote it "
+                             f"({written[FILES[key]]} bytes, listed in {REPORT})")]}
+        return {"pass": None, "skipped": f"{FILES[key]} was not written"}
+    if needs and read.get(needs) is None:
+        return {"pass": None, "skipped": f"needs a readable {FILES[needs]}"}
+    try:
+        result, read[name] = run()
+    except ExportError as exc:
+        result = {"pass": False, "error": str(exc)}
+    result["seconds"] = round(time.perf_counter() - t1, 3)
+    if result.get("pass") is False:
+        result.setdefault("why", failure_reasons(result))
+    log.info("check %s: %s", name, {True: "ok", False: "FAILED"}.get(result.get("pass"), "skipped"))
+    return result
 
 
 def written_files(outdir: Path) -> dict[str, int]:
@@ -261,15 +306,15 @@ def _check_bom(bom) -> dict:
             "nonpositive_volume": bad[:20], **kinds}
 
 
-def _volume_errors(volumes: dict[str, float], expected: dict[str, float]):
-    """``(worst relative error, its id, ids beyond VOLUME_REL_TOL)`` of solid volumes against the BOM's."""
+def _volume_errors(volumes: dict[str, float], expected: dict[str, float], tol: Tolerances):
+    """``(worst relative error, its id, ids beyond tol.file_volume)`` of solid volumes against the BOM's."""
     worst, worst_id, errors = 0.0, None, []
     for name, v in volumes.items():
         if name in expected:
             rel = abs(v - expected[name]) / expected[name]
             if rel > worst:
                 worst, worst_id = rel, name
-            if rel > VOLUME_REL_TOL:
+            if rel > tol.file_volume:
                 errors.append(name)
     return worst, worst_id, errors
 
@@ -286,7 +331,7 @@ def _colours_by_kind(names, colours: dict, bom):
     return by_kind, uncoloured, ok
 
 
-def _check_step(path, bom):
+def _check_step(path, bom, tol: Tolerances = DEFAULT):
     from .export.brep import solid_facts
     from .export.step_read import read_step
 
@@ -301,7 +346,7 @@ def _check_step(path, bom):
         if not f["valid"] or f["solids"] != 1:
             invalid.append(name)
         volumes[name] = f["volume_mm3"]
-    worst, worst_id, errors = _volume_errors(volumes, expected)
+    worst, worst_id, errors = _volume_errors(volumes, expected, tol)
     unit_mm = "SI_UNIT(.MILLI.,.METRE.)" in _head(path, 1 << 16).replace(" ", "")
     colours = facts.pop("colours", {})
     by_kind, uncoloured, coloured_by_kind = _colours_by_kind(names, colours, bom)
@@ -309,13 +354,13 @@ def _check_step(path, bom):
           and coloured_by_kind)
     return ({"pass": ok, "solids": len(names), "bom_rows": len(expected), "missing": missing[:20],
              "unexpected": extra[:20], "invalid": invalid[:20], "n_invalid": len(invalid),
-             "volume_rel_error_max": worst, "worst": worst_id, "volume_tolerance": VOLUME_REL_TOL,
+             "volume_rel_error_max": worst, "worst": worst_id, "volume_tolerance": tol.file_volume,
              "volume_failures": errors[:20], "unit_mm": unit_mm, "coloured_by_kind": coloured_by_kind,
              "colours": {k: [list(c) for c in v] for k, v in by_kind.items()}, "uncoloured": uncoloured[:20],
              **facts}, dict(solids))
 
 
-def _check_step_text(path, bom):
+def _check_step_text(path, bom, tol: Tolerances = DEFAULT):
     """The STEP file read by the independent text reader: names, validity of every solid as a closed
     planar polyhedron (edges used twice in opposite directions, V - E + F = 2, loops closed and
     counter-clockwise about their outward plane normals, simple, vertices on their planes and lines
@@ -341,7 +386,7 @@ def _check_step_text(path, bom):
         if bad:
             invalid.append(name)
             reasons.setdefault(", ".join(bad), name)
-    worst, worst_id, errors = _volume_errors({n: f["volume_mm3"] for n, f in solids.items()}, expected)
+    worst, worst_id, errors = _volume_errors({n: f["volume_mm3"] for n, f in solids.items()}, expected, tol)
     colours = {n: f["colour"] for n, f in solids.items() if f["colour"] is not None}
     by_kind, uncoloured, coloured_by_kind = _colours_by_kind(names, colours, bom)
     ok = (not missing and not extra and not invalid and not errors and facts["unit_mm"] and facts["complete"]
@@ -349,7 +394,7 @@ def _check_step_text(path, bom):
     return ({"pass": ok, "read_back": "text", "solids": facts["solids"], "bom_rows": len(expected),
              "missing": missing[:20], "unexpected": extra[:20], "invalid": invalid[:20],
              "n_invalid": len(invalid), "invalid_reasons": reasons, "volume_rel_error_max": worst,
-             "worst": worst_id, "volume_tolerance": VOLUME_REL_TOL, "volume_failures": errors[:20],
+             "worst": worst_id, "volume_tolerance": tol.file_volume, "volume_failures": errors[:20],
              "max_off_plane_mm": worst_plane, "max_off_line_mm": worst_line, "accuracy_mm": accuracy,
              "unit_mm": facts["unit_mm"], "complete": facts["complete"], "coloured_by_kind": coloured_by_kind,
              "colours": {k: [list(c) for c in v] for k, v in by_kind.items()}, "uncoloured": uncoloured[:20],
@@ -368,9 +413,8 @@ def _check_intersections(meshes, tol):
 
 
 def _check_bearing(meshes, bom, tol):
-    from .export.verify import bearing
-
     from .cad.parts import unit_id
+    from .export.verify import bearing
 
     plates: dict[tuple[str, str], list[str]] = {}   # (beam unit, panel) -> the plates the panel lies on
     for r in bom:
@@ -390,7 +434,7 @@ def _check_flat(path, bom, read):
     return check_flat(path, bom, step_solids=read.get("step"), meshes=read.get("3mf"))
 
 
-def _check_dxf(path, bom, solids_step, flat_path=None, reader=None):
+def _check_dxf(path, bom, solids_step, flat_path=None, reader=None, tol: Tolerances = DEFAULT):
     """CUT outlines against the flat data's outlines (which the flat check holds to the STEP solids),
     or, without flat.json, their areas against the BOM's (a beam's true outline, V ends and ridge
     included, is not a face of its solid).
@@ -429,14 +473,14 @@ def _check_dxf(path, bom, solids_step, flat_path=None, reader=None):
         if err > worst_e:
             worst_e, worst_id = err, pid
         worst_a = max(worst_a, rel)
-        if fi < 0 or rel > AREA_REL_TOL or err > EDGE_TOL_MM:
+        if fi < 0 or rel > tol.file_area or err > tol.file_edge_mm:
             failures.append({"id": pid, "face": fi, "area_rel_error": rel, "edge_error_mm": err})
     ok = (facts["audit_errors"] == 0 and facts["units"] == 4 and not missing and not failures
           and facts["texts"] >= len(flat))
     return {"pass": ok, "against": "flat.json", "outlines": len(outlines),
             "expected": len(flat), "missing": missing[:20],
             "area_rel_error_max": worst_a, "edge_error_mm_max": worst_e, "worst": worst_id,
-            "tolerances": {"area_rel": AREA_REL_TOL, "edge_mm": EDGE_TOL_MM}, "failures": failures[:20],
+            "tolerances": {"area_rel": tol.file_area, "edge_mm": tol.file_edge_mm}, "failures": failures[:20],
             "failed": len(failures), **facts}
 
 

@@ -8,19 +8,18 @@ from __future__ import annotations
 
 import numpy as np
 
-VOLUME_REL_TOL = 1e-6
-"""Relative volume tolerance of every solid read back against the BOM's analytic volume."""
+from optimize.tolerances import DEFAULT, Tolerances
 
 
 def _volumes(bom) -> dict[str, float]:
     return {r["id"]: float(r["volume_mm3"]) for r in bom}
 
 
-def check_3mf(path, bom):
+def check_3mf(path, bom, tol: Tolerances = DEFAULT):
     """One manifold3d mesh of all objects (indices apart, so each stays its own surface): status
     NoError and genus ``1 - objects`` hold when every object is a closed 2-manifold of genus 0 (a
     closed surface's genus is never negative); otherwise each object alone names the bad ones.
-    Volumes by the divergence theorem per object."""
+    Volumes by the divergence theorem per object, each within ``tol.file_volume`` (relative) of the BOM's."""
     import manifold3d
 
     from .export.threemf_text import read_3mf_text
@@ -56,7 +55,7 @@ def check_3mf(path, bom):
                 rel = abs(v - expected[n]) / expected[n]
                 if rel > worst:
                     worst, worst_id = rel, n
-                if rel > VOLUME_REL_TOL:
+                if rel > tol.file_volume:
                     errors.append(n)
     split = _split_objects(list(objects.values()))
     ok = not missing and not extra and not bad and not errors and not split

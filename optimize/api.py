@@ -14,6 +14,7 @@ import numpy as np
 
 from .errors import ConfigError
 from .mesh import Mesh, measures
+from .mesh.axes import fit_axes
 from .options import DEFAULTS, FORMULATIONS, METHODS, OptimizeOptions  # noqa: F401 (re-exported)
 from .proximity.curve import BoundaryCurve
 from .proximity.surface import Reference
@@ -23,7 +24,7 @@ from .solvers import guided
 from .solvers.guided import Convex, Glide, solve
 from .terms import convexity
 from .terms import fixed as fixed_mod
-from .terms.formulation import Formulation, fit_axes
+from .terms.formulation import Formulation
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
@@ -154,7 +155,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     x0 = form.start(norm.V)
     keep = None
     if convex:
-        corners, floor = convexity.floors(norm, norm.V)
+        corners, floor = convexity.floors(norm, norm.V, tol.fold)
         keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0
     run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=fairness,
@@ -186,7 +187,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     record_net(res, mesh, target)
     if keep is not None:
         _held(res, norm, Xn, keep, tol)
-    check_folds(res, mesh.V, FOLD_ADVICE if convex else NO_CONVEX_FOLD_ADVICE)
+    check_folds(res, mesh.V, FOLD_ADVICE if convex else NO_CONVEX_FOLD_ADVICE, tol.fold)
     log.info("optimize_mesh(%s, %s): %s", mesh.name, target, res.message)
     return res
 
@@ -229,7 +230,7 @@ def _held(res: OptimizeResult, norm: Mesh, Xn: np.ndarray, keep: Convex, tol: To
     planar = measures.planarity(norm, Xn)
     held = faces[planar[faces] > tol.planarity]
     held = held[np.argsort(-planar[held])]
-    res.defects["convexity"] = {"at_floor": int(len(faces)), "held": int(len(held)),
+    res.defects["convexity"] = {"at_floor": len(faces), "held": len(held),
                                 "faces": held[:20].tolist(), "sine_floor": convexity.SINE_FLOOR}
     if res.status != "converged" and len(held):
         bad = np.nonzero(planar > tol.planarity)[0]
@@ -247,21 +248,16 @@ def _unit(U: np.ndarray) -> np.ndarray:
 
 
 def _node_axes(form: Formulation, x: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit axes ``(n, 3)`` and cone angles ``(n,)``: the solved ones at interior
-    valence-4 vertices, elsewhere the normalized mean of the adjacent face normals."""
-    t = form.mesh.topology
-    SF = t.star_faces
-    valid = SF >= 0
-    Ns = np.where(valid[:, :, None], normals[np.maximum(SF, 0)], 0.0)  # (n, s, 3)
-    axes = _unit(Ns.sum(axis=1))
-    cosines = np.einsum("nsj,nj->ns", Ns, axes).sum(axis=1) / valid.sum(axis=1)
+    """Unit axes ``(n, 3)`` and cone angles ``(n,)``: the solved ones where the formulation has
+    axis unknowns, elsewhere the node axes fitted to the final unit face normals ``normals (m, 3)``
+    (:func:`optimize.mesh.axes.fit_axes`, the offset stage's fit)."""
+    fit = fit_axes(form.mesh, normals)
+    axes, cosines = fit.axes.copy(), fit.cos_theta.copy()
     cv = form.cone_vertices
     if "axes" in form.layout:
         a = form.layout.view(x, "axes")
         axes[cv] = _unit(a)
         cosines[cv] = form.layout.view(x, "cos") / np.linalg.norm(a, axis=1)
-    elif len(cv):  # positions only: the axis of the circle through the four normals
-        axes[cv], cosines[cv] = fit_axes(normals[SF[cv, :4]])
     av = form.axis_vertices
     if len(av):  # solved node axes (torsion-free beams), every vertex
         a = form.layout.view(x, "node_axes")

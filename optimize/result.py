@@ -14,6 +14,7 @@ import numpy as np
 
 from .errors import ConvergenceError
 from .mesh import Mesh, measures
+from .tolerances import DEFAULT
 
 STATUSES = ("converged", "folded", "stalled", "max_iter", "diverged")
 
@@ -114,13 +115,15 @@ class OptimizeResult:
                 f"success={self.success}, max_distance={self.max_distance:.3g}, {self.mesh!r})")
 
 
-def check_folds(result: OptimizeResult, V0: np.ndarray, advice: str = "") -> OptimizeResult:
+def check_folds(result: OptimizeResult, V0: np.ndarray, advice: str = "",
+                fold: float = DEFAULT.fold) -> OptimizeResult:
     """The one fold check of every method: record ``defects["folded"]`` (faces convex at
     ``V0 (n, 3)``, the input positions, that are dented, flipped or collapsed in
     ``result.mesh``: :func:`optimize.mesh.measures.folded_faces`) and turn a ``converged``
-    run with any of them into ``folded`` (not a success); ``advice`` ends the message.
+    run with any of them into ``folded`` (not a success); ``advice`` ends the message;
+    ``fold`` is ``Tolerances.fold``.
     Returns ``result`` (updated in place; calling it twice changes nothing more)."""
-    folded = np.nonzero(measures.folded_faces(result.mesh, result.mesh.V, V0))[0]
+    folded = np.nonzero(measures.folded_faces(result.mesh, result.mesh.V, V0, fold))[0]
     result.defects["folded"] = {"count": int(len(folded)), "faces": folded[:20].tolist()}
     if len(folded) and result.status == "converged":
         result.status, result.success = "folded", False

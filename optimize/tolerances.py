@@ -30,6 +30,16 @@ class Tolerances:
     closeness : relative to the bounding-box diagonal, max distance to the
         reference surface (reported, not enforced by the optimizer).
     beam_twist_mm : absolute, the largest twist of a beam a steel shop takes.
+    fold : signed corner sine: a corner convex in the input (sine above ``-fold``)
+        that ends below ``-fold`` is dented (``measures.folded_faces``, the
+        optimizer's fold check and convexity rows).
+    strip_parallel : sine of the angle below which two rulings of a developable
+        strip count as parallel (``modelling.strip_analysis``).
+    file_volume : relative, the volume of every solid read back from a written
+        file against the bill of materials (3MF, STL, STEP, IFC).
+    file_area : relative, the area of every cut outline read back from the cut
+        files against the flat data.
+    file_edge_mm : absolute, the edge lengths of those outlines.
     """
 
     planarity: float = 1e-6
@@ -40,6 +50,11 @@ class Tolerances:
     cad_linear_mm: float = 1e-3
     closeness: float = 5e-3
     beam_twist_mm: float = 1.0
+    fold: float = 1e-6
+    strip_parallel: float = 1e-6
+    file_volume: float = 1e-6
+    file_area: float = 1e-9
+    file_edge_mm: float = 1e-6
 
     def for_defect(self, name: str) -> float:
         """The threshold a solver's stop test holds the defect ``name`` to: a field of its own,

@@ -202,15 +202,15 @@ def test_built_section_properties_equal_the_closed_forms():
 
 
 def test_structure_check_uses_the_built_section():
-    from fabricate.app.config import StructureSection
+    from fabricate.structure.options import StructureOptions
     from fabricate.structure.check import configured_section
 
     structure = dome_structure(n_around=6, k=3)
     spec = PartSpec(beam=SECTIONS["rhs"])
-    sec = configured_section(StructureSection(), spec, structure)
+    sec = configured_section(StructureOptions(), spec, structure)
     assert sec.shape == "rhs" and sec.name == "rhs 200x120x6x8"
     assert sec.A == pytest.approx(2 * 6 * (200 - 16) + 2 * 8 * 120)
-    plate = configured_section(StructureSection(), PartSpec(), structure)
+    plate = configured_section(StructureOptions(), PartSpec(), structure)
     assert plate.name == "plate 60x200"
 
 

@@ -219,3 +219,38 @@ def test_fold_check_of_the_solver_agrees_with_measures_folded_faces():
         V = mesh.V + amount * rng.standard_normal(mesh.V.shape)
         assert np.array_equal(check.faces(V), measures.folded_faces(mesh, V))
     assert check.faces(mesh.V[:, [1, 0, 2]]).all()  # mirrored: every normal flipped
+
+
+def test_fold_advice_fits_the_target():
+    """A folded run of the paper's methods advises the default method where it exists (pq,
+    conical, circular) and, for a strip (which runs the paper's methods only), another of those."""
+    from optimize.errors import ConfigError
+    from optimize.mesh import Mesh
+    from optimize.modelling.designs import trefoil_band_mesh
+
+    grid = shapes.perturbed(shapes.grid(5, 4, (4.0, 3.0)), 0.1, seed=4)
+    res = optimize_mesh(grid, "pq", method="sqp")
+    assert res.status == "folded", res.message
+    assert res.message.endswith("the default method does (method 'default', --method default)")
+    band = trefoil_band_mesh(30, 0.4)
+    band = Mesh(band.V + 0.02 * np.random.default_rng(1).standard_normal(band.V.shape), band.F, name="band")
+    res = optimize_mesh(band, "strip", method="sqp")
+    assert res.status == "folded", res.message
+    assert "--method default" not in res.message and "method 'default'" not in res.message
+    assert "target 'strip' has no other method" in res.message and "--method penalty" in res.message
+    with pytest.raises(ConfigError, match="strip"):
+        optimize_mesh(band, "strip", method="default")  # the method the pq advice names is no option here
+
+
+def test_the_fold_threshold_is_the_runs_tolerance():
+    """``Tolerances.fold`` reaches the fold check: the face that folds on this grid turns its
+    corner to a sine below -0.3, so a threshold of 0.9 lets it pass and the run converges."""
+    from optimize import Tolerances
+
+    grid = shapes.perturbed(shapes.grid(5, 4, (4.0, 3.0)), 0.1, seed=4)
+    strict = optimize_mesh(grid, "pq", method="sqp")
+    assert strict.status == "folded" and strict.defects["folded"]["count"] > 0
+    loose = optimize_mesh(grid, "pq", method="sqp", tol=Tolerances(fold=0.9))
+    assert loose.status == "converged" and loose.defects["folded"]["count"] == 0, loose.message
+    assert not measures.folded_faces(grid, loose.mesh.V, tol=0.9).any()
+    assert measures.folded_faces(grid, loose.mesh.V).any()  # the default threshold still sees the fold

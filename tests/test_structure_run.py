@@ -32,7 +32,7 @@ def dome():
 
 def options(**structure):
     data = {"input": {"shape": {"name": "dome"}}, "structure": dict({"check": "report"}, **structure)}
-    return parse_config(data, source=Path("t.yaml")).structure
+    return parse_config(data, source=Path("t.yaml")).structure.to_options()
 
 
 SPEC = PartSpec(glass_thickness=10.0, beam_width=60.0, beam_depth=200.0)
@@ -153,7 +153,7 @@ def test_bad_structure_input_is_exit_2_with_one_line_naming_the_key(tmp_path, se
 def test_reference_config_lists_every_structure_key():
     import yaml
 
-    from fabricate.structure.options import LoadsOption, SizingOption, StructureSection
+    from fabricate.app.config_structure import LoadsOption, SizingOption, StructureSection
 
     data = yaml.safe_load((REPO / "configs" / "reference.yaml").read_text())["structure"]
     assert set(data) == set(StructureSection.allowed_keys())

@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from pathlib import Path
 from typing import Any, Literal
 
@@ -46,12 +47,12 @@ from optimize.tolerances import Tolerances
 from .config_design import MAX_FACES, DesignParamError, check_design, subdivided_faces
 from .config_errors import format_errors
 from .config_parts import LimitsSection, NestingSection, PartsSection, SheetSection  # noqa: F401 - re-exported
-from .config_section import MAX_MM, Section, section_base  # noqa: F401 - MAX_MM re-exported
+from .config_section import MAX_MM, Section, section_base, tuples  # noqa: F401 - MAX_MM re-exported
 from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
+from .config_structure import StructureSection
 from .config_yaml import MAX_DEPTH, read_config
 from .options import (CHECK_AUTO_MAX_PARTS, TOLERANCE_KEYS, UNIT_TO_MM, OffsetOptions,  # noqa: F401 - re-exported
                       OutputsOptions, RunOptions)
-from ..structure.options import StructureSection
 
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
 
@@ -131,10 +132,7 @@ class InputSection(Section):
 
     _paths = field_validator("mesh", "control", "surface", mode="before")(_resolve_path)
 
-    @field_validator("side", mode="before")
-    @classmethod
-    def _side_list(cls, v):
-        return tuple(v) if isinstance(v, list) else v
+    _side_list = tuples("side")
 
     @field_validator("layer", "object", mode="before")
     @classmethod
@@ -373,22 +371,11 @@ def _cross_checks(cfg: RunConfig, source: Path, lines: dict[tuple, int]) -> None
                               f"rounds of {scheme} make about {faces:,}, more than {MAX_FACES:,} (the largest "
                               "design run); expected fewer quads (the design's count parameters) or fewer "
                               "subdivision.levels")
-    parts = cfg.parts
-    flanged = parts.beam.section != "plate"
-    bearing, bkey = ((parts.beam.flange_width_mm, "beam.flange_width_mm") if flanged
-                     else (parts.beam_width, "beam_width"))
-    if parts.joint_gap >= bearing:
-        where = _at(source, lines, ("parts", "joint_gap"), ("parts",) + tuple(bkey.split(".")))
-        raise ConfigError(f"{where}: parts.joint_gap: {parts.joint_gap:g} mm is not "
-                          f"below parts.{bkey} {bearing:g} mm; expected a smaller gap so that the "
-                          "panels bear on the beams")
-    from ..cad.spec import PartSpec
-
-    try:  # the section and connection rules that join several keys (flange vs web, hub radius)
-        PartSpec(**parts.model_dump())
-    except ConfigError as exc:
-        key = tuple(str(exc).split(" ", 1)[0].split("."))
-        raise ConfigError(f"{_at(source, lines, key, ('parts',))}: {exc}") from None
+    try:  # the rules that join several keys (the joint gap below the bearing width, flange vs web, hub radius)
+        cfg.parts.to_options()
+    except ConfigError as exc:  # the line of the first key the message names that the file has
+        keys = [tuple(k.split(".")) for k in re.findall(r"\bparts(?:\.\w+)+", str(exc))]
+        raise ConfigError(f"{_at(source, lines, *keys, ('parts',))}: {exc}") from None
     if cfg.offset.distances is not None and "beam_depth" in cfg.parts.model_fields_set:
         span = abs(cfg.offset.distances[-1] - cfg.offset.distances[0])
         if abs(span - cfg.parts.beam_depth) > 1e-9 * max(span, 1.0):

@@ -41,18 +41,6 @@ def did_you_mean(word: str, allowed) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
-def key_lines(text: str) -> dict[tuple, int]:
-    """Map key paths to 1-based line numbers (bounded like every config read: see
-    :mod:`fabricate.app.config_yaml`); ``{}`` for text that is not a valid config."""
-    from optimize.errors import ConfigError
-
-    from .config_yaml import load_yaml
-    try:
-        return load_yaml(text, "<text>")[1]
-    except ConfigError:
-        return {}
-
-
 def _clean_loc(loc: tuple) -> tuple:
     """Drop pydantic's union tags (``'list[int]'``, ``'literal[...]'``, ``'str'``) from a location."""
     tags = {"str", "int", "float", "bool", "none"}

@@ -3,25 +3,33 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, field_validator, model_serializer, model_validator
+from pydantic import Field, model_serializer, model_validator
 from pydantic_core import PydanticCustomError
 
-from .config_section import MAX_MM, Section
+from ..cad.glass import BOUNDS, GASES, INTERLAYER_DENSITY, TYPES
+from ..cad.spec import BeamSpec, Limits, NodeSpec, PartSpec
+from .config_section import Section, section_base, tuples
 
-_tuple = field_validator("plies_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+_Interlayer = Literal[tuple(INTERLAYER_DENSITY)]
+
+
+def _mm(key: str):
+    """A ``parts.glass`` key in mm: not given (null) takes the build-up's default; bounds those of
+    :data:`fabricate.cad.glass.BOUNDS`."""
+    return Field(default=None, **BOUNDS[key])
 
 
 class PaneSection(Section):
     """One pane of an insulated unit: monolithic (``thickness_mm``) or laminated (``plies_mm`` and an
     interlayer between each two plies)."""
 
-    type: Literal["monolithic", "laminated"] = "monolithic"
-    thickness_mm: float | None = Field(default=None, ge=2.0, le=25.0)
+    type: Literal[TYPES[:2]] = "monolithic"
+    thickness_mm: float | None = _mm("thickness_mm")
     plies_mm: tuple[float, ...] | None = None
-    interlayer: Literal["PVB", "SGP"] | None = None
-    interlayer_mm: float | None = Field(default=None, gt=0, le=10.0)
+    interlayer: _Interlayer | None = None
+    interlayer_mm: float | None = _mm("interlayer_mm")
 
-    _plies = _tuple
+    _plies = tuples("plies_mm")
 
 
 class GlassSection(Section):
@@ -29,25 +37,25 @@ class GlassSection(Section):
     ``laminated`` (``plies_mm``, ``interlayer``, ``interlayer_mm``) or ``insulated`` (``outer`` and
     ``inner`` panes, ``cavity_mm`` of ``gas``, spacer ``edge_seal_mm``, stepped ``step_mm``)."""
 
-    type: Literal["monolithic", "laminated", "insulated"]
-    thickness_mm: float | None = Field(default=None, ge=2.0, le=25.0)
+    type: Literal[TYPES]
+    thickness_mm: float | None = _mm("thickness_mm")
     plies_mm: tuple[float, ...] | None = None
-    interlayer: Literal["PVB", "SGP"] | None = None
-    interlayer_mm: float | None = Field(default=None, gt=0, le=10.0)
+    interlayer: _Interlayer | None = None
+    interlayer_mm: float | None = _mm("interlayer_mm")
     outer: PaneSection | None = None
     inner: PaneSection | None = None
-    cavity_mm: float | None = Field(default=None, ge=4.0, le=50.0)
-    gas: Literal["argon", "air", "krypton"] | None = None
-    edge_seal_mm: float | None = Field(default=None, ge=5.0, le=50.0)
-    step_mm: float | None = Field(default=None, ge=0.0, le=200.0)
+    cavity_mm: float | None = _mm("cavity_mm")
+    gas: Literal[GASES] | None = None
+    edge_seal_mm: float | None = _mm("edge_seal_mm")
+    step_mm: float | None = _mm("step_mm")
 
-    _plies = _tuple
+    _plies = tuples("plies_mm")
 
     @model_validator(mode="after")
     def _consistent(self) -> "GlassSection":
         from optimize.errors import ConfigError
 
-        from fabricate.cad.glass import BuildUp
+        from ..cad.glass import BuildUp
 
         try:
             BuildUp.from_config(self.model_dump())
@@ -56,54 +64,30 @@ class GlassSection(Section):
         return self
 
 
-class LimitsSection(Section):
-    """What the shops can make; parts beyond it are flagged by id (see ``fabricate.cad.spec.Limits``)."""
-
-    min_corner_deg: float = Field(default=30.0, ge=0, lt=180)
-    min_edge_mm: float = Field(default=50.0, ge=0, le=10000.0)
-    sheet_mm: tuple[float, float] = (6000.0, 3210.0)
-    max_panel_kg: float = Field(default=250.0, gt=0, le=100000.0)
-
-    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+class LimitsSection(section_base(Limits)):
+    """What the shops can make; parts beyond it are flagged by id (defaults, bounds:
+    :class:`fabricate.cad.spec.Limits`)."""
 
 
-class BeamSection(Section):
-    """The beam section welded from plates (see ``fabricate.cad.spec.BeamSpec``), mm."""
-
-    section: Literal["plate", "rhs", "tee", "i"] = "plate"
-    web_mm: float | None = Field(default=None, gt=0, le=2000.0)
-    flange_mm: float = Field(default=12.0, gt=0, le=500.0)
-    flange_width_mm: float = Field(default=200.0, gt=0, le=5000.0)
+class BeamSection(section_base(BeamSpec)):
+    """The beam section welded from plates, mm (defaults, bounds: :class:`fabricate.cad.spec.BeamSpec`)."""
 
 
-class NodeSection(Section):
-    """How the beams meet at a node (see ``fabricate.cad.spec.NodeSpec``), mm."""
-
-    connection: Literal["hub", "mitre", "none"] | None = None
-    hub: Literal["tube", "solid"] = "tube"
-    radius_mm: float | None = Field(default=None, gt=0, le=5000.0)
-    wall_mm: float = Field(default=10.0, gt=0, le=1000.0)
-    cap_mm: float = Field(default=15.0, gt=0, le=1000.0)
-    gap_mm: float = Field(default=20.0, ge=0, le=5000.0)
+class NodeSection(section_base(NodeSpec)):
+    """How the beams meet at a node, mm (defaults, bounds: :class:`fabricate.cad.spec.NodeSpec`)."""
 
 
-class PartsSection(Section):
-    """Part dimensions in mm and densities in kg/m3 (see ``fabricate.cad.PartSpec``)."""
+_NESTED = {
+    "limits": (LimitsSection, Field(default_factory=LimitsSection)),
+    "beam": (BeamSection, Field(default_factory=BeamSection)),
+    "node": (NodeSection, Field(default_factory=NodeSection)),
+    "glass": (GlassSection | None, Field(default=None)),
+}
 
-    glass_thickness: float = Field(default=10.0, gt=0, le=200.0)
-    joint_gap: float = Field(default=10.0, ge=0, le=1000.0)
-    edge: Literal["auto", "axis", "perpendicular"] = "auto"
-    beam_width: float = Field(default=60.0, gt=0, le=2000.0)
-    beam_depth: float = Field(default=200.0, gt=0, le=MAX_MM)
-    node_radius: float = Field(default=0.0, ge=0, le=5000.0)
-    density_glass: float = Field(default=2500.0, gt=0, le=25000.0)
-    density_steel: float = Field(default=7850.0, gt=0, le=25000.0)
-    node_sides: int = Field(default=24, ge=6, le=256)
-    steel_grade: str = Field(default="S355", min_length=1, max_length=40)
-    limits: LimitsSection = Field(default_factory=LimitsSection)
-    beam: BeamSection = Field(default_factory=BeamSection)
-    node: NodeSection = Field(default_factory=NodeSection)
-    glass: GlassSection | None = None
+
+class PartsSection(section_base(PartSpec, extra=_NESTED)):
+    """Part dimensions in mm and densities in kg/m3 (defaults, bounds, and the rules joining several
+    keys: :class:`fabricate.cad.spec.PartSpec`)."""
 
     @model_validator(mode="after")
     def _one_build_up(self) -> "PartsSection":
@@ -134,7 +118,7 @@ class SheetSection(Section):
     kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
     rotation: bool = True
 
-    _sheet_list = field_validator("sheet_mm", mode="before")(lambda v: tuple(v) if isinstance(v, list) else v)
+    _sheet_list = tuples("sheet_mm")
 
 
 class NestingSection(Section):

@@ -54,7 +54,7 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
                  order: typing.Sequence[str] | None = None) -> type[Section]:
     """A :class:`Section` whose keys are the fields of the frozen dataclass ``options``: each key's
     default is the field's, its bounds, alias, unit and help those of the field metadata
-    (:func:`fabricate.app.options.option`; ``meta`` adds to it by field name, for an option class that has
+    (:func:`fabricate.fields.option`; ``meta`` adds to it by field name, for an option class that has
     none, like :class:`optimize.tolerances.Tolerances`).  A ``tuple[X, ...]`` field is a YAML list
     (with ``items`` bounds on each item).  ``extra``: further keys ``{name: (annotation, Field)}`` of
     the section only (nested sections); ``order``: the order of the keys.  Subclass the result to add
@@ -64,16 +64,20 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
     for f in dataclasses.fields(options):
         md = {**f.metadata, **(meta or {}).get(f.name, {})}
         annotation = _schema_type(hints[f.name], md.get("items"))
-        default = f.default if f.default is not dataclasses.MISSING else f.default_factory()
+        default = (f.default if f.default is not dataclasses.MISSING
+                   else ... if f.default_factory is dataclasses.MISSING  # ...: a required key
+                   else f.default_factory())
         help_ = md.get("help", "") + (f" ({md['unit']})" if md.get("unit") else "")
         if annotation is not hints[f.name] and isinstance(default, tuple):
             default = list(default)  # the default of a YAML list
         fields[f.name] = (annotation, Field(default=default, description=help_ or None,
                                             **{k: md[k] for k in _BOUNDS if k in md}))
+    fixed = [f.name for f in dataclasses.fields(options) if _fixed_tuple(hints[f.name]) and f.name not in (extra or {})]
     fields.update(extra or {})
     if order is not None:
         fields = {k: fields[k] for k in order}
-    model = create_model(f"{options.__name__}Keys", __base__=Section, __module__=__name__, **fields)
+    model = create_model(f"{options.__name__}Keys", __base__=Section, __module__=__name__,
+                         __validators__={"_yaml_tuples": tuples(*fixed)} if fixed else None, **fields)
     OPTIONS[model] = options
     return model
 
@@ -89,8 +93,31 @@ def _schema_type(annotation, items: dict | None):
     return annotation
 
 
-def _frozen_value(value):
+def tuples(*names: str):
+    """A before-validator that takes a YAML list given to the tuple keys ``names`` as the tuple
+    (strict types refuse a list for a tuple).  :func:`section_base` adds it to every fixed-length
+    tuple field by itself."""
+    return field_validator(*names, mode="before")(_as_tuple)
+
+
+def _as_tuple(value):
     return tuple(value) if isinstance(value, list) else value
+
+
+def _fixed_tuple(annotation) -> bool:
+    """Whether ``annotation`` is, or has in a union, a fixed-length ``tuple[X, Y, ...]``."""
+    origin, args = get_origin(annotation), get_args(annotation)
+    if origin in (typing.Union, types.UnionType):
+        return any(_fixed_tuple(a) for a in args)
+    return origin is tuple and not (len(args) == 2 and args[1] is Ellipsis)
+
+
+def _frozen_value(value):
+    """A section's value as its option object takes it: a nested derived section as its option
+    object, another section as its dict, a list as a tuple."""
+    if isinstance(value, Section):
+        return value.to_options() if any(c in OPTIONS for c in type(value).__mro__) else value.model_dump()
+    return tuple(_frozen_value(v) for v in value) if isinstance(value, list) else value
 
 
 _FALSE, _TRUE = ("off", "no", "false"), ("on", "yes", "true")

@@ -1,7 +1,7 @@
 """The one source of the application's defaults: frozen option objects.
 
 Each class is a frozen dataclass whose fields carry their default, their
-bounds, unit and help in the field metadata (:func:`option`).  The config
+bounds, unit and help in the field metadata (:func:`fabricate.fields.option`).  The config
 sections of :mod:`fabricate.app.config` are derived from them
 (:func:`fabricate.app.config_section.section_base`), and the command line reads
 its defaults from them, so every default is written once.  This module imports
@@ -14,34 +14,24 @@ no pydantic and nothing heavy (``fabricate --help`` reads it).
 - :class:`RunOptions`      the top-level keys of a run config (name, units, scale);
 - :class:`CommandOptions`  what ``fabricate run`` / ``batch`` take on the command line.
 
+The options of a stage live with the stage: ``parts`` in :class:`fabricate.cad.spec.PartSpec`,
+``structure`` in :class:`fabricate.structure.options.StructureOptions`; their sections are derived
+the same way (:mod:`fabricate.app.config_parts`, :mod:`fabricate.app.config_structure`).
+
 The optimizer's section stays as it is until ``optimize`` has its own frozen options.
 """
 from __future__ import annotations
 
-from dataclasses import MISSING, dataclass, field
-from typing import Any, Literal
+from dataclasses import dataclass
+from typing import Literal
 
-MAX_MM = 10_000.0
-"""Largest |layer distance| and beam depth (mm): 10 m."""
+from ..fields import MAX_MM, option  # also re-exported
 
 CHECK_AUTO_MAX_PARTS = 3000
 """``outputs.check: auto`` runs the full check up to this many parts, the fast one above."""
 
 UNIT_TO_MM = {"mm": 1.0, "cm": 10.0, "m": 1000.0, "in": 25.4, "ft": 304.8}
 """Millimetres per unit of ``units``."""
-
-
-def option(default: Any = MISSING, *, unit: str = "", help: str = "", alias: str | None = None,
-           ge: float | None = None, gt: float | None = None, le: float | None = None, lt: float | None = None,
-           min_length: int | None = None, max_length: int | None = None, pattern: str | None = None,
-           items: dict | None = None):
-    """A dataclass field with what its config key needs in the metadata: bounds (``ge`` ... ``lt``,
-    ``min_length`` / ``max_length``, ``pattern``), the bounds of each item of a tuple (``items``),
-    the YAML name when it is not a Python name (``alias``), the unit and a one-line help."""
-    meta = {k: v for k, v in dict(unit=unit, help=help, alias=alias, ge=ge, gt=gt, le=le, lt=lt,
-                                  min_length=min_length, max_length=max_length, pattern=pattern,
-                                  items=items).items() if v not in (None, "")}
-    return field(default=default, metadata=meta)
 
 
 @dataclass(frozen=True)
@@ -97,6 +87,11 @@ TOLERANCE_KEYS = {
     "cad_linear_mm": dict(ge=1e-7, le=1.0, unit="mm", help="OpenCASCADE's modelling tolerance (1e-7 mm at least)"),
     "closeness": dict(ge=1e-12, le=1.0, unit="relative", help="distance to the reference / bbox diagonal"),
     "beam_twist_mm": dict(ge=1e-9, le=1000.0, unit="mm", help="largest twist of a beam a steel shop takes"),
+    "fold": dict(ge=1e-12, le=1.0, unit="sine", help="a convex corner whose signed sine ends below -fold is dented"),
+    "strip_parallel": dict(ge=1e-12, le=1.0, unit="sine", help="rulings of a strip closer than this are parallel"),
+    "file_volume": dict(ge=1e-12, le=1.0, unit="relative", help="solid volumes read back from the files / BOM"),
+    "file_area": dict(ge=1e-12, le=1.0, unit="relative", help="cut outline areas read back / flat data"),
+    "file_edge_mm": dict(ge=1e-9, le=1.0, unit="mm", help="cut outline edge lengths read back / flat data"),
 }
 """Bounds, units and help of the ``tolerances`` keys; their defaults are those of
 :class:`optimize.tolerances.Tolerances`."""

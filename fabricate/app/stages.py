@@ -179,10 +179,9 @@ def stage_offset(cfg, opt: OptimizeRecord) -> OffsetRecord:
 
 # -- CAD -----------------------------------------------------------------------------
 def part_spec(cfg):
-    """The :class:`fabricate.cad.PartSpec` of the config's ``parts`` section."""
-    from fabricate.cad import PartSpec
-
-    return PartSpec(**cfg.parts.model_dump())
+    """The :class:`fabricate.cad.PartSpec` of the config's ``parts`` section (the frozen object it
+    is derived from, :meth:`fabricate.app.config_section.Section.to_options`)."""
+    return cfg.parts.to_options()
 
 
 def stage_cad(cfg, opt: OptimizeRecord, off: OffsetRecord) -> PartsRecord:
@@ -242,7 +241,7 @@ def stage_structure(cfg, off: OffsetRecord, parts: PartsRecord) -> StructureReco
     from fabricate.structure.outputs import structure_measures
     from fabricate.structure.run import check_run
 
-    chk, rep, notes, line = check_run(cfg.structure, off.structure, parts.spec)
+    chk, rep, notes, line = check_run(cfg.structure.to_options(), off.structure, parts.spec)
     return StructureRecord(check=chk, report=frozen(rep), measures=frozen(structure_measures(chk)),
                            notes=tuple(notes), line=line)
 

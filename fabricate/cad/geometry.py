@@ -48,11 +48,6 @@ def fan_triangles(faces: tuple[tuple[int, ...], ...]) -> np.ndarray:
     return np.asarray(tris, dtype=np.int64).reshape(-1, 3)
 
 
-def face_of_triangle(faces: tuple[tuple[int, ...], ...]) -> np.ndarray:
-    """(t,) int: the face each fan triangle of :func:`fan_triangles` belongs to."""
-    return np.repeat(np.arange(len(faces)), [len(f) - 2 for f in faces])
-
-
 def volumes(V: np.ndarray, faces) -> np.ndarray:
     """(p,) float: volumes of closed polyhedra ``V (p, nv, 3)`` (divergence theorem).
 
@@ -63,21 +58,6 @@ def volumes(V: np.ndarray, faces) -> np.ndarray:
     X = V - V[:, :1, :]
     a, b, c = X[:, T[:, 0]], X[:, T[:, 1]], X[:, T[:, 2]]
     return dot(a, np.cross(b, c)).sum(axis=1) / 6.0
-
-
-def face_vector_areas(V: np.ndarray, face: tuple[int, ...]) -> np.ndarray:
-    """(p, 3) float: vector area (normal times area) of one face of each polyhedron."""
-    P = V[:, list(face)]
-    P = P - P[:, :1]
-    return 0.5 * np.cross(P, np.roll(P, -1, axis=1)).sum(axis=1)
-
-
-def polygon_area_normal(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Area ``(p,)`` and unit normal ``(p, 3)`` of polygons ``P (p, k, 3)`` (Newell)."""
-    Q = P - P[:, :1]
-    s = 0.5 * np.cross(Q, np.roll(Q, -1, axis=1)).sum(axis=1)
-    a = np.linalg.norm(s, axis=1)
-    return a, unit(s)
 
 
 def convexity(P: np.ndarray, normal: np.ndarray) -> np.ndarray:
@@ -117,12 +97,6 @@ def flat_frame(P: np.ndarray, normal: np.ndarray) -> tuple[np.ndarray, np.ndarra
     ex = unit(ex - dot(ex, normal)[:, None] * normal)
     ey = np.cross(normal, ex)
     return origin, ex, ey
-
-
-def to_plane(X: np.ndarray, origin: np.ndarray, ex: np.ndarray, ey: np.ndarray) -> np.ndarray:
-    """(p, k, 2) float: points ``X (p, k, 3)`` in the frames of :func:`flat_frame`."""
-    D = X - origin[:, None, :]
-    return np.stack([dot(D, ex[:, None, :]), dot(D, ey[:, None, :])], axis=2)
 
 
 def min_area_rectangle(Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -41,9 +41,16 @@ TYPES = ("monolithic", "laminated", "insulated")
 PLY_MM = (2.0, 25.0)
 """Float glass is made from 2 to 25 mm thick."""
 PVB_FILM_MM = 0.38
+GLASS_THICKNESS = dict(gt=0.0, le=200.0)
+"""Bounds of ``parts.glass_thickness``, the monolithic shorthand (mm)."""
+BOUNDS = {"thickness_mm": dict(ge=PLY_MM[0], le=PLY_MM[1]), "interlayer_mm": dict(gt=0.0, le=10.0),
+          "cavity_mm": dict(ge=4.0, le=50.0), "edge_seal_mm": dict(ge=5.0, le=50.0), "step_mm": dict(ge=0.0, le=200.0)}
+"""Bounds of the ``parts.glass`` keys (mm): one place, which the config section reads too."""
 
 
-def _number(key: str, value, lo: float, hi: float, *, low_open: bool = False) -> float:
+def _number(key: str, value, bounds: dict) -> float:
+    """``value`` as a float within ``bounds`` (``ge`` or ``gt``, and ``le``), else ConfigError naming ``key``."""
+    lo, hi, low_open = bounds.get("ge", bounds.get("gt")), bounds["le"], "gt" in bounds
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
     if not ok or value > hi or value < lo or (low_open and value <= lo):
         rng = f"({lo:g}, {hi:g}]" if low_open else f"[{lo:g}, {hi:g}]"
@@ -142,7 +149,7 @@ class BuildUp:
         Raises ConfigError naming the key for an unknown type, a missing or misplaced key, or a
         thickness out of range."""
         if data is None:
-            return cls.monolithic(_number("parts.glass_thickness", glass_thickness, 0.0, 200.0, low_open=True))
+            return cls.monolithic(_number("parts.glass_thickness", glass_thickness, GLASS_THICKNESS))
         if isinstance(data, BuildUp):
             return data
         if not isinstance(data, dict):
@@ -175,9 +182,10 @@ class BuildUp:
         if gas not in GASES:
             raise ConfigError(f"{key}.gas = {gas!r}: expected one of {', '.join(GASES)}")
         return cls("insulated", panes["outer"], panes["inner"],
-                   cavity_mm=_number(f"{key}.cavity_mm", data.get("cavity_mm", 16.0), 4.0, 50.0),
-                   gas=gas, edge_seal_mm=_number(f"{key}.edge_seal_mm", data.get("edge_seal_mm", 16.0), 5.0, 50.0),
-                   step_mm=_number(f"{key}.step_mm", data.get("step_mm", 0.0), 0.0, 200.0))
+                   cavity_mm=_number(f"{key}.cavity_mm", data.get("cavity_mm", 16.0), BOUNDS["cavity_mm"]),
+                   gas=gas, edge_seal_mm=_number(f"{key}.edge_seal_mm", data.get("edge_seal_mm", 16.0),
+                                                      BOUNDS["edge_seal_mm"]),
+                   step_mm=_number(f"{key}.step_mm", data.get("step_mm", 0.0), BOUNDS["step_mm"]))
 
     @property
     def thickness_mm(self) -> float:
@@ -262,7 +270,7 @@ def _pane(data: dict, key: str, kind: str) -> Pane:
                                   f"(give {key}.thickness_mm)")
         if "thickness_mm" not in data:
             raise ConfigError(f"{key}.thickness_mm: missing; a monolithic pane needs its thickness (mm)")
-        return Pane((_number(f"{key}.thickness_mm", data["thickness_mm"], *PLY_MM),))
+        return Pane((_number(f"{key}.thickness_mm", data["thickness_mm"], BOUNDS["thickness_mm"]),))
     if "thickness_mm" in data:
         raise ConfigError(f"{key}.thickness_mm: a laminated pane is given by {key}.plies_mm (and its interlayer), "
                           "not by one thickness")
@@ -270,11 +278,11 @@ def _pane(data: dict, key: str, kind: str) -> Pane:
     if not isinstance(plies, (list, tuple)) or len(plies) < 2:
         raise ConfigError(f"{key}.plies_mm = {plies!r}: expected a list of two or more ply thicknesses (mm), "
                           "e.g. [8, 8]")
-    plies = tuple(_number(f"{key}.plies_mm[{j}]", p, *PLY_MM) for j, p in enumerate(plies))
+    plies = tuple(_number(f"{key}.plies_mm[{j}]", p, BOUNDS["thickness_mm"]) for j, p in enumerate(plies))
     inter = data.get("interlayer", "PVB")
     if inter not in INTERLAYER_DENSITY:
         raise ConfigError(f"{key}.interlayer = {inter!r}: expected one of {', '.join(INTERLAYER_DENSITY)}")
-    t = _number(f"{key}.interlayer_mm", data.get("interlayer_mm", 1.52), 0.0, 10.0, low_open=True)
+    t = _number(f"{key}.interlayer_mm", data.get("interlayer_mm", 1.52), BOUNDS["interlayer_mm"])
     return Pane(plies, inter, t)
 
 

@@ -1,24 +1,20 @@
-"""Part dimensions: what the glass supplier and the steel shop are told (mm, kg/m3)."""
+"""Part dimensions: what the glass supplier and the steel shop are told (mm, kg/m3).
+
+The frozen dataclasses here are the one source of the defaults, bounds, units and help of the
+``parts`` config section (``fabricate.app.config_parts`` derives it from them); constructing one
+checks the choices and lower bounds of its fields (:func:`fabricate.fields.check_fields`) and the
+rules that join several keys (the joint gap below the bearing width, flanges wider than the web,
+the hub radius), each written here only.
+"""
 from __future__ import annotations
 
-import math
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Literal
 
 from optimize.errors import ConfigError
 
-from .glass import BuildUp
-
-EDGE_OPTIONS = ("auto", "axis", "perpendicular")
-SECTIONS = ("plate", "rhs", "tee", "i")
-CONNECTIONS = ("hub", "mitre", "none")
-HUBS = ("tube", "solid")
-
-
-def _number(key: str, value, low: float = 0.0, strict: bool = True) -> None:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
-    if not ok or (value <= low if strict else value < low):
-        raise ConfigError(f"{key} = {value!r}: expected a number {'>' if strict else '>='} {low:g} (mm)")
+from ..fields import MAX_MM, check_fields, option
+from .glass import GLASS_THICKNESS, BuildUp
 
 
 @dataclass(frozen=True)
@@ -34,18 +30,13 @@ class BeamSpec:
     The depth is the layer span (``beam_depth`` / ``offset.distances``): the beam fills it.
     """
 
-    section: str = "plate"
-    web_mm: float | None = None
-    flange_mm: float = 12.0
-    flange_width_mm: float = 200.0
+    section: Literal["plate", "rhs", "tee", "i"] = option("plate", help="plate, tee, i or rhs, welded from plates")
+    web_mm: float | None = option(None, gt=0, le=2000.0, unit="mm", help="web plate thickness (null: beam_width)")
+    flange_mm: float = option(12.0, gt=0, le=500.0, unit="mm", help="flange plate thickness")
+    flange_width_mm: float = option(200.0, gt=0, le=5000.0, unit="mm", help="overall width across the beam plane")
 
     def __post_init__(self) -> None:
-        if self.section not in SECTIONS:
-            raise ConfigError(f"parts.beam.section = {self.section!r}: expected one of {', '.join(SECTIONS)}")
-        if self.web_mm is not None:
-            _number("parts.beam.web_mm", self.web_mm)
-        _number("parts.beam.flange_mm", self.flange_mm)
-        _number("parts.beam.flange_width_mm", self.flange_width_mm)
+        check_fields(self, "parts.beam")
 
 
 @dataclass(frozen=True)
@@ -62,24 +53,16 @@ class NodeSpec:
     wall_mm : tube wall; cap_mm : cap plate thickness; gap_mm : ``none``: end distance from the axis.
     """
 
-    connection: str | None = None
-    hub: str = "tube"
-    radius_mm: float | None = None
-    wall_mm: float = 10.0
-    cap_mm: float = 15.0
-    gap_mm: float = 20.0
+    connection: Literal["hub", "mitre", "none"] | None = option(
+        None, help="hub, mitre or none (null: hub when node_radius > 0)")
+    hub: Literal["tube", "solid"] = option("tube", help="a tube with cap plates, or a solid polygonal hub")
+    radius_mm: float | None = option(None, gt=0, le=5000.0, unit="mm", help="hub outside radius (null: node_radius)")
+    wall_mm: float = option(10.0, gt=0, le=1000.0, unit="mm", help="tube wall")
+    cap_mm: float = option(15.0, gt=0, le=1000.0, unit="mm", help="cap plate thickness")
+    gap_mm: float = option(20.0, ge=0, le=5000.0, unit="mm", help="connection none: end distance from the axis")
 
     def __post_init__(self) -> None:
-        if self.connection is not None and self.connection not in CONNECTIONS:
-            raise ConfigError(f"parts.node.connection = {self.connection!r}: expected one of "
-                              f"{', '.join(CONNECTIONS)}")
-        if self.hub not in HUBS:
-            raise ConfigError(f"parts.node.hub = {self.hub!r}: expected one of {', '.join(HUBS)}")
-        if self.radius_mm is not None:
-            _number("parts.node.radius_mm", self.radius_mm)
-        _number("parts.node.wall_mm", self.wall_mm)
-        _number("parts.node.cap_mm", self.cap_mm)
-        _number("parts.node.gap_mm", self.gap_mm, strict=False)
+        check_fields(self, "parts.node")
 
 
 @dataclass(frozen=True)
@@ -92,16 +75,13 @@ class Limits:
     max_panel_kg : heaviest panel the site can lift into place.
     """
 
-    min_corner_deg: float = 30.0
-    min_edge_mm: float = 50.0
-    sheet_mm: tuple[float, float] = (6000.0, 3210.0)
-    max_panel_kg: float = 250.0
+    min_corner_deg: float = option(30.0, ge=0, lt=180, unit="deg", help="smallest panel corner")
+    min_edge_mm: float = option(50.0, ge=0, le=10000.0, unit="mm", help="shortest panel or beam outline edge")
+    sheet_mm: tuple[float, float] = option((6000.0, 3210.0), unit="mm", help="the largest glass sheet")
+    max_panel_kg: float = option(250.0, gt=0, le=100000.0, unit="kg", help="heaviest panel the site can lift")
 
     def __post_init__(self) -> None:
-        for key in ("min_corner_deg", "min_edge_mm", "max_panel_kg"):
-            value = getattr(self, key)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"parts.limits.{key} = {value!r}: expected a number >= 0")
+        check_fields(self, "parts.limits")
         sheet = tuple(self.sheet_mm)
         if len(sheet) != 2 or not all(isinstance(v, (int, float)) and v > 0 for v in sheet):
             raise ConfigError(f"parts.limits.sheet_mm = {self.sheet_mm!r}: expected [width, height] > 0 (mm)")
@@ -140,16 +120,16 @@ class PartSpec:
     limits : :class:`Limits` the parts are held to (flagged in the report).
     """
 
-    glass_thickness: float = 10.0
-    joint_gap: float = 10.0
-    edge: str = "auto"
-    beam_width: float = 60.0
-    beam_depth: float = 200.0
-    node_radius: float = 0.0
-    density_glass: float = 2500.0
-    density_steel: float = 7850.0
-    node_sides: int = 24
-    steel_grade: str = "S355"
+    glass_thickness: float = option(10.0, **GLASS_THICKNESS, unit="mm", help="monolithic panel thickness")
+    joint_gap: float = option(10.0, ge=0, le=1000.0, unit="mm", help="gap between neighbouring panels")
+    edge: Literal["auto", "axis", "perpendicular"] = option("auto", help="panel sides: axis, perpendicular or auto")
+    beam_width: float = option(60.0, gt=0, le=2000.0, unit="mm", help="beam thickness across its plane")
+    beam_depth: float = option(200.0, gt=0, le=MAX_MM, unit="mm", help="layer distance of the default layers")
+    node_radius: float = option(0.0, ge=0, le=5000.0, unit="mm", help="0: no nodes; else the hub radius")
+    density_glass: float = option(2500.0, gt=0, le=25000.0, unit="kg/m3")
+    density_steel: float = option(7850.0, gt=0, le=25000.0, unit="kg/m3")
+    node_sides: int = option(24, ge=6, le=256, help="sides of the polygonal hub")
+    steel_grade: str = option("S355", min_length=1, max_length=40, help="EN 10025 grade on the steel cut list")
     limits: Limits = Limits()
     beam: BeamSpec = BeamSpec()
     node: NodeSpec = NodeSpec()
@@ -159,21 +139,12 @@ class PartSpec:
         for key, cls in (("limits", Limits), ("beam", BeamSpec), ("node", NodeSpec)):
             if isinstance(getattr(self, key), dict):
                 object.__setattr__(self, key, cls(**getattr(self, key)))
-        positive = ("glass_thickness", "beam_width", "beam_depth", "density_glass", "density_steel")
-        for key in positive:
-            value = getattr(self, key)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-                raise ConfigError(f"parts.{key} = {value!r}: expected a positive number (mm or kg/m3)")
-        for key in ("joint_gap", "node_radius"):
-            value = getattr(self, key)
-            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
-                raise ConfigError(f"parts.{key} = {value!r}: expected a number >= 0 (mm)")
-        if self.edge not in EDGE_OPTIONS:
-            raise ConfigError(f"parts.edge = {self.edge!r}: expected one of {', '.join(EDGE_OPTIONS)}")
+        check_fields(self, "parts")
         if self.joint_gap >= self.bearing_width:
             key = "parts.beam_width" if self.beam.section == "plate" else "parts.beam.flange_width_mm"
             raise ConfigError(f"parts.joint_gap = {self.joint_gap:g} mm is not below {key} = "
-                              f"{self.bearing_width:g} mm: the panels would not bear on the beams")
+                              f"{self.bearing_width:g} mm: expected a smaller gap so that the panels bear on the "
+                              "beams")
         b = self.beam
         if b.section in ("tee", "i") and b.flange_width_mm <= self.web:
             raise ConfigError(f"parts.beam.flange_width_mm = {b.flange_width_mm:g} mm: expected more than the web "
@@ -187,8 +158,6 @@ class PartSpec:
         if self.connection == "hub" and self.node.hub == "tube" and self.node.wall_mm >= self.hub_radius:
             raise ConfigError(f"parts.node.wall_mm = {self.node.wall_mm:g} mm: expected less than the hub "
                               f"radius {self.hub_radius:g} mm")
-        if not (isinstance(self.node_sides, int) and self.node_sides >= 6):
-            raise ConfigError(f"parts.node_sides = {self.node_sides!r}: expected an integer >= 6")
         if isinstance(self.glass, dict) and all(v is None for v in self.glass.values()):
             object.__setattr__(self, "glass", None)     # an empty section: the monolithic shorthand
         given = self.glass is not None

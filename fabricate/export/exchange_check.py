@@ -4,7 +4,7 @@
   same id (Name and Tag), one per glass unit (``P0001`` for the rows ``P0001.1 ...``, volumes summed); full mode also validates the file against the IFC4
   schema and its express rules' attribute types (``ifcopenshell.validate``)
   and compares every element's volume, from ifcopenshell's own geometry
-  kernel, with the BOM's within ``1e-6`` relative.
+  kernel, with the BOM's within ``tol.file_volume`` (``1e-6``) relative.
 - ``3dm``: rhino3dm reads ``model.3dm``; one named object per BOM row on the
   layer of its kind, the BOM row in its user strings, units mm.
 - ``nc1``: one file per beam row, read by the reader written apart from the
@@ -16,7 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-VOLUME_REL_TOL = 1e-6
+from optimize.tolerances import DEFAULT, Tolerances
+
 KIND_LAYER = {"panel": "glass", "beam": "steel", "node": "nodes"}
 
 
@@ -49,7 +50,7 @@ def face_set_volumes(f) -> dict[str, float]:
     return out
 
 
-def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False) -> dict:
+def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False, tol: Tolerances = DEFAULT) -> dict:
     """``full``: schema validation and volumes (``kernel``: ifcopenshell's geometry kernel, else the
     face sets' own coordinates as parsed, about 20x faster)."""
     import ifcopenshell
@@ -81,7 +82,7 @@ def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False) -> di
         extra["volumes_from"] = "ifcopenshell geometry kernel" if kernel else "face sets as parsed"
         extra["volume_rel_error_max"] = max(errors.values(), default=0.0)
         # no shape (NaN) is as bad as a wrong volume
-        extra["bad_volume"] = sorted(pid for pid, e in errors.items() if not e <= VOLUME_REL_TOL)[:20]
+        extra["bad_volume"] = sorted(pid for pid, e in errors.items() if not e <= tol.file_volume)[:20]
     return _ids_result(set(rows), set(elements), extra)
 
 

@@ -36,6 +36,7 @@ MAX_DIGITS = 11                # a reference of more digits is refused (ids up t
 NAME_WINDOW = 24               # entity names shorter than this are classified with numpy
 MAX_NAME = 200                 # a longer entity name is refused
 MAX_REAL = 96                  # bytes of one list of reals (three coordinates) at most
+REAL_ROWS = 1 << 13            # records whose reals are read at once (about 800 kB of text)
 NUMBER_CHARS = np.zeros(256, dtype=bool)
 NUMBER_CHARS[np.frombuffer(b"0123456789.+-Ee ", np.uint8)] = True
 
@@ -381,14 +382,31 @@ class Records:
         return self.hval[j], off
 
     def reals(self, rows: np.ndarray, a: np.ndarray, b: np.ndarray, per: int, what: str) -> np.ndarray:
-        """``(r, per)`` reals written in ``buf[a:b]`` of each record, separated by commas."""
+        """``(r, per)`` reals written in ``buf[a:b]`` of each record, separated by commas (read
+        :data:`REAL_ROWS` records at a time: the temporaries stay in cache)."""
         n = len(rows)
         length = b - a
         width = int(length.max()) if n else 1
         if width > MAX_REAL or (length < 1).any():
             i = int(np.argmax((length > MAX_REAL) | (length < 1)))
             self._fail(rows, np.arange(n) != i, what, f"expected {per} numbers in at most {MAX_REAL} characters")
-        W = np.array(_window(self.buf, width + 1)[a])                     # (r, width + 1) copy
+        out = np.empty((n, per))
+        for c in range(0, n, REAL_ROWS):
+            s = slice(c, c + REAL_ROWS)
+            out[s] = self._reals(rows[s], a[s], length[s], width, per, what)
+        return out
+
+    def _reals(self, rows, a, length, width: int, per: int, what: str) -> np.ndarray:
+        buf = self.buf
+        fits = a + width + 1 <= len(buf)
+        if fits.all():
+            W = np.array(_window(buf, width + 1)[a])                      # (r, width + 1) copy
+        else:            # records near the end of the data: their rows from a space-padded tail
+            at = int(a[~fits].min())
+            tail = np.concatenate([buf[at:], np.full(width + 1, 32, np.uint8)])
+            W = np.empty((len(a), width + 1), np.uint8)
+            W[fits] = _window(buf, width + 1)[a[fits]]
+            W[~fits] = _window(tail, width + 1)[a[~fits] - at]
         W[np.arange(width + 1)[None, :] >= length[:, None]] = 32          # a space ends every row
         commas = W == COMMA
         self._fail(rows, commas.sum(axis=1) == per - 1, what, f"expected {per} numbers separated by commas")
@@ -400,9 +418,9 @@ class Records:
                 x = np.fromstring(W.tobytes(), dtype=np.float64, sep=" ")
             except ValueError:
                 x = np.zeros(0)
-        if x.size != n * per or not np.isfinite(x).all():
+        if x.size != len(rows) * per or not np.isfinite(x).all():
             raise ExportError(f"{self.path}: a {what} has a coordinate that is not a finite number")
-        return x.reshape(n, per)
+        return x.reshape(len(rows), per)
 
     def _fail(self, rows, ok, what, why, values=None) -> None:
         if len(ok) and not ok.all():

@@ -6,6 +6,7 @@
 """
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass, field
 
@@ -107,7 +108,7 @@ def solve_frame(frame, cases, options, structure) -> tuple:
 def check_structure(structure, options, spec, *, section_of=None, sections=None) -> StructureCheck:
     """Build, load, solve and evaluate the beam frame of ``structure`` (an OffsetStructure).
 
-    options : the config's StructureSection; spec : the PartSpec (glass thickness, beam width).
+    options : the :class:`~fabricate.structure.options.StructureOptions` (``cfg.structure.to_options()``); spec : the PartSpec (glass thickness, beam width).
     section_of, sections : optional per beam sections (sizing); default the configured one.
     """
     t0 = time.perf_counter()
@@ -152,7 +153,7 @@ def report(check: StructureCheck) -> dict:
         "buckling_length_factor": opt.buckling_length_factor,
         "min_buckling_factor": float(r.chi.min(initial=1.0)) if r.chi is not None else None,
         "steel_mass_kg": round(fr.steel_mass_kg(), 1),
-        "loads_kN": {"characteristic_totals": totals, "input": opt.loads.model_dump()},
+        "loads_kN": {"characteristic_totals": totals, "input": dataclasses.asdict(opt.loads)},
         "combinations": [{"name": n, "kind": k, "factors": f} for n, k, f in opt.combination_list()],
         "governing_combination": r.uls[int(r.governing[i_max])] if r.uls else None,
         "governing_sls": r.governing_sls,

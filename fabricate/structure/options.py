@@ -1,4 +1,6 @@
-"""The ``structure`` section of a run config: the frame, its loads and the check (one place for every default).
+"""The structure stage's options: the frame, its loads and the check, as frozen objects (one place
+for every default, bound and help; the ``structure`` config section is derived from them in
+:mod:`fabricate.app.config_structure`).
 
 Units: section dimensions and lengths in mm, area loads in kN/m2, unit weights in kN/m3,
 moduli in MPa (N/mm2).  Load case names follow EN 1991 (self-weight and permanent loads
@@ -8,15 +10,10 @@ characteristic ones for the deflections.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Literal
 
-from pydantic import Field, field_validator, model_validator
-from pydantic_core import PydanticCustomError
-
-from fabricate.app.config_section import Section, section_base  # the strict base (no import of app.config)
-from fabricate.app.options import option
-
+from ..fields import check_fields, option
 from .sections import SectionProperties, section
 
 CASES = ("self_weight", "glass", "finishes", "snow", "wind_pressure", "wind_suction")
@@ -27,25 +24,16 @@ GRADES = {"S235": 235.0, "S275": 275.0, "S355": 355.0, "S460": 460.0}
 """Yield strength f_y (MPa) of the structural steel grades (EN 10025-2, t <= 40 mm)."""
 
 
-class SectionOption(Section):
+@dataclass(frozen=True, kw_only=True)
+class SectionOptions:
     """A beam section (mm): ``plate`` width x depth, ``rhs`` depth x width x web (wall),
     ``tee`` / ``i`` depth x width (flange) x web x flange thickness."""
 
-    shape: Literal["plate", "rhs", "tee", "i"] = "plate"
-    depth: float = Field(gt=0)
-    width: float = Field(gt=0)
-    web: float | None = Field(default=None, gt=0)
-    flange: float | None = Field(default=None, gt=0)
-
-    @model_validator(mode="after")
-    def _valid(self) -> "SectionOption":
-        from optimize.errors import ConfigError
-
-        try:
-            self.properties()
-        except ConfigError as exc:
-            raise PydanticCustomError("section", "{err}", {"err": str(exc)}) from None
-        return self
+    shape: Literal["plate", "rhs", "tee", "i"] = option("plate")
+    depth: float = option(gt=0, unit="mm")
+    width: float = option(gt=0, unit="mm")
+    web: float | None = option(None, gt=0, unit="mm")
+    flange: float | None = option(None, gt=0, unit="mm")
 
     def properties(self, key: str = "section") -> SectionProperties:
         return section(self.shape, depth=self.depth, width=self.width, web=self.web, flange=self.flange, key=key)
@@ -62,29 +50,18 @@ class LoadsOptions:
     wind_pressure: float = option(0.5, ge=0, unit="kN/m2", help="w_e toward the structure, normal to the panels")
     wind_suction: float = option(0.5, ge=0, unit="kN/m2", help="w_e away from the structure (uplift)")
 
+    def __post_init__(self) -> None:
+        check_fields(self, "structure.loads")
 
-class LoadsOption(section_base(LoadsOptions)):
-    """The ``structure.loads`` section (defaults: :class:`LoadsOptions`)."""
 
+@dataclass(frozen=True)
+class CombinationOptions:
+    """One combination: ``name``, ``kind`` (``uls`` strength, ``sls`` deflection), factors per case
+    (a partial factor times a combination factor, >= 0)."""
 
-class CombinationOption(Section):
-    """One combination: ``name``, ``kind`` (``uls`` strength, ``sls`` deflection), factors per case."""
-
-    name: str = Field(min_length=1, max_length=60)
+    name: str = option(min_length=1, max_length=60)
     kind: Literal["uls", "sls"]
     factors: dict[Literal["self_weight", "glass", "finishes", "snow", "wind_pressure", "wind_suction"], float]
-
-    @field_validator("factors")
-    @classmethod
-    def _factors(cls, v):
-        bad = {k: f for k, f in v.items() if not (f >= 0)}
-        if bad:
-            k, f = next(iter(bad.items()))
-            raise PydanticCustomError("factor", "factor {k} = {f}: expected a number >= 0 (a partial factor times "
-                                      "a combination factor)", {"k": k, "f": f})
-        if not v:
-            raise PydanticCustomError("factor", "no factors, expected at least one load case")
-        return v
 
 
 def _perm(g: float) -> dict[str, float]:
@@ -102,18 +79,22 @@ DEFAULT_COMBINATIONS = (
 )
 
 
-class SizingOption(Section):
+@dataclass(frozen=True)
+class SizingOptions:
     """``fabricate size``: candidate sections (lightest passing one per group) and the grouping."""
 
-    sections: list[SectionOption] = Field(default_factory=list)
-    group_by: Literal["all", "boundary"] = "boundary"
-    max_rounds: int = Field(default=6, ge=1, le=50)
+    sections: tuple[SectionOptions, ...] = option(())
+    group_by: Literal["all", "boundary"] = option("boundary", help="all beams together, or boundary and inner apart")
+    max_rounds: int = option(6, ge=1, le=50)
+
+    def __post_init__(self) -> None:
+        check_fields(self, "structure.sizing")
 
 
 @dataclass(frozen=True)
 class StructureOptions:
-    """The keys of the ``structure`` section besides its nested sections (section, loads,
-    combinations, sizing)."""
+    """The ``structure`` section: the check's keys and its nested options (``section`` null: the
+    section the parts are welded from, ``parts.beam``; ``combinations`` null: :data:`DEFAULT_COMBINATIONS`)."""
 
     check: Literal["off", "report", "enforce"] = option("off", help="off skips the check; enforce fails the run")
     grade: Literal["S235", "S275", "S355", "S460"] = option("S355", help="steel grade (EN 10025-2)")
@@ -123,6 +104,7 @@ class StructureOptions:
     buckling_length_factor: float = option(1.0, gt=0, le=10.0, help="buckling length / beam length")
     elastic_modulus: float = option(210000.0, gt=0, le=1e6, unit="MPa")
     shear_modulus: float = option(81000.0, gt=0, le=1e6, unit="MPa")
+    section: SectionOptions | None = None
     connections: Literal["rigid", "pinned"] = option("rigid")
     supports: Literal["lowest", "boundary", "outline"] | tuple[int, ...] = option(
         "lowest", help="the supported nodes: a rule or vertex indices")
@@ -132,45 +114,12 @@ class StructureOptions:
     up: tuple[float, float, float] = option((0.0, 0.0, 1.0), help="the up direction of the loads")
     deflection_limit: float = option(200.0, gt=0, le=10000.0, help="span / n, beams and whole structure")
     span: float | None = option(None, gt=0, le=1e7, unit="mm", help="null: the shorter side of the plan")
+    loads: LoadsOptions = LoadsOptions()
+    combinations: tuple[CombinationOptions, ...] | None = None
+    sizing: SizingOptions = SizingOptions()
 
-
-_NESTED = {
-    "section": (SectionOption | None, Field(default=None)),  # null: the section the parts are welded from (parts.beam)
-    "loads": (LoadsOption, Field(default_factory=LoadsOption)),
-    "combinations": (list[CombinationOption] | None, Field(default=None)),  # null: DEFAULT_COMBINATIONS
-    "sizing": (SizingOption, Field(default_factory=SizingOption)),
-}
-_KEYS = [f.name for f in fields(StructureOptions)]
-
-
-class StructureSection(section_base(StructureOptions, extra=_NESTED, order=[
-        *_KEYS[:_KEYS.index("shear_modulus") + 1], "section", *_KEYS[_KEYS.index("shear_modulus") + 1:],
-        "loads", "combinations", "sizing"])):
-    """The structural check of the beam frame (``fabricate.structure``); ``check: off`` skips it
-    (defaults: :class:`StructureOptions`, :class:`LoadsOptions`)."""
-
-    @field_validator("up", mode="before")
-    @classmethod
-    def _up_list(cls, v):  # YAML gives a list; the strict tuple takes it converted
-        return tuple(v) if isinstance(v, list) else v
-
-    @field_validator("supports")
-    @classmethod
-    def _supports(cls, v):
-        if isinstance(v, list):
-            if not v:
-                raise PydanticCustomError("supports", "an empty list supports nothing; expected vertex indices, "
-                                          "'lowest', 'boundary' or 'outline'")
-            if any(i < 0 for i in v):
-                raise PydanticCustomError("supports", "vertex indices must be >= 0")
-        return v
-
-    @field_validator("up")
-    @classmethod
-    def _up(cls, v):
-        if sum(c * c for c in v) <= 0:
-            raise PydanticCustomError("up", "up {v} is not a nonzero vector, expected [x, y, z]", {"v": list(v)})
-        return v
+    def __post_init__(self) -> None:
+        check_fields(self, "structure")
 
     @property
     def fy(self) -> float:
@@ -182,3 +131,5 @@ class StructureSection(section_base(StructureOptions, extra=_NESTED, order=[
         if self.combinations is None:
             return [(n, k, dict(f)) for n, k, f in DEFAULT_COMBINATIONS]
         return [(c.name, c.kind, dict(c.factors)) for c in self.combinations]
+
+

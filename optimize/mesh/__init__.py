@@ -4,6 +4,7 @@
 - ``topology``: :class:`Topology` (edges, corners, vertex stars, boundary loops; cached);
 - ``measures``: planarity, conical and circular defects, normals, areas, folds (the shared definitions);
 - ``corners``: corner angles and their gradients (the one kernel);
+- ``axes``: node axes fitted to the face normals (the one fit: optimizer results, offset stage);
 - ``components``: connected components;
 - ``io``: OBJ, OFF, PLY, STL and 3dm readers and writers (:func:`read_mesh`, :func:`write_mesh`).
 Names load on first use (PEP 562).

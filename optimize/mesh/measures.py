@@ -150,9 +150,11 @@ def corner_turns(mesh: Mesh, V: np.ndarray | None = None, normals: np.ndarray | 
     return np.einsum("ij,ij->i", np.cross(u, w), N) / lengths
 
 
-def folded_faces(mesh: Mesh, V: np.ndarray, V0: np.ndarray | None = None, tol: float = 1e-6) -> np.ndarray:
+def folded_faces(mesh: Mesh, V: np.ndarray, V0: np.ndarray | None = None,
+                 tol: float = DEFAULT.fold) -> np.ndarray:
     """(m,) bool: faces that folded going from positions ``V0 (n, 3)`` (default ``mesh.V``)
-    to ``V (n, 3)``: a corner convex at ``V0`` turned reflex (signed sine below ``-tol``),
+    to ``V (n, 3)``: a corner convex at ``V0`` turned reflex (signed sine below ``-tol``,
+    ``Tolerances.fold``),
     the face normal turned by more than 90 degrees, or an edge shrank below
     ``COLLAPSED`` of its length at ``V0`` (a vertex slid onto its neighbour: the quad is
     a triangle now).  A planar bow-tie, a dented or a collapsed panel is planar but

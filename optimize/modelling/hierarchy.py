@@ -194,7 +194,7 @@ def _measures(mesh: Mesh, tol: Tolerances, scheme: str, target: str) -> dict:
     if target == "strip" or scheme in ("chaikin", "lane_riesenfeld"):
         from .strip_analysis import strip_report
 
-        out["strips"] = strip_report(mesh)
+        out["strips"] = strip_report(mesh, tol=tol.strip_parallel)
     return out
 
 

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..mesh import Mesh
 from ..mesh.corners import angle_values
+from ..tolerances import DEFAULT
 from .strips import StripLayout, ruling_points, strip_layouts, strip_mesh
 
 __all__ = ["StripAnalysis", "Development", "GaussImage", "analyze_strip", "develop", "gauss_image",
@@ -74,11 +75,12 @@ def _layout(mesh: Mesh, layout: StripLayout | None) -> StripLayout:
     return strip_layouts(mesh)[0] if layout is None else layout
 
 
-def analyze_strip(mesh: Mesh, layout: StripLayout | None = None, *, tol: float = 1e-6) -> StripAnalysis:
+def analyze_strip(mesh: Mesh, layout: StripLayout | None = None, *,
+                  tol: float = DEFAULT.strip_parallel) -> StripAnalysis:
     """Rulings, singular points and the kind of every quad of one strip.
 
     mesh : Mesh, a strip (or several; ``layout`` picks one, default the first).
-    tol : relative tolerance for parallel rulings (sine of their angle) and
+    tol : relative tolerance (``Tolerances.strip_parallel``) for parallel rulings (sine of their angle) and
         for coinciding apexes (distance / (ruling length + apex distance)).
     """
     lay = _layout(mesh, layout)
@@ -247,7 +249,7 @@ def _quad_angles(Q: np.ndarray) -> np.ndarray:
     return angle_values(np.stack([Q, np.roll(Q, -1, axis=1), np.roll(Q, 1, axis=1)], axis=2))
 
 
-def strip_report(mesh: Mesh, *, tol: float = 1e-6) -> list[dict]:
+def strip_report(mesh: Mesh, *, tol: float = DEFAULT.strip_parallel) -> list[dict]:
     """JSON-ready analysis of every strip of ``mesh``: kind, singular curve,
     Gauss-image spread, development errors, planarity."""
     from ..mesh.measures import planarity

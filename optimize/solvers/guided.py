@@ -259,7 +259,8 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
         pattern = (abs(Jall).T @ abs(Jall)).tocsr()
         pattern.data[:] = 1e-300  # structurally there, numerically nothing
     fscale = [1.0]  # fairness weight factor: the worst target defect / far (at most 1)
-    folds = convexity.FoldCheck(form.mesh, L.view(x0, "vertices").copy() if convex is None else convex.V0)
+    folds = convexity.FoldCheck(form.mesh, L.view(x0, "vertices").copy() if convex is None else convex.V0,
+                                tol.fold)
     if score <= 0:
         status, message = "converged", "the input already satisfies every tolerance"
     while status is None:

@@ -40,11 +40,11 @@ import scipy.sparse as sp
 
 from ..mesh import Mesh
 from ..mesh.measures import COLLAPSED, corner_turns
+from ..tolerances import DEFAULT
 from .nodeaxes import _corner_spans
 from .variables import Layout
 
 SINE_FLOOR = 0.1  # about 5.7 degrees from straight or from closed
-CONVEX = 1e-6  # a corner with a start sine above -CONVEX counts as convex (as measures.folded_faces)
 
 
 def vector_areas(mesh: Mesh, V: np.ndarray) -> np.ndarray:
@@ -74,7 +74,7 @@ class FoldCheck:
     """``measures.folded_faces`` against fixed start positions ``V0 (n, 3)``, with what depends on
     ``V0`` computed once (the optimizer asks at every trial step)."""
 
-    def __init__(self, mesh: Mesh, V0: np.ndarray, tol: float = 1e-6):
+    def __init__(self, mesh: Mesh, V0: np.ndarray, tol: float = DEFAULT.fold):
         t = mesh.topology
         self.mesh, self.tol = mesh, tol
         A0 = vector_areas(mesh, V0)
@@ -93,10 +93,11 @@ class FoldCheck:
         return bad | (np.einsum("ij,ij->i", self.N0, A) < 0)
 
 
-def floors(mesh: Mesh, V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(corners (k,), floor (k,))``: the corners convex at positions ``V (n, 3)`` and their floors."""
+def floors(mesh: Mesh, V: np.ndarray, fold: float = DEFAULT.fold) -> tuple[np.ndarray, np.ndarray]:
+    """``(corners (k,), floor (k,))``: the corners convex at positions ``V (n, 3)`` (start sine
+    above ``-fold``, ``Tolerances.fold``, as ``measures.folded_faces``) and their floors."""
     s0 = corner_turns(mesh, V)
-    corners = np.nonzero(s0 > -CONVEX)[0]
+    corners = np.nonzero(s0 > -fold)[0]
     return corners, np.minimum(SINE_FLOOR, 0.5 * np.maximum(s0[corners], 0.0))
 
 

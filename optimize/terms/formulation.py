@@ -24,9 +24,9 @@ ill-conditioned).  ``optimize_mesh`` uses it for ``conical`` by default
 (exact at a conical vertex, whose four normals lie on one circle).
 
 Starting values come from the current mesh: face normals by Newell's method;
-axes by a least-squares fit to the normals around each vertex (the normal of
-the plane best fitting the four unit normals, oriented like them) and ``c``
-their mean dot product; circle centres by a least-squares circle fit in the
+axes and ``c`` by the node-axis fit of :mod:`optimize.mesh.axes` to the four
+unit normals (``n . X = 1`` in least squares, ``a = X / |X|``, ``c = 1 / |X|``;
+the axis of the circle through them at a conical vertex); circle centres by a least-squares circle fit in the
 best-fit plane of each quad.
 """
 from __future__ import annotations
@@ -36,6 +36,7 @@ import scipy.sparse as sp
 
 from ..errors import ConfigError
 from ..mesh import Mesh
+from ..mesh.axes import fit_star_axes
 from ..mesh.measures import face_normals
 from . import (
     anglebalance,
@@ -54,14 +55,10 @@ UNKNOWNS = ("auxiliary", "vertices")
 
 
 def fit_axes(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Axes ``(p, 3)`` and ``c (p,)`` best fitting ``n . a = c`` for normals ``N (p, s, 3)``."""
-    centred = N - N.mean(axis=1, keepdims=True)
-    cov = np.einsum("psi,psj->pij", centred, centred)
-    _, vecs = np.linalg.eigh(cov)
-    a = vecs[:, :, 0]
-    mean = N.mean(axis=1)
-    a = np.where((np.einsum("pi,pi->p", a, mean) < 0)[:, None], -a, a)
-    return a, np.einsum("psj,pj->ps", N, a).mean(axis=1)
+    """Axes ``(p, 3)`` and ``c (p,)`` best fitting ``n . a = c`` for unit normals ``N (p, s, 3)``
+    (:func:`optimize.mesh.axes.fit_star_axes`, the offset stage's fit)."""
+    fit = fit_star_axes(N, np.ones(N.shape[:2], dtype=bool))
+    return fit.axes, fit.cos_theta
 
 
 def fit_circles(P: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

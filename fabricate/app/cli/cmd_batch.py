@@ -1,6 +1,8 @@
 """``fabricate batch CONFIG...``: many configs and parameter sweeps in parallel, one summary table."""
 from __future__ import annotations
 
+from .args import add_force, add_out, add_sets
+
 
 def register(sub) -> None:
     from fabricate.app.options import COMMAND
@@ -16,19 +18,16 @@ def register(sub) -> None:
                "4 export failed, 3 tolerance not reached. A job whose worker process dies is run once "
                "more on its own. 130 interrupted (workers stopped, temporary folders removed).")
     p.add_argument("configs", nargs="+", metavar="CONFIG", help="YAML run configurations")
-    p.add_argument("--set", metavar="KEY=V1[,V2...]", action="append", default=[], dest="sets",
-                   help="override / sweep a config value (repeatable; the sweep is the product of all); a list "
-                        "key's comma list is one list (offset.distances=0,-200), bracket lists to sweep "
-                        "them (offset.distances=[0,-200],[0,-300])")
+    add_sets(p, "override / sweep a config value (repeatable; the sweep is the product of all); a list "
+                "key's comma list is one list (offset.distances=0,-200), bracket lists to sweep "
+                "them (offset.distances=[0,-200],[0,-300])", sweep=True)
     p.add_argument("--workers", type=int, default=COMMAND.workers, metavar="N",
                    help="parallel worker processes (default: one per core, at most one per job)")
     p.add_argument("--scheduler", metavar="ADDRESS", default=None,
                    help="run on a Dask distributed cluster, e.g. tcp://host:8786 (needs dask[distributed]; "
                         "the workers must see the config and mesh files and the output folder)")
-    p.add_argument("--out", metavar="DIR", default=COMMAND.out_root,
-                   help=f"parent folder of the run folders (default: ./{COMMAND.out_root})")
-    p.add_argument("--force", action="store_true",
-                   help="replace earlier finished runs in OUT/<name>/ (as fabricate run --force)")
+    add_out(p, "run folders")
+    add_force(p, "replace earlier finished runs in OUT/<name>/ (as fabricate run --force)")
     p.add_argument("--csv", metavar="PATH", default=None,
                    help="summary table as CSV (default: OUT/batch_summary.csv)")
     p.set_defaults(handler=run)

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import math
 
+from .args import add_output
 from .units import add_units
 
 
@@ -25,9 +26,8 @@ def register(sub) -> None:
     p.add_argument("--distances", required=True, metavar="D1,D2,...",
                    help="comma-separated signed distances in mm, e.g. 0,20,120 (use --distances=-20,0 "
                         "for a leading minus); beams span the first and the last")
-    p.add_argument("-o", "--output", required=True, metavar="DIR",
-                   help="output folder (written atomically, with a marker file; never a folder this tool "
-                        "did not write)")
+    add_output(p, "output folder (written atomically, with a marker file; never a folder this tool did not "
+                  "write)", metavar="DIR")
     p.add_argument("--replace", action="store_true",
                    help="replace an earlier offset output in DIR (as fabricate run --force; --force here "
                         "means offsetting a mesh that is not PQ)")

@@ -4,12 +4,10 @@ from __future__ import annotations
 import json
 import sys
 
-from optimize.options import DEFAULTS
+from optimize.options import DEFAULTS, FORMULATIONS, LINEAR_SOLVERS, METHODS, TARGETS
 
+from .args import add_output
 from .units import add_units
-
-TARGETS = ("pq", "conical", "circular", "strip")
-METHODS = ("default", "penalty", "sqp", "hybrid")
 
 
 def register(sub) -> None:
@@ -20,18 +18,18 @@ def register(sub) -> None:
                     "vertex order and faces as MESH. Exit 3 when a tolerance was not reached (OUT and "
                     "the report are still written and say so).")
     p.add_argument("mesh", help="input mesh (.obj, .off, .ply)")
-    p.add_argument("-o", "--output", required=True, help="optimized mesh to write (.obj, .off, .ply)")
-    p.add_argument("--target", choices=TARGETS, default="pq",
+    add_output(p, "optimized mesh to write (.obj, .off, .ply)")
+    p.add_argument("--target", choices=TARGETS, default=DEFAULTS.target,
                    help="pq: planar faces; conical: PQ + conical vertices (node axes); circular: PQ + "
                         "circular quads; strip: developable strip (the paper's methods: --method default runs "
                         "penalty there, as fabricate run does). Default pq.")
-    p.add_argument("--method", choices=METHODS, default="default",
+    p.add_argument("--method", choices=METHODS, default=DEFAULTS.method,
                    help="default: regularized Gauss-Newton; penalty/sqp/hybrid: the paper's methods")
-    p.add_argument("--formulation", choices=("auto", "auxiliary", "vertices"), default="auto",
+    p.add_argument("--formulation", choices=FORMULATIONS, default=DEFAULTS.formulation,
                    help="default method's unknowns: auxiliary (positions + normals, axes, centres; "
                         "quadratic rows), vertices (positions only), auto (vertices for conical)")
-    p.add_argument("--linear-solver", choices=("auto", "pardiso", "superlu", "eliminate"),
-                   default="auto", help="sparse solver of the default method (auto: MKL PARDISO "
+    p.add_argument("--linear-solver", choices=LINEAR_SOLVERS,
+                   default=DEFAULTS.linear_solver, help="sparse solver of the default method (auto: MKL PARDISO "
                                         "where installed, else SuperLU)")
     p.add_argument("--torsion-free-beams", choices=("auto", "on", "off"), default="auto",
                    help="conical: solve node axes with every interior beam planar (auto: when the mesh "

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 
+from .args import add_output
 from .units import add_units
 
 
@@ -32,7 +33,7 @@ def register(sub) -> None:
     p.add_argument("surface", help="triangle or polygon mesh (.obj, .off, .ply, .stl): one piece, open "
                                    "(holes allowed)")
     p.add_argument("--edge-length", type=float, required=True, help="target edge length (mm)")
-    p.add_argument("-o", "--output", required=True, help="output quad mesh (.obj, .off, .ply)")
+    add_output(p, "output quad mesh (.obj, .off, .ply)")
     p.add_argument("--radius", type=float, default=None,
                    help="kernel radius of the principal directions, mm (default: the edge length, at "
                         "least 3 mean triangle edges)")

@@ -4,10 +4,10 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from .args import add_config, add_force, add_out, add_quiet, add_sets, one_value_sets
+
 
 def register(sub) -> None:
-    from fabricate.app.options import COMMAND
-
     p = sub.add_parser(
         "run", help="run the whole pipeline for one YAML config",
         description="Input -> subdivide/optimize -> offset -> CAD -> exports -> report, written "
@@ -21,33 +21,25 @@ def register(sub) -> None:
                "run), 3 tolerance not reached (results written, marked in report.json, report.html and "
                "TOLERANCE_NOT_REACHED.txt), 4 export failed (when both, 4), 1 internal error, "
                "130 interrupted.")
-    p.add_argument("config", help="YAML run configuration (see configs/reference.yaml)")
-    p.add_argument("--out", metavar="DIR", default=COMMAND.out_root,
-                   help=f"parent folder of the run folder (default: ./{COMMAND.out_root})")
-    p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], dest="sets",
-                   help="override a config value, e.g. --set parts.glass_thickness=8 (repeatable); a list key "
-                        "takes a comma list: --set offset.distances=0,-200")
-    p.add_argument("--force", action="store_true",
-                   help="replace an earlier finished run in OUT/<name>/ (never a folder this tool did "
-                        "not write, nor one with files added or changed since)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    add_config(p, "YAML run configuration (see configs/reference.yaml)")
+    add_out(p)
+    add_sets(p, "override a config value, e.g. --set parts.glass_thickness=8 (repeatable); a list key "
+                "takes a comma list: --set offset.distances=0,-200")
+    add_force(p, "replace an earlier finished run in OUT/<name>/ (never a folder this tool did "
+                 "not write, nor one with files added or changed since)")
+    add_quiet(p)
     p.set_defaults(handler=run)
 
 
 def run(args) -> int:
     from rich.console import Console
 
-    from fabricate.app.batch import parse_sets
     from fabricate.app.config import load_config
     from fabricate.app.pipeline import STAGES, run_folder, run_pipeline
     from fabricate.app.progress import NullProgress, RichProgress
-    from optimize.errors import ConfigError
 
-    sets = parse_sets(args.sets)
-    many = [k for k, v in sets.items() if len(v) != 1]
-    if many:
-        raise ConfigError(f"--set {many[0]}: fabricate run takes one value per key; use fabricate batch for sweeps")
-    config = load_config(args.config, overrides={k: v[0] for k, v in sets.items()})
+    sets = one_value_sets(args.sets, "run", "; use fabricate batch for sweeps")
+    config = load_config(args.config, overrides=sets)
     err = Console(stderr=True, highlight=False)
     target = run_folder(config, args.out)
     progress = NullProgress() if args.quiet else RichProgress(STAGES, title=f"{config.name} -> {target}",

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 
+from .args import add_output
 from .units import add_units
 
 
@@ -13,7 +14,7 @@ def register(sub) -> None:
                                    "design's starting mesh (its control mesh when it has "
                                    "subdivision levels) to OUT (.obj, .off, .ply).")
     p.add_argument("name", nargs="?", help="design name (see the list)")
-    p.add_argument("-o", "--output", help="mesh file to write (.obj, .off, .ply)")
+    add_output(p, "mesh file to write (.obj, .off, .ply)", required=False)
     p.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                    help="set a design parameter (repeatable), e.g. --param nu=12 --param noise=0.05")
     p.add_argument("--refined", action="store_true",

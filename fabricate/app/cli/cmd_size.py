@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import sys
 
+from .args import add_config, add_sets, one_value_sets
+
 
 def register(sub) -> None:
     p = sub.add_parser(
@@ -13,9 +15,8 @@ def register(sub) -> None:
                     "their limits) by a full OpenSees solve; reports the steel saved against the configured "
                     "section (structure.section, or the section the parts are welded from: parts.beam).",
         epilog="Exit codes: 0 a passing choice, 2 bad input, 3 no candidate passes (the heaviest is reported).")
-    p.add_argument("config", help="YAML run configuration with structure.sizing.sections")
-    p.add_argument("--set", metavar="KEY=VALUE", action="append", default=[], dest="sets",
-                   help="override a config value, e.g. --set structure.loads.snow=1.2 (repeatable)")
+    add_config(p, "YAML run configuration with structure.sizing.sections")
+    add_sets(p, "override a config value, e.g. --set structure.loads.snow=1.2 (repeatable)")
     p.add_argument("--json", metavar="FILE", help="also write the sizing as JSON (atomic)")
     p.set_defaults(handler=run)
 
@@ -25,22 +26,17 @@ def run(args) -> int:
     from pathlib import Path
 
     from fabricate.app import stages
-    from fabricate.app.batch import parse_sets
     from fabricate.app.config import load_config
     from fabricate.structure.sizing import size_sections
     from optimize.atomic import atomic_open
     from optimize.errors import ConfigError
 
-    sets = parse_sets(args.sets)
-    many = [k for k, v in sets.items() if len(v) != 1]
-    if many:
-        raise ConfigError(f"--set {many[0]}: fabricate size takes one value per key")
-    cfg = load_config(args.config, overrides={k: v[0] for k, v in sets.items()})
+    cfg = load_config(args.config, overrides=one_value_sets(args.sets, "size"))
     if not cfg.structure.sizing.sections:
         raise ConfigError(f"{cfg.source}: structure.sizing.sections: empty, expected a list of candidate sections "
                           "(e.g. - {shape: rhs, depth: 200, width: 100, web: 6})")
     off = stages.stage_offset(cfg, stages.stage_optimize(cfg, stages.stage_input(cfg)))
-    sz = size_sections(off.structure, cfg.structure, stages.part_spec(cfg))
+    sz = size_sections(off.structure, cfg.structure.to_options(), stages.part_spec(cfg))
     d = sz.as_dict()
     print(f"{cfg.name}: sizing {sum(d['beams'].values())} beams ({cfg.structure.grade}, "
           f"{len(cfg.structure.sizing.sections)} candidates, group_by {cfg.structure.sizing.group_by})")

@@ -16,11 +16,6 @@ from ...terms import anglesum
 from .combine import combine
 
 
-def circular_quads(mesh: Mesh) -> np.ndarray:
-    """(q,) int: the quad faces (two rows each)."""
-    return np.nonzero(mesh.face_sizes == 4)[0]
-
-
 def circular_rows(mesh: Mesh):
     """Row spec ``(corners (2 q, 2), signs, const (2 q,))`` for :func:`optimize.solvers.paper.combine.combine`."""
     corners, signs, offset = anglesum.rows(mesh)  # the default method's corner pairs

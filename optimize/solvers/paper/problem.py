@@ -23,6 +23,7 @@ from scipy.sparse.csgraph import shortest_path
 
 from ... import kernels
 from ...mesh import Mesh, measures
+from ...mesh.axes import fit_axes
 from ...mesh.corners import angle_values, corner_vertices
 from ...options import DEFAULTS
 from ...proximity.footpoints import Footpoints
@@ -322,37 +323,30 @@ class Problem:
         Y, _ = self.foot_search.closest(V)
         record_shape(res, self.mesh, np.linalg.norm(V - Y, axis=1), self.ref.bbox_diagonal)
         record_net(res, self.mesh, self.target)
-        return check_folds(res, self.mesh.V, PAPER_FOLD_ADVICE)
+        return check_folds(res, self.mesh.V, fold_advice(self.target, method), self.tol.fold)
 
 
 PAPER_FOLD_ADVICE = ("the paper's methods do not keep faces convex; the default method does "
                      "(method 'default', --method default)")
 
 
-def node_axes(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-    """Unit node axes ``(n, 3)`` and cone angles ``(n,)`` of a (near) conical mesh.
+def fold_advice(target: str, method: str) -> str:
+    """The way forward a folded run's message ends with.  For ``target`` pq, conical and
+    circular the default method keeps faces convex; a strip has only the paper's methods
+    (``--method default`` runs penalty there), so the advice names the others than ``method``
+    and the fairness weight."""
+    if target != "strip":
+        return PAPER_FOLD_ADVICE
+    others = [m for m in ("penalty", "sqp", "hybrid") if m != method]
+    names = ", ".join(f"'{m}'" for m in others)
+    return (f"the paper's methods do not keep faces convex, and target 'strip' has no other method "
+            f"(the default method does not take strips); try another of them (method {names}, "
+            f"--method {others[0]}) or a larger fairness weight (fairness, --fairness)")
 
-    At an interior valence-4 vertex the four unit face normals ``n_0..n_3`` lie
-    on a circle of the unit sphere whose plane has normal ``a`` with
-    ``(n_0 - n_2) . a = (n_1 - n_3) . a = 0``; ``a`` is oriented to the normals'
-    side and ``theta = arccos(mean n_i . a)``.  Elsewhere (or where that cross
-    product vanishes) the axis is the normalized mean of the face normals.
-    """
-    t = mesh.topology
-    N = measures.face_normals(mesh)
-    S = t.star_faces
-    Ns = np.where((S >= 0)[:, :, None], N[np.maximum(S, 0)], 0.0)  # (n, s, 3)
-    mean = Ns.sum(axis=1)
-    mean /= np.maximum(np.linalg.norm(mean, axis=1, keepdims=True), 1e-300)
-    axes = mean.copy()
-    p = t.interior_valence4
-    if len(p):
-        n4 = N[S[p, :4]]
-        a = np.cross(n4[:, 0] - n4[:, 2], n4[:, 1] - n4[:, 3])
-        ln = np.linalg.norm(a, axis=1)
-        ok = ln > 1e-12
-        a = np.where(ok[:, None], a / np.where(ok, ln, 1.0)[:, None], mean[p])
-        a *= np.where(np.einsum("ij,ij->i", a, mean[p]) < 0, -1.0, 1.0)[:, None]
-        axes[p] = a
-    cos = np.einsum("nsk,nk->ns", Ns, axes).sum(axis=1) / np.maximum(t.star_size, 1)
-    return axes, np.arccos(np.clip(cos, -1.0, 1.0))
+
+def node_axes(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Unit node axes ``(n, 3)`` and cone angles ``(n,)`` of a (near) conical mesh: the
+    offset stage's fit to the unit face normals (:func:`optimize.mesh.axes.fit_axes`); at a
+    conical vertex the axis of the circle the normals lie on."""
+    fit = fit_axes(mesh, measures.face_normals(mesh))
+    return fit.axes, np.arccos(np.clip(fit.cos_theta, -1.0, 1.0))
