@@ -26,16 +26,17 @@ with it:
   ``cad_linear_mm x`` the smaller surface area).
 - ``bearing``: every panel touches each beam listed as its neighbour
   (manifold3d gap below ``cad_linear_mm``).
-- ``flat``: every panel and beam rebuilt from ``flat.json`` alone (outline,
+- ``flat``: every panel, beam and hub cap plate rebuilt from ``flat.json`` alone (outline,
   bevels, thickness, transform) has the volume and, within 0.01 mm, the
   corners of its STEP solid (3MF mesh in the fast check).
 - ``dxf``: read by an independent reader (:mod:`fabricate.export.dxf_text`: lint
   of codes, sections, handles, closed outlines; ``--occ``: ezdxf loads and
   audits the whole file), units mm, one CUT outline (id in XDATA) and
-  one ETCH id per panel and beam, and each outline has the area (``tol.file_area``,
-  ``1e-9`` relative) and the edge lengths (``tol.file_edge_mm``, ``1e-6`` mm) of the flat data's outline
+  one ETCH id per part cut from sheet (panel, beam, hub cap), and each outline has the area
+  (``tol.file_area``, ``1e-9`` relative) and the edge lengths (``tol.file_edge_mm``, ``1e-6`` mm) of
+  the flat data's outline
   with the same id (without ``flat.json``: a face of the STEP solid).
-- ``svg``: parses, one group per panel and beam.
+- ``svg``: parses, one group per part cut from sheet.
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
   element / object / file per BOM row with the same id; IFC schema-valid with the volume of
   every element's face set, as ifcopenshell reads it, equal to the BOM's (with ``--occ``: from
@@ -59,6 +60,7 @@ import numpy as np
 from optimize.errors import ExportError
 from optimize.tolerances import DEFAULT, Tolerances
 
+from .cad.parts import cut_from_sheet
 from .check_mesh import check_3mf as _check_3mf
 from .check_mesh import check_stl as _check_stl
 
@@ -456,7 +458,7 @@ def _check_dxf(path, bom, solids_step, flat_path=None, reader=None, tol: Toleran
         for pid, Q in zip(g["ids"], g["outline"]):
             outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
     outlines, facts = read_outlines(path)
-    flat = [r["id"] for r in bom if r["kind"] in ("panel", "beam")]
+    flat = [r["id"] for r in bom if cut_from_sheet(r["kind"], r.get("member", ""))]
     missing = sorted(set(flat) - set(outlines))
     worst_a, worst_e, worst_id, failures = 0.0, 0.0, None, []
     for pid, Q in outlines.items():  # one outline per part
@@ -498,6 +500,6 @@ def _check_svg(path, bom):
         return {"pass": False, "error": f"{path.name}: the root element is not an SVG <svg> element"}
     ids = {unescape(m.decode("utf-8", "replace"), {"&quot;": '"', "&apos;": "'"})
            for m in re.findall(rb"<g\s[^>]*?\bid=\"([^\"]*)\"", data)}
-    flat = {r["id"] for r in bom if r["kind"] in ("panel", "beam")}
+    flat = {r["id"] for r in bom if cut_from_sheet(r["kind"], r.get("member", ""))}
     missing = sorted(flat - ids)
     return {"pass": not missing, "groups": len(ids & flat), "expected": len(flat), "missing": missing[:20]}

@@ -27,6 +27,8 @@ import numpy as np
 
 from optimize.tolerances import DEFAULT, Tolerances
 
+from .cad.parts import cut_from_sheet
+
 STEP_FILE = "model.step"
 DXF_FILE = "outlines.dxf"
 BOM_AREA_TOL_MM2 = 0.5
@@ -95,7 +97,7 @@ def dxf_against_bom(path, bom: list[dict]) -> dict:
     from .export.verify import outline_areas
 
     outlines, facts = read_outlines(path)
-    area = {r["id"]: float(r["area_m2"]) * 1e6 for r in bom if r["kind"] in ("panel", "beam")}
+    area = {r["id"]: float(r["area_m2"]) * 1e6 for r in bom if cut_from_sheet(r["kind"], r.get("member", ""))}
     missing = sorted(set(area) - set(outlines))
     failures, worst, worst_id = [], 0.0, None
     ids = list(outlines)

@@ -155,6 +155,10 @@ def test_steel_cut_list_one_row_per_beam_then_its_plates(section, tmp_path):
     write_steel_cut_list(parts, tmp_path / "steel.csv")
     with open(tmp_path / "steel.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
+    hubs = [r for r in rows if r["id"][0] == "N"]                # after the beams: the hubs and their pieces
+    n_nodes, pieces = parts.mesh.n_vertices, sum(len(g) for g in parts.of_kind("node"))
+    assert rows[-len(hubs):] == hubs and len(hubs) == n_nodes + (pieces if pieces > n_nodes else 0)
+    rows = rows[:-len(hubs)]
     members = MEMBERS[section]
     units = [r for r in rows if r["member"] == "beam"]
     n_beams = len(parts.of_kind("beam")[0])

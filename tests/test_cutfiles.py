@@ -46,6 +46,31 @@ def test_one_nested_file_per_material_and_thickness(parts, cut):
                                    np.linalg.norm(np.roll(F, -1, 0) - F, axis=1), atol=1e-9)
 
 
+def test_hub_caps_are_nested_with_the_plates_of_their_thickness(tmp_path):
+    """The quickstart's parts: T beams with 12 mm flanges, tube hubs with 12 mm caps: one 12 mm steel
+    cut file holds the flanges and the caps (their true outline, id and orientation mark); no tube."""
+    spec = PartSpec(beam={"section": "tee", "web_mm": 10, "flange_mm": 12, "flange_width_mm": 100},
+                    node={"connection": "hub", "hub": "tube", "radius_mm": 80.0, "wall_mm": 8.0, "cap_mm": 12.0})
+    parts = build_parts(dome_structure(n_around=6, k=3), spec)
+    facts = write_cut_files(parts, tmp_path, NestingSection().model_dump())
+    assert sorted(f for f in facts if f.endswith(".dxf")) == ["cut_glass_10mm.dxf", "cut_steel_10mm.dxf",
+                                                               "cut_steel_12mm.dxf"]
+    steel, info = read_outlines(tmp_path / "cut_steel_12mm.dxf")
+    caps = {i for g in parts.of_kind("node") if g.member in ("top cap", "bottom cap") for i in g.ids}
+    flanges = {i for g in parts.of_kind("beam") if "flange" in g.member for i in g.ids}
+    assert caps and set(steel) == caps | flanges and info["texts"] == len(caps | flanges)
+    web, _ = read_outlines(tmp_path / "cut_steel_10mm.dxf")
+    assert not set(web) & caps
+    for pid in sorted(caps)[:6]:  # the cap drawn is the 24-gon of radius 80 (edge 2 r sin(pi / 24))
+        Q = steel[pid]
+        np.testing.assert_allclose(np.linalg.norm(np.roll(Q, -1, 0) - Q, axis=1), 160 * np.sin(np.pi / 24),
+                                   rtol=1e-9)
+    lay = facts["cut_steel_12mm.dxf"]["layout"]
+    assert sum(s["parts"] for s in lay["per_sheet"]) == len(caps | flanges)
+    svg = (tmp_path / "cut_steel_12mm.svg").read_text()
+    assert all(f'id="{i}"' in svg for i in caps)
+
+
 def test_a_part_larger_than_the_sheet_is_listed_not_nested(parts, tmp_path):
     nest = NestingSection().model_dump()
     nest["steel"]["sheet_mm"] = (3000.0, 2500.0)

@@ -245,6 +245,9 @@ def test_nc1_length_and_angles_equal_the_steel_cut_list(parts, tmp_path):
     write_nc1(parts, tmp_path / "nc1")
     write_steel_cut_list(parts, tmp_path / "steel.csv")
     rows = list(csv.DictReader(open(tmp_path / "steel.csv", newline="")))
+    hubs = [r for r in rows if r["member"] == "hub"]                # the solid hubs: bars, no NC1 of their own
+    assert len(hubs) == len(parts.nodes) and all(r["section"].startswith("solid hub RD ") for r in hubs)
+    rows = [r for r in rows if r["id"][0] == "B"]
     assert len(rows) == len(parts.beams)
 
     def larger(text):

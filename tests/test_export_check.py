@@ -4,7 +4,7 @@ import json
 import shutil
 
 import pytest
-from cad_fixtures import dome_parts
+from cad_fixtures import dome_parts, dome_structure
 
 from fabricate.cad import PartSpec, build_parts
 from fabricate.check import check_outputs
@@ -46,6 +46,23 @@ def test_a_written_run_passes_every_check(run_dir, parts):
     assert c["svg"]["pass"]
     assert c["flat"]["pass"] and c["flat"]["against"] == "step" and c["flat"]["parts"] == c["dxf"]["expected"]
     assert c["flat"]["hausdorff_mm_max"] < 1e-6
+
+
+def test_hub_cap_plates_rebuilt_from_flat_json_equal_their_step_solids(tmp_path):
+    """A tube hub's two cap plates are cut from plate: flat.json, the DXF and the SVG carry them, and the
+    flat check holds each (outline, thickness, transform) to its STEP solid (volume, Hausdorff 0.01 mm)."""
+    tube = {"connection": "hub", "hub": "tube", "radius_mm": 80.0, "wall_mm": 8.0, "cap_mm": 12.0}
+    parts = build_parts(dome_structure(n_around=6, k=3), PartSpec(node=tube))
+    caps = [i for g in parts.of_kind("node") if g.member.endswith("cap") for i in g.ids]
+    assert len(caps) == 2 * len({i.split(".")[0] for i in caps}) > 0
+    result = check_outputs(_write(parts, tmp_path / "tube"))
+    assert result["pass"], result["failed"]
+    c = result["checks"]
+    flat_ids = {i for g in json.loads((tmp_path / "tube" / "flat.json").read_text())["groups"] for i in g["ids"]}
+    assert set(caps) <= flat_ids and not any(i.endswith(".1") and i[0] == "N" for i in flat_ids)  # no tube
+    assert c["flat"]["against"] == "step" and c["flat"]["parts"] == len(parts.panels) + len(parts.beams) + len(caps)
+    assert c["flat"]["hausdorff_mm_max"] < 1e-6
+    assert c["dxf"]["outlines"] == c["flat"]["parts"] and c["svg"]["groups"] == c["flat"]["parts"]
 
 
 def test_cli_check_exit_codes(run_dir, tmp_path, capsys):

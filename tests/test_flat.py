@@ -5,6 +5,7 @@ from cad_fixtures import dome_structure
 from scipy.spatial import ConvexHull, HalfspaceIntersection
 
 from fabricate.cad import PartSpec, build_parts
+from fabricate.cad.parts import cut_from_sheet
 from fabricate.cad.flat import corner_triples, cut_planes, face_planes, solid_from_flat
 from fabricate.cad.geometry import polygon_area_2d, volumes
 from fabricate.export.flatdata import check_flat, read_flat, rebuild, write_flat
@@ -21,6 +22,8 @@ def _twisted():
 
 CASES = {"dome": lambda: build_parts(dome_structure(), PartSpec()),
          "dome_hubs": lambda: build_parts(dome_structure(n_around=6, k=3), PartSpec(node_radius=60.0)),
+         "dome_tube_hubs": lambda: build_parts(dome_structure(n_around=6, k=3), PartSpec(node={
+             "connection": "hub", "hub": "tube", "radius_mm": 80.0, "wall_mm": 8.0, "cap_mm": 12.0})),
          "open_flipped": lambda: build_parts(dome_structure(n_around=6, k=3, flip=True, sweep=np.pi), PartSpec()),
          "twisted": lambda: build_parts(_twisted(), PartSpec())}
 
@@ -31,7 +34,19 @@ def parts(request):
 
 
 def _flat_groups(parts):
-    return [g for g in parts.groups if g.kind in ("panel", "beam")]
+    return [g for g in parts.groups if cut_from_sheet(g.kind, g.member)]
+
+
+def test_every_part_cut_from_sheet_has_flat_data_hub_caps_included():
+    parts = CASES["dome_tube_hubs"]()
+    flat = {g.member for g in _flat_groups(parts) if g.kind == "node"}
+    assert flat == {"top cap", "bottom cap"}                     # the tube is ordered as a section
+    for g in _flat_groups(parts):
+        if g.kind == "node":  # a cap: a 12 mm plate, its outline the 24-gon of radius 80, square edges
+            np.testing.assert_allclose(g.thickness_mm, 12.0)
+            np.testing.assert_allclose(np.linalg.norm(g.flat - g.flat.mean(axis=1, keepdims=True), axis=2), 80.0,
+                                       rtol=1e-9)
+            np.testing.assert_allclose(g.bevel_deg, 0.0, atol=1e-9)
 
 
 def test_flat_data_rebuild_every_solid(parts):
@@ -121,7 +136,7 @@ def test_flat_json_round_trip_and_check(parts, tmp_path):
         V = np.stack([by_id[i].vertices for i in g["ids"]])
         assert np.linalg.norm(X - V, axis=2).max() < 1e-6
     res = check_flat(tmp_path / "flat.json", read_bom(tmp_path / "bom.csv"))
-    assert res["pass"] and res["parts"] == len(parts.panels) + len(parts.beams)
+    assert res["pass"] and res["parts"] == sum(len(g) for g in _flat_groups(parts))
 
 
 def test_a_wrong_bevel_in_flat_json_fails_the_check(tmp_path):

@@ -99,3 +99,42 @@ def test_limits_flag_the_parts_that_break_them_by_id():
              for i, e in zip(g.ids, edge_lengths(g.bevel_ref).min(axis=1)) if e < 2000.0]
     assert set(short) == set(lim["edge"]["ids"]) and lim["edge"]["worst"] < 2000.0
     assert lim["sheet"]["count"] > 0 and lim["sheet"]["limit"] == "within 2000 x 1000 mm"
+
+
+def test_the_quickstart_hubs_are_in_the_steel_cut_list_as_chs_and_caps(tmp_path):
+    """The quickstart config's parts (T beams, tube hubs D160 x 8 with 12 mm caps) on a small dome: one row
+    per hub, its tube a CHS a shop can order (length = the tube between the caps; hub row: the height), its
+    caps PL12 with their blank; every weight is the BOM's and the total holds beams, tubes and caps."""
+    from pathlib import Path
+
+    from fabricate.app.config import load_config
+    from fabricate.app.stages import part_spec
+
+    cfg = load_config(Path(__file__).resolve().parents[1] / "configs" / "quickstart.yaml")
+    parts = build_parts(dome_structure(n_around=6, k=3), part_spec(cfg))
+    facts = write_steel_cut_list(parts, tmp_path / "steel.csv")
+    write_bom(parts, tmp_path / "bom.csv")
+    rows = {r["id"]: r for r in _rows(tmp_path / "steel.csv")}
+    bom = {r["id"]: r for r in _rows(tmp_path / "bom.csv")}
+    n = parts.mesh.n_vertices
+    assert facts["hubs"] == n and [r["member"] for r in rows.values()].count("hub") == n
+    for v in range(n):
+        nid = f"N{v + 1:04d}"
+        hub, tube, top, bottom = rows[nid], rows[nid + ".1"], rows[nid + ".2"], rows[nid + ".3"]
+        assert hub["section"] == "tube hub CHS 160 x 8 + 2 caps PL12 24-gon D160" and hub["plates"] == "3"
+        assert tube["section"] == "CHS 160 x 8" and tube["member"] == "tube" and tube["grade"] == "S355"
+        assert top["section"] == bottom["section"] == "PL12" and top["member"] == "top cap"
+        assert float(tube["length_mm"]) == pytest.approx(float(bom[nid + ".1"]["length_mm"]), abs=0.05)
+        assert float(hub["length_mm"]) == pytest.approx(float(tube["length_mm"]) + 24.0, abs=0.1)
+        assert float(top["blank_w_mm"]) == pytest.approx(2 * 80 * np.cos(np.pi / 24), abs=0.1)  # 24-gon, flat to flat
+        pieces = [float(bom[nid + s]["weight_kg"]) for s in (".1", ".2", ".3")]
+        for r, w in zip((tube, top, bottom), pieces):
+            assert float(r["weight_kg"]) == pytest.approx(w, abs=0.006)
+        assert float(hub["weight_kg"]) == pytest.approx(sum(pieces), abs=0.01)
+    # a round CHS 160 x 8 of that length would weigh pi (D - t) t L rho: the 24-gon is 1.1 % lighter
+    L = float(rows["N0001.1"]["length_mm"])
+    assert float(rows["N0001.1"]["weight_kg"]) == pytest.approx(np.pi * 152 * 8 * L * 7850e-9, rel=0.02)
+    steel = sum(float(r["volume_mm3"]) for r in bom.values() if r["material"] == "steel") * 7850e-9
+    w = facts["weight_kg"]
+    assert w["total"] == pytest.approx(steel, rel=1e-6) and w["hubs"] > 0 and w["beams"] > w["hubs"]
+    assert w["total"] == pytest.approx(w["beams"] + w["hubs"], abs=1e-3)

@@ -18,7 +18,10 @@ neighbours cannot touch).
   annular face per end, a face with a hole: what polyhedra with convex faces
   cannot express) for the OpenCASCADE writer and :meth:`Parts.to_build123d`.
 - the top and bottom cap plates (``top cap``, ``bottom cap``): ``K``-gon prisms
-  of radius ``r``, ``cap`` thick.
+  of radius ``r``, ``cap`` thick (their ``thickness``), cut from plate: their flat
+  data (outline face: the lower face, whose normal points down the axis) go to ``flat.json`` and the cut
+  files of that plate thickness with the beams' plates
+  (:func:`fabricate.cad.parts.cut_from_sheet`).
 """
 from __future__ import annotations
 
@@ -75,9 +78,9 @@ def tube_hubs(node: dict, wall: float, cap: float, node_ids, element) -> list[di
         {"member": "tube", "vertices": tube_V, "normals": tube_N, "faces": tube_faces(k), "length": height - 2 * cap,
          "back": k},  # flat data between an outside face and the inside face behind it (not cut from sheet)
         {"member": "top cap", "vertices": np.concatenate([hi_c, hi], axis=1), "normals": N, "faces": faces,
-         "length": np.full(len(V), cap)},
+         "length": np.full(len(V), cap), "thickness": np.full(len(V), cap)},
         {"member": "bottom cap", "vertices": np.concatenate([lo, lo_c], axis=1), "normals": N, "faces": faces,
-         "length": np.full(len(V), cap)},
+         "length": np.full(len(V), cap), "thickness": np.full(len(V), cap)},
     ]
 
 

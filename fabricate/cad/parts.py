@@ -34,6 +34,20 @@ GENUS = {"tube": 1}
 """Holes through a part by its ``member`` (a hub tube has one); every other part is genus 0."""
 
 
+SHEET_MEMBERS = {"panel": None, "beam": None, "node": ("top cap", "bottom cap")}
+"""Which solids are cut from sheet, by kind: every panel and beam solid (None), of the nodes only a
+tube hub's cap plates (the tube is ordered as a hollow section, a solid hub is turned)."""
+
+
+def cut_from_sheet(kind: str, member: str) -> bool:
+    """Whether a solid of ``kind`` and ``member`` is cut from sheet (has flat data in ``flat.json`` and
+    the cut files); takes a :class:`PartGroup`'s or a BOM row's ``kind`` and ``member``."""
+    if kind not in SHEET_MEMBERS:
+        return False
+    members = SHEET_MEMBERS[kind]
+    return members is None or member in members
+
+
 def unit_id(part_id: str) -> str:
     """The unit a solid belongs to: ``P0001.2`` -> ``P0001``; a one-solid part is its own unit."""
     return part_id.split(".", 1)[0]

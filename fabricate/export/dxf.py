@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fabricate.cad.parts import cut_from_sheet
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
@@ -91,7 +92,7 @@ def _entities(parts, lay: Layout, owner: str, seed: int, limit: int | None = Non
     row_of = {pid: k for k, pid in enumerate(lay.ids)}
     out, handle, n = [], seed, 0
     for g in parts.groups:
-        if g.kind not in ("panel", "beam") or not len(g) or g.ids[0] not in row_of:
+        if not cut_from_sheet(g.kind, g.member) or not len(g) or g.ids[0] not in row_of:
             continue
         fg = flat_group(g)
         take = len(g) if limit is None else max(0, min(len(g), limit - n))

@@ -1,7 +1,8 @@
 """``flat.json``: the flat data of every part cut from sheet, and the check that it defines the part.
 
 For every panel and beam (every ply and interlayer of a glass unit, with its
-``member`` and ``material``): the outline to cut (mm, in the part frame, as the
+``member`` and ``material``) and every cap plate of a tube hub
+(:func:`fabricate.cad.parts.cut_from_sheet`): the outline to cut (mm, in the part frame, as the
 DXF draws it before nesting), the bevel reference line with its corner
 heights, the bevel angle of every edge on both sides, the sheet thickness
 and the 4 x 4 transform that places the part in the model (see
@@ -19,12 +20,12 @@ from pathlib import Path
 
 import numpy as np
 
+from fabricate.cad.parts import cut_from_sheet
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
 TOL_MM = 0.01
 """Largest accepted Hausdorff distance (mm); the volume may differ by this times the outline area."""
-FLAT_KINDS = ("panel", "beam")
 FORMAT = "conical-fab flat data 1"
 
 
@@ -34,7 +35,7 @@ def write_flat(parts, path) -> dict:
     path = Path(path)
     groups, n = [], 0
     for g in parts.groups:
-        if g.kind not in FLAT_KINDS or not len(g):
+        if not cut_from_sheet(g.kind, g.member) or not len(g):
             continue
         groups.append({
             "kind": g.kind, "member": g.member, "material": g.material or ("glass" if g.kind == "panel" else "steel"),
@@ -46,7 +47,7 @@ def write_flat(parts, path) -> dict:
         n += len(g)
     doc = {"format": FORMAT, "units": "mm", "frame": (
         "part frame: the sheet lies between z = -thickness and z = 0 (the reference face: panel bearing "
-        "face, beam + plate face) seen from +z; outline counter-clockwise; transform maps part frame to "
+        "face, beam + plate face, hub cap: its lower face) seen from +z; outline counter-clockwise; transform maps part frame to "
         "model; bevel_deg[j] = [+z side, -z side] of edge j -> j+1, degrees from square, positive when "
         "the part narrows toward that face; cut face of edge j side s passes through the bevel reference "
         "edge j at its corner heights"), "groups": groups}
@@ -109,7 +110,8 @@ def solid_corners(shape) -> np.ndarray:
 
 
 def check_flat(path, bom: list[dict], step_solids: dict | None = None, meshes: dict | None = None) -> dict:
-    """The flat data against the solids: every panel and beam of the BOM is in ``flat.json``; the
+    """The flat data against the solids: every part of the BOM cut from sheet (panels, beams, hub caps:
+    :func:`~fabricate.cad.parts.cut_from_sheet`) is in ``flat.json``; the
     solid rebuilt from its outline, bevels, thickness and transform has the solid's volume (the BOM's
     analytic one, which the STEP and 3MF checks hold to their files) and its corners are within
     :data:`TOL_MM` of the STEP solid's (``step_solids``: name -> OCC shape) or else the 3MF mesh's
@@ -118,7 +120,7 @@ def check_flat(path, bom: list[dict], step_solids: dict | None = None, meshes: d
     from fabricate.cad.geometry import volumes
 
     groups = read_flat(path)
-    expected = {r["id"]: r for r in bom if r["kind"] in FLAT_KINDS}
+    expected = {r["id"]: r for r in bom if cut_from_sheet(r["kind"], r.get("member", ""))}
     against = "step" if step_solids else "3mf" if meshes else None
     seen, failures = set(), []
     worst_h, worst_v, worst_id = 0.0, 0.0, None

@@ -70,18 +70,25 @@ class Layout:
                 "utilisation_mean": float(np.mean(self.utilisation)) if self.sheets else 0.0, "per_sheet": per}
 
 
-def flat_parts(parts, kinds=("panel", "beam"), thickness: float | None = None):
-    """The groups laid flat (panels and beams; nodes are turned parts, not cut from sheet), optionally
-    only the parts of one thickness (mm)."""
+SHEET_KINDS = ("panel", "beam", "node")
+
+
+def flat_parts(parts, kinds=SHEET_KINDS, thickness: float | None = None):
+    """The groups laid flat: those of ``kinds`` cut from sheet (panels, beams and a tube hub's cap plates:
+    :func:`fabricate.cad.parts.cut_from_sheet`; a hub tube is ordered as a section), optionally only the
+    parts of one thickness (mm)."""
+    from fabricate.cad.parts import cut_from_sheet
+
     out = []
     for gi, g in enumerate(parts.groups):
-        if g.kind in kinds and len(g) and (thickness is None or np.allclose(g.thickness_mm, thickness)):
+        if (g.kind in kinds and cut_from_sheet(g.kind, g.member) and len(g)
+                and (thickness is None or np.allclose(g.thickness_mm, thickness))):
             out.append((gi, g))
     return out
 
 
 def layout(parts, sheet: tuple[float, float] | None = None, spacing: float = 10.0, *, kerf: float | None = None,
-           rotation: bool = True, kinds=("panel", "beam"), thickness: float | None = None,
+           rotation: bool = True, kinds=SHEET_KINDS, thickness: float | None = None,
            name: str = "S") -> Layout:
     """Lay the outlines of ``kinds`` flat; nest them on ``sheet = (W, H)`` mm when given.
 

@@ -22,7 +22,11 @@
   (inside the beam; 180 flat), weight (all its plates), the limits it breaks.
   A section of several plates is followed by one row per plate (``B0012.1``
   ...: ``PL<t>``, the member it is, its stock blank and its own end cuts and
-  weight).  A plate beam is one row, its own blank.
+  weight).  A plate beam is one row, its own blank.  Then one row per hub
+  (``N0001``, member ``hub``: ``tube hub CHS 160 x 8 + 2 caps PL12 24-gon D160``,
+  length = hub height, weight of its pieces) and, for a tube hub, its tube
+  (``N0001.1``: ``CHS 160 x 8``, length = the tube cut between the caps) and its
+  two caps (``PL12``, their blank): :func:`hub_rows`.
 - ``node_schedule.csv``: one row per node: position, axis direction (glass
   toward beams), the incoming beams with their angle around the axis
   (azimuth, from the first one, counter-clockwise seen along the axis) and
@@ -296,9 +300,75 @@ def write_steel_cut_list(parts, path) -> dict:
                 yield (pid, e, f"PL{g.thickness_mm[i]:g}", g.member, "", spec.steel_grade, f"{L:.1f}",
                        f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}", *angles(a, i), "", f"{w:.2f}",
                        " ".join(unit_id(n) for n in g.neighbours[i] if n[0] == "P"), nodes, "; ".join(flags.get(pid, [])))
-    n = _write(path, STEEL_COLUMNS, rows())
+    hubs, hub_weight = hub_rows(parts, flags)
+
+    def every_row():
+        yield from rows()
+        yield from hubs
+    n = _write(path, STEEL_COLUMNS, every_row())
+    beam_weight = float(uf["weight_kg"].sum()) if uf is not None else 0.0
     return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "beams": len(by_edge),
-            "section": section_text(spec, depth), "seconds": time.perf_counter() - t0}
+            "hubs": len({unit_id(r[0]) for r in hubs}), "section": section_text(spec, depth),
+            "hub_section": hubs[0][2] if hubs else "",
+            "weight_kg": {"beams": round(beam_weight, 3), "hubs": round(hub_weight, 3),
+                          "total": round(beam_weight + hub_weight, 3)},
+            "seconds": time.perf_counter() - t0}
+
+
+def hub_section(spec) -> tuple[str, str]:
+    """What a steel shop orders for a hub: ``(hub, piece)`` texts, e.g. ``("tube hub CHS 160 x 8 + 2 caps PL12
+    24-gon D160", "CHS 160 x 8")`` (a tube: a circular hollow section, outside diameter x wall, the model
+    its inscribed ``node_sides``-gon) or ``("solid hub RD 160", "RD 160")`` (a round bar)."""
+    d = 2 * spec.hub_radius
+    k = spec.node_sides
+    if spec.hub_kind == "tube":
+        chs = f"CHS {d:g} x {spec.node.wall_mm:g}"
+        return f"tube hub {chs} + 2 caps PL{spec.node.cap_mm:g} {k}-gon D{d:g}", chs
+    return f"solid hub RD {d:g} ({k}-gon)", f"RD {d:g}"
+
+
+def hub_rows(parts, flags: dict) -> tuple[list[tuple], float]:
+    """The steel cut list's rows of the hubs and their total weight (kg).
+
+    Per hub: one row (``N0001``, member ``hub``: the hub section, length = hub height between its outer
+    faces, weight of all its pieces); for a tube hub then its pieces: the tube (``N0001.1``, ``CHS D x wall``,
+    length = the tube cut between the caps) and the two caps (``PL<cap>``, their stock blank).  Weights are
+    the model's solids (volume x density, as the BOM): the tube is modelled as its inscribed
+    ``node_sides``-gon, so a round CHS of the listed size weighs about ``1 - sin(2 pi/K) K / (2 pi)``
+    more (1.1 % for 24 sides)."""
+    from fabricate.cad.parts import unit_id
+
+    nodes = parts.of_kind("node")
+    if not nodes:
+        return [], 0.0
+    spec = parts.spec
+    hub_text, piece = hub_section(spec)
+    n = 1 + max(int(g.element.max()) for g in nodes)
+    weight, height = np.zeros(n), np.zeros(n)
+    pieces: dict[int, list] = {}
+    for g in nodes:
+        w = g.volume_mm3 * spec.group_density(g) * 1e-9
+        np.add.at(weight, g.element, w)
+        np.add.at(height, g.element, g.length_mm)     # tube + caps: the hub's height
+        for i, pid in enumerate(g.ids):  # the pieces, grouped by hub
+            pieces.setdefault(int(g.element[i]), []).append((g, i, pid, w[i]))
+    blank = ("", "", "", "", "", "", "", "")
+    out = []
+    for v in sorted(pieces):
+        own = pieces[v]
+        uid = unit_id(own[0][2])
+        unit_flags = sorted({f for p in own for f in flags.get(p[2], [])})
+        out.append((uid, "", hub_text, "hub", f"{len(own)}", spec.steel_grade, f"{height[v]:.1f}", *blank,
+                    f"{weight[v]:.2f}", "", uid, "; ".join(unit_flags)))
+        if len(own) == 1:
+            continue
+        for g, i, pid, w in own:
+            cap = g.member != "tube"
+            out.append((pid, "", f"PL{g.thickness_mm[i]:g}" if cap else piece, g.member, "", spec.steel_grade,
+                        f"{g.length_mm[i]:.1f}", f"{g.rect[i, 0]:.1f}" if cap else "",
+                        f"{g.rect[i, 1]:.1f}" if cap else "", "", "", "", "", "", "", f"{w:.2f}", "", uid,
+                        "; ".join(flags.get(pid, []))))
+    return out, float(weight.sum())
 
 
 def node_table(parts) -> dict[str, np.ndarray]:

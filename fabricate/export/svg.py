@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 from xml.sax.saxutils import escape
 
+from fabricate.cad.parts import cut_from_sheet
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
@@ -39,7 +40,7 @@ def write_svg(parts, path, *, sheet: tuple[float, float] | None = None, spacing:
     where = {pid: k for k, pid in enumerate(lay.ids)}
     body = []
     for gi, g in enumerate(parts.groups):
-        if g.kind not in ("panel", "beam") or not len(g) or g.ids[0] not in where:
+        if not cut_from_sheet(g.kind, g.member) or not len(g) or g.ids[0] not in where:
             continue  # a layout of some groups only (one material and thickness)
         fg = flat_group(g)
         k_out = fg.outline.shape[1]

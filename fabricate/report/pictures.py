@@ -188,34 +188,56 @@ def outline_label_sizes(widths_pt: np.ndarray, heights_pt: np.ndarray, ids: list
     return np.where(fs >= MIN_FONT_PT, fs, 0.0)
 
 
+_GLYPHS: dict[str, tuple[np.ndarray, np.ndarray, float]] = {}
+
+
+def _glyph(ch: str) -> tuple[np.ndarray, np.ndarray, float]:
+    """Outline vertices, path codes and advance of one character at font size 1 (cached)."""
+    if ch not in _GLYPHS:
+        from matplotlib.font_manager import FontProperties
+        from matplotlib.textpath import TextPath, text_to_path
+
+        prop = FontProperties(size=1.0)
+        tp = TextPath((0.0, 0.0), ch, prop=prop)
+        w = text_to_path.get_text_width_height_descent(ch, prop, ismath=False)[0]
+        _GLYPHS[ch] = (np.asarray(tp.vertices, dtype=float), np.asarray(tp.codes), float(w))
+    return _GLYPHS[ch]
+
+
+def _glyph_run(text: str) -> tuple[np.ndarray, np.ndarray] | None:
+    """The glyph outlines of ``text`` at size 1, centred on their bounding box (None: nothing drawn)."""
+    x, parts = 0.0, []
+    for ch in text:
+        V, C, w = _glyph(ch)
+        if len(V):
+            parts.append((V + (x, 0.0), C))
+        x += w
+    if not parts:
+        return None
+    V = np.concatenate([v for v, _ in parts])
+    return V - 0.5 * (V.min(axis=0) + V.max(axis=0)), np.concatenate([c for _, c in parts])
+
+
+def glyph_extent(text: str) -> tuple[float, float]:
+    """Width and height of the ink of ``text`` at size 1, as :func:`_id_patch` draws it."""
+    run = _glyph_run(text)
+    return (0.0, 0.0) if run is None else tuple(float(v) for v in np.ptp(run[0], axis=0))
+
+
 def _id_patch(labels: list[tuple[str, np.ndarray, float]]):
     """One patch of every id as glyph outlines in data units (mm): ``[(text, centre (2,), height mm)]``.
     Thousands of ``ax.text`` take seconds to lay out; glyphs are made once per character and one
-    compound path draws at once."""
-    from matplotlib.font_manager import FontProperties
+    compound path draws at once.  Each id's ink is centred on ``centre``: its box is ``centre`` plus or
+    minus half of :func:`glyph_extent` times its size."""
     from matplotlib.patches import PathPatch
     from matplotlib.path import Path as MPath
-    from matplotlib.textpath import TextPath, text_to_path
 
-    prop = FontProperties(size=1.0)
-    glyphs: dict[str, tuple[np.ndarray, np.ndarray, float]] = {}
     verts, codes = [], []
     for text, centre, size in labels:
-        x, parts = 0.0, []
-        for ch in text:
-            if ch not in glyphs:
-                tp = TextPath((0.0, 0.0), ch, prop=prop)
-                w = text_to_path.get_text_width_height_descent(ch, prop, ismath=False)[0]
-                glyphs[ch] = (np.asarray(tp.vertices, dtype=float), np.asarray(tp.codes), float(w))
-            V, C, w = glyphs[ch]
-            if len(V):
-                parts.append((V + (x, 0.0), C))
-            x += w
-        if not parts:
+        run = _glyph_run(text)
+        if run is None:
             continue
-        V = np.concatenate([v for v, _ in parts])
-        mid = 0.5 * (V.min(axis=0) + V.max(axis=0))
-        verts.append((V - mid) * size + centre)
-        codes.append(np.concatenate([c for _, c in parts]))
+        verts.append(run[0] * size + centre)
+        codes.append(run[1])
     path = MPath(np.concatenate(verts), np.concatenate(codes)) if verts else MPath(np.zeros((0, 2)))
     return PathPatch(path, facecolor="k", edgecolor="none", lw=0)

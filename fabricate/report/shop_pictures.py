@@ -7,7 +7,8 @@
   count and yield;
 - :func:`picture_plan`: the layout plan (plan view, model x and y, as
   ``layout_plan.dxf``): every glass unit's bearing outline with its unit id and
-  every beam's glass edge with its id, where they sit on the roof.
+  every beam's glass edge with its id, where they sit on the roof, the ids placed
+  apart (:mod:`fabricate.export.plan_labels`).
 
 The data come in as plain arrays (:func:`sheet_drawings`, :func:`plan_drawing`
 make them from the nested batches and the parts).
@@ -24,6 +25,10 @@ SHEET_INCH = 11.0
 """Width of one drawn sheet (inches)."""
 PLAN_LABEL_INCH = 1.1
 """The plan is drawn so that the median panel is this wide (inches): its id fits inside."""
+PLAN_MIN_PT = 4.5
+"""The smallest id on the layout plan picture (points): every beam's, a small panel's."""
+PLAN_MAX_PT = 9.0
+"""The largest panel id on the layout plan picture (points)."""
 
 
 def sheet_drawings(batches: list[dict], most: int = 2) -> list[dict]:
@@ -106,26 +111,27 @@ def picture_sheets(sheets: list[dict], path: str | Path, *, title: str) -> Path:
 
 
 def plan_drawing(parts) -> dict:
-    """The layout plan as arrays: ``panels [(unit id, (k, 2))]``, ``beams [(id, (2, 2))]`` in plan (x, y, mm)."""
-    from fabricate.export.cutfiles import plan_groups
+    """The layout plan as arrays: ``panels [(unit id, (k, 2))]``, ``beams [(id, (2, 2))]`` in plan (x, y, mm)
+    (the same as ``layout_plan.dxf``: :func:`fabricate.export.cutfiles.plan_items`)."""
+    from fabricate.export.cutfiles import plan_items
 
     panels, beams = [], []
-    for g, ids in plan_groups(parts):
-        P = g.vertices[:, list(g.ring)][..., :2]
-        if g.kind == "beam":
-            beams += list(zip(ids, P[:, :2]))
+    for it in plan_items(parts):
+        if it["kind"] == "beam":
+            beams.append((it["text"], it["segment"]))
         else:
-            panels += list(zip(ids, P))
+            panels.append((it["text"], it["polygon"]))
     return {"panels": panels, "beams": beams}
 
 
-def picture_plan(plan: dict, path: str | Path, *, title: str) -> Path:
-    """The layout plan: panels (light blue) with their unit ids, beams (grey lines) with theirs, plan view.
+def plan_layout(plan: dict) -> dict:
+    """How :func:`picture_plan` draws ``plan``: ``inch_per_mm``, ``lo``, ``hi`` (mm) and the ``labels`` of
+    :func:`fabricate.export.plan_labels.place_labels` in mm, sized from points: a panel's id up to
+    :data:`PLAN_MAX_PT` as it fits, a beam's :data:`PLAN_MIN_PT` (none smaller), their ink boxes
+    (:func:`~fabricate.report.pictures.glyph_extent`) apart."""
+    from fabricate.export.plan_labels import place_labels
 
-    The drawing is scaled so the median panel is :data:`PLAN_LABEL_INCH` wide (7 to
-    :data:`~fabricate.report.pictures.MAX_SHEET_INCH` inches, at least 11); a beam id sits under the
-    middle of its beam."""
-    from matplotlib.collections import LineCollection, PolyCollection
+    from .pictures import glyph_extent
 
     panels, beams = plan["panels"], plan["beams"]
     allp = np.concatenate([q for _, q in panels] + [q for _, q in beams]) if panels or beams else np.zeros((1, 2))
@@ -134,34 +140,50 @@ def picture_plan(plan: dict, path: str | Path, *, title: str) -> Path:
     sizes = np.array([np.ptp(q, axis=0) for _, q in panels]) if panels else np.ones((1, 2))
     inch_per_mm = PLAN_LABEL_INCH / max(float(np.median(sizes.max(axis=1))), 1e-9)
     inch_per_mm = min(max(inch_per_mm, 11.0 / float(span.max())), MAX_SHEET_INCH / float(span.max()))
+    pt = 72.0 * inch_per_mm                                            # points per mm on the drawing
+    items = ([{"text": i, "kind": "panel", "polygon": q, "anchor": q.mean(axis=0)} for i, q in panels]
+             + [{"text": i, "kind": "beam", "segment": q, "anchor": q.mean(axis=0)} for i, q in beams])
+    labels = place_labels(items, glyph_extent, PLAN_MIN_PT / pt, PLAN_MAX_PT / pt, beam_size=PLAN_MIN_PT / pt)
+    return {"inch_per_mm": inch_per_mm, "lo": lo, "hi": hi, "labels": labels}
+
+
+def picture_plan(plan: dict, path: str | Path, *, title: str) -> Path:
+    """The layout plan: panels (light blue) with their unit ids, beams (grey lines) with theirs, plan view.
+
+    The drawing is scaled so the median panel is :data:`PLAN_LABEL_INCH` wide (7 to
+    :data:`~fabricate.report.pictures.MAX_SHEET_INCH` inches, at least 11); the ids are placed by
+    :func:`plan_layout`: inside their panel, beside their beam, or on a leader, never on top of one
+    another; the title counts the leaders and the ids left out."""
+    from matplotlib.collections import LineCollection, PolyCollection
+
+    from fabricate.export.plan_labels import label_counts
+
+    panels, beams = plan["panels"], plan["beams"]
+    lay = plan_layout(plan)
+    lo, hi, inch_per_mm = lay["lo"], lay["hi"], lay["inch_per_mm"]
+    span = np.maximum(hi - lo, 1.0)
     fig = _figure((float(span[0] * inch_per_mm) + 1.0, float(span[1] * inch_per_mm) + 1.2))
     ax = fig.add_axes((0.5 / fig.get_figwidth(), 0.5 / fig.get_figheight(),
                        1 - 1.0 / fig.get_figwidth(), 1 - 1.2 / fig.get_figheight()))
     ax.add_collection(PolyCollection([q for _, q in panels], facecolors=(0.82, 0.9, 0.97, 1.0),
                                      edgecolors=(0.3, 0.45, 0.6, 1.0), linewidths=0.4))
     ax.add_collection(LineCollection([q for _, q in beams], colors=(0.35, 0.35, 0.38, 1.0), linewidths=0.9))
-    pt = 72.0 * inch_per_mm
-    labels, small = [], 0
-    if panels:
-        ids = [i for i, _ in panels]
-        fs = outline_label_sizes(0.6 * sizes[:, 0] * pt, 0.35 * sizes[:, 1] * pt, ids)
-        small += int(np.sum(fs == 0))
-        labels += [(i, q.mean(axis=0), f / pt) for (i, q), f in zip(panels, fs) if f > 0]
-    if beams:
-        ids = [i for i, _ in beams]
-        L = np.array([np.linalg.norm(q[1] - q[0]) for _, q in beams])
-        fs = outline_label_sizes(0.45 * L * pt, np.full(len(L), 9.0), ids)
-        small += int(np.sum(fs == 0))
-        labels += [(i, q.mean(axis=0) + np.array([0.0, -0.6 * f / pt]), f / pt)
-                   for (i, q), f in zip(beams, fs) if f > 0]
-    if labels:
-        ax.add_artist(_id_patch(labels))
+    placed = [lab for lab in lay["labels"] if lab["how"] != "skipped"]
+    leaders = [lab["leader"] for lab in placed if lab["leader"] is not None]
+    if leaders:
+        ax.add_collection(LineCollection(leaders, colors=(0.2, 0.2, 0.2, 1.0), linewidths=0.3))
+    if placed:
+        ax.add_artist(_id_patch([(lab["text"], lab["centre"], lab["size"]) for lab in placed]))
     pad = 0.02 * float(span.max())
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
     ax.set_ylim(lo[1] - pad, hi[1] + pad)
     ax.set_aspect("equal")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
-    note = f" ({small} ids too small to draw here: see layout_plan.dxf)" if small else ""
-    ax.set_title(f"{title}: {len(panels)} glass units, {len(beams)} beams, plan view{note}", fontsize=10)
+    counts = label_counts(lay["labels"])
+    note = ", ".join(t for t in (f"{counts['leader']} ids on leaders" if counts["leader"] else "",
+                                 f"{counts['skipped']} ids left out: no free room near their part" if counts["skipped"]
+                                 else "") if t)
+    ax.set_title(f"{title}: {len(panels)} glass units, {len(beams)} beams, plan view"
+                 + (f" ({note})" if note else ""), fontsize=10)
     return _save(fig, path)
