@@ -32,6 +32,7 @@ from ...proximity.footpoints import Footpoints
 from ...proximity.surface import Reference
 from ...remesh.conjugacy import record_net
 from ...result import OptimizeResult, check_folds, record_shape
+from ...terms.closeness import closeness_residual
 from ...terms.fairness import fairness_matrix
 from ...terms.fixed import resolve
 from ...terms.variables import Layout
@@ -219,10 +220,12 @@ class Problem:
     def closeness(self, x: np.ndarray, foot=None, jac: bool = True):
         """Unweighted tangent-plane closeness rows ``(r (n,), J (n, k))`` at footpoints ``foot``.
 
-        ``foot = (Y, N)`` from :meth:`footpoints` (recomputed at ``x`` when None).
+        ``foot = (Y, N)`` from :meth:`footpoints` (recomputed at ``x`` when None).  The rows
+        are :func:`optimize.terms.closeness.closeness_terms`'s over ``h`` (``J`` the same matrix,
+        on the free columns, its values set on a pattern built once).
         """
         Y, N = self.footpoints(x) if foot is None else foot
-        r = np.einsum("ij,ij->i", self.positions(x) - Y, N) / self.h
+        r = closeness_residual(self.positions(x), Y, N) / self.h
         if not jac:
             return r
         if self._close is None:
@@ -243,7 +246,7 @@ class Problem:
                 g += w1 * kernels.matvec(self.Kt, r)
         if w2 > 0:
             Y, N = self.footpoints(x) if foot is None else foot
-            r = np.einsum("ij,ij->i", self.positions(x) - Y, N) / self.h
+            r = closeness_residual(self.positions(x), Y, N) / self.h
             f += w2 * float(r @ r)
             if grad:
                 G = N * r[:, None]

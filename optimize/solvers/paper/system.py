@@ -187,7 +187,7 @@ class ConstraintSystem:
                     vals.append(w * loc["G1"])
             else:
                 corner, sign, S = ent
-                cs.append(w * (kernels.matvec(S, loc["phi"]) + term.const))
+                cs.append(w * (kernels.matvec(S, loc["phi"]) - term.offset))
                 if jac and not fused:
                     vals.append((w * sign)[:, None] * loc["G"][corner])
         c = np.concatenate(cs)
