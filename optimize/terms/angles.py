@@ -70,5 +70,5 @@ def rows_at(mesh: Mesh, V: np.ndarray, C: np.ndarray, sign: np.ndarray,
             offset: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
     """:func:`angle_rows` at positions ``V (n, 3)`` (the unknowns are the vertices alone):
     ``r (p,)`` and ``J (p, 3 n)`` with columns ``x = V.ravel()``."""
-    layout = Layout().add("vertices", mesh.n_vertices, 3)
+    layout = Layout.vertices_only(mesh.n_vertices)
     return angle_rows(np.asarray(V, dtype=np.float64).ravel(), layout, mesh, C, sign, offset)

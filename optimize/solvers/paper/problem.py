@@ -70,7 +70,7 @@ class Problem:
             raise ConfigError(f"fairness={fairness}, closeness={closeness}: weights must be >= 0")
         self.center, self.h = measures.normalization(mesh)
         n = mesh.n_vertices
-        self.layout = Layout().add("vertices", n, 3)  # x = ((V - center) / h), named
+        self.layout = Layout.vertices_only(n)  # x = ((V - center) / h), named
         self.fixed = resolve(mesh, fixed)
         mask = np.ones(self.layout.size, dtype=bool)
         mask[self.layout.index("vertices")[self.fixed].ravel()] = False
@@ -150,7 +150,8 @@ class Problem:
 
     def _system(self, name: str, terms: list) -> ConstraintSystem:
         if name not in self._systems:
-            self._systems[name] = ConstraintSystem(self.mesh, terms, None if self._all_free else self.free)
+            self._systems[name] = ConstraintSystem(self.mesh, terms, None if self._all_free else self.free,
+                                                   self.layout)
         return self._systems[name]
 
     # -- variables ----------------------------------------------------------
