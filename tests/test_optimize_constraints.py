@@ -4,9 +4,20 @@ import numpy as np
 import pytest
 
 from optimize import proximity
-from optimize.modelling import shapes
-from optimize.terms import anglebalance, anglesum, circular, conical, diagonals, facesum, glide, planarity, unit
 from optimize.errors import ConfigError
+from optimize.modelling import shapes
+from optimize.terms import (
+    anglebalance,
+    anglesum,
+    circular,
+    conical,
+    determinants,
+    diagonals,
+    facesum,
+    glide,
+    planarity,
+    unit,
+)
 from optimize.terms import fixed as fixed_mod
 from optimize.terms.formulation import Formulation
 from optimize.terms.variables import Layout
@@ -147,6 +158,28 @@ def test_angle_sum_rows_on_mixed_faces():
     assert _fd_check(lambda y: facesum.terms(y, layout, mesh), mesh.V.ravel()) < 1e-7
     big = np.nonzero(mesh.face_sizes > 4)[0]
     assert np.allclose(facesum.at_positions(mesh, mesh.V, big)[0], r[-1:])
+
+
+@pytest.mark.parametrize("module", [determinants, facesum])
+def test_vertex_terms_take_their_columns_from_the_layout(module):
+    """The paper's determinant and angle-sum rows with the vertices block after another one:
+    the columns are the layout's (the same matrix as at positions, moved), the Jacobian
+    checks by finite differences, and the rows vanish on a translational net (planar quads)."""
+    from optimize import Mesh
+
+    cap = shapes.revolution(np.array([[1.0, 0.0], [1.0, 1.0], [0.8, 1.5]]), 8)
+    mesh = shapes.perturbed(Mesh(cap.V, cap.faces_list() + [list(range(0, 24, 3))]), 0.05, seed=5)
+    layout = Layout().add("normals", mesh.n_faces, 3).add("vertices", mesh.n_vertices, 3)
+    x = np.random.default_rng(6).standard_normal(layout.size)
+    layout.view(x, "vertices")[:] = mesh.V
+    r, J = module.terms(x, layout, mesh)
+    r0, J0 = module.at_positions(mesh, mesh.V)
+    assert r.size and np.array_equal(r, r0)
+    cols = layout.index("vertices").ravel()
+    assert abs(J[:, cols] - J0).max() == 0 and J[:, layout.index("normals").ravel()].nnz == 0
+    assert _fd_check(lambda y: module.terms(y, layout, mesh), x) < 1e-7
+    flat = _translational()
+    assert np.abs(module.at_positions(flat, flat.V)[0]).max() < 1e-12
 
 
 @pytest.mark.parametrize("name", ["normals", "axes"])

@@ -5,7 +5,7 @@ planar convex polygon, so a zero residual asks for planar *and* convex faces.
 Triangles satisfy it identically and get no row.  The row is degenerate: every
 angle is an even function of an out-of-plane displacement, so its gradient
 vanishes at a planar face and solvers converge on it linearly (the paper's
-methods add determinant rows on quads, ``optimize.solvers.paper.det``).  The
+methods add determinant rows on quads, ``optimize.terms.determinants``).  The
 default method does not use it (see ``convexity``); the paper's methods do.
 
 Block: ``vertices (n, 3)``.  One row per face of :func:`angle_sum_faces`, in that order.

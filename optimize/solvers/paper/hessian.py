@@ -5,8 +5,8 @@ constraint row is a sum of local functions (a corner angle of three points; a
 quad's determinants of four points), so ``sum_i y_i Hess c_i`` is assembled
 from small dense blocks, ``(9, 9)`` per corner and ``(12, 12)`` per quad,
 each by central differences of the *exact* local gradients
-(:func:`optimize.mesh.corners.angle_local`, :func:`optimize.solvers.paper.det.det_local`,
-:func:`optimize.solvers.paper.det.det_combined_local`) with a step of ``1e-6`` times
+(:func:`optimize.mesh.corners.angle_local`, :func:`optimize.terms.determinants.det_local`,
+:func:`optimize.terms.determinants.det_combined_local`) with a step of ``1e-6`` times
 the element size (error about ``1e-10`` relative), for all elements at once.
 """
 from __future__ import annotations
@@ -19,7 +19,7 @@ import scipy.sparse as sp
 from ...mesh import Mesh
 from ...mesh.corners import angle_local, corner_vertices
 from ...terms.variables import Layout
-from .det import det_combined_local, det_local, det_quads
+from ...terms.determinants import det_combined_local, det_local, det_quads
 
 REL_STEP = 1e-6
 

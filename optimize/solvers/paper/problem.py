@@ -33,11 +33,11 @@ from ...proximity.surface import Reference
 from ...remesh.conjugacy import record_net
 from ...result import OptimizeResult, check_folds, record_shape
 from ...terms.closeness import closeness_residual
+from ...terms.determinants import det_values
 from ...terms.fairness import fairness_matrix
 from ...terms.fixed import resolve
 from ...terms.variables import Layout
 from ...tolerances import DEFAULT, Tolerances
-from .det import det_values
 from .system import ConstraintSystem, Pattern
 from .targets import sqp_terms, target_terms, tested_defects
 

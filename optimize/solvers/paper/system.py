@@ -16,8 +16,14 @@ import scipy.sparse as sp
 from ... import kernels
 from ...mesh import Mesh
 from ...mesh.corners import angle_local, angle_values, corner_vertices
+from ...terms.determinants import (
+    ALTERNATING,
+    det_combined_local,
+    det_local,
+    det_quads,
+    det_values,
+)
 from ...terms.variables import Layout
-from .det import ALTERNATING, det_combined_local, det_local, det_quads, det_values
 
 
 class Pattern:

@@ -14,7 +14,7 @@ The angle rows are the terms' (:mod:`optimize.terms`): the angle sum
 the opposite-angle pairs :mod:`~optimize.terms.anglesum` (the default method's
 corner sets; the paper's methods evaluate them on fixed patterns,
 :mod:`optimize.solvers.paper.system`); the determinants are the paper's own
-(:mod:`optimize.solvers.paper.det`).  ``strip`` requires a single row of quads:
+(:mod:`optimize.terms.determinants`).  ``strip`` requires a single row of quads:
 open, closed, or closed with a half twist (a Moebius band).
 """
 from __future__ import annotations
@@ -41,7 +41,7 @@ class Term:
         the corner sets of the terms :mod:`optimize.terms.facesum`,
         :mod:`~optimize.terms.anglebalance` and :mod:`~optimize.terms.anglesum`), "det"
         (the four strip determinants of every quad) or "det1" (their alternating mean,
-        one row per quad: :func:`optimize.solvers.paper.det.det_combined_local`).
+        one row per quad: :func:`optimize.terms.determinants.det_combined_local`).
     weight : float, the block's weight in the penalty energy (``mu`` for ``det``).
     """
 
