@@ -45,7 +45,7 @@ from optimize.mesh import measures  # noqa: E402
 from optimize.modelling import shapes
 from optimize.errors import ConfigError  # noqa: E402
 from optimize.solvers.paper import run_paper_method  # noqa: E402
-from optimize.solvers.paper.det import det_local  # noqa: E402
+from optimize.terms.determinants import det_local  # noqa: E402
 from optimize.modelling.designs import trefoil_band_mesh as trefoil_band  # noqa: E402
 
 PAPER_SECONDS = {"penalty": 0.08, "sqp": 0.75}  # Liu et al. 2006, 336-face strip, 2 GHz PC

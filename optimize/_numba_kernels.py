@@ -49,7 +49,7 @@ def angles(V, vid, jac):
 
 @njit(cache=True)
 def dets(V, quads, jac):
-    """``D (q, 4)`` and ``G (q, 4, 12)`` of :func:`optimize.solvers.paper.det.det_local` at ``V[quads]``.
+    """``D (q, 4)`` and ``G (q, 4, 12)`` of :func:`optimize.terms.determinants.det_local` at ``V[quads]``.
 
     Without ``jac`` ``G`` is empty ``(0, 4, 12)``."""
     q = quads.shape[0]

@@ -8,7 +8,7 @@ arithmetic in one compiled call each:
 - :func:`angles` and :func:`dets`: corner angles ``(c,)`` with gradients
   ``(c, 9)`` and the four strip determinants ``(q, 4)`` with gradients
   ``(q, 4, 12)``, the formulas of :func:`optimize.mesh.corners.angle_local`
-  and :func:`optimize.solvers.paper.det.det_local`;
+  and :func:`optimize.terms.determinants.det_local`;
 - :func:`closest_candidates`: the closest point among each query point's
   candidate triangles (:class:`optimize.proximity.Footpoints`), the
   case analysis of :func:`optimize.proximity.surface.closest_on_triangles`;

@@ -4,9 +4,20 @@ import numpy as np
 import pytest
 
 from optimize import proximity
-from optimize.modelling import shapes
-from optimize.terms import anglebalance, anglesum, circular, conical, diagonals, glide, planarity, unit
 from optimize.errors import ConfigError
+from optimize.modelling import shapes
+from optimize.terms import (
+    anglebalance,
+    anglesum,
+    circular,
+    conical,
+    determinants,
+    diagonals,
+    facesum,
+    glide,
+    planarity,
+    unit,
+)
 from optimize.terms import fixed as fixed_mod
 from optimize.terms.formulation import Formulation
 from optimize.terms.variables import Layout
@@ -123,6 +134,52 @@ def test_each_constraint_jacobian(module, target):
     r, J = module.terms(x, form.layout, form.mesh)
     assert J.shape == (r.size, form.layout.size) and r.size > 0
     assert _fd_check(lambda y: module.terms(y, form.layout, form.mesh), x) < 1e-7
+
+
+def test_angle_sum_rows_on_mixed_faces():
+    """The angle-sum term (rows of different lengths: quads and an octagon) against a loop
+    over the faces; zero on a surface of revolution (planar convex faces), below zero once
+    perturbed; Jacobian by finite differences."""
+    from optimize import Mesh
+    from optimize.mesh.measures import corner_angles
+
+    cap = shapes.revolution(np.array([[1.0, 0.0], [1.0, 1.0], [0.8, 1.5]]), 8)
+    exact = Mesh(cap.V, cap.faces_list() + [list(range(0, 24, 3))])
+    assert sorted(set(exact.face_sizes.tolist())) == [4, 8]
+    assert np.abs(facesum.at_positions(exact, exact.V)[0]).max() < 1e-12
+    mesh = shapes.perturbed(exact, 0.05, seed=3)
+    r, J = facesum.at_positions(mesh, mesh.V)
+    phi, t = corner_angles(mesh), mesh.topology
+    ref = [phi[t.offsets[f]:t.offsets[f] + t.face_sizes[f]].sum() - (t.face_sizes[f] - 2) * np.pi
+           for f in range(mesh.n_faces) if t.face_sizes[f] >= 4]
+    assert np.allclose(r, ref, atol=1e-13) and (r < 0).all()
+    assert J.shape == (len(ref), 3 * mesh.n_vertices)
+    layout = Layout().add("vertices", mesh.n_vertices, 3)
+    assert _fd_check(lambda y: facesum.terms(y, layout, mesh), mesh.V.ravel()) < 1e-7
+    big = np.nonzero(mesh.face_sizes > 4)[0]
+    assert np.allclose(facesum.at_positions(mesh, mesh.V, big)[0], r[-1:])
+
+
+@pytest.mark.parametrize("module", [determinants, facesum])
+def test_vertex_terms_take_their_columns_from_the_layout(module):
+    """The paper's determinant and angle-sum rows with the vertices block after another one:
+    the columns are the layout's (the same matrix as at positions, moved), the Jacobian
+    checks by finite differences, and the rows vanish on a translational net (planar quads)."""
+    from optimize import Mesh
+
+    cap = shapes.revolution(np.array([[1.0, 0.0], [1.0, 1.0], [0.8, 1.5]]), 8)
+    mesh = shapes.perturbed(Mesh(cap.V, cap.faces_list() + [list(range(0, 24, 3))]), 0.05, seed=5)
+    layout = Layout().add("normals", mesh.n_faces, 3).add("vertices", mesh.n_vertices, 3)
+    x = np.random.default_rng(6).standard_normal(layout.size)
+    layout.view(x, "vertices")[:] = mesh.V
+    r, J = module.terms(x, layout, mesh)
+    r0, J0 = module.at_positions(mesh, mesh.V)
+    assert r.size and np.array_equal(r, r0)
+    cols = layout.index("vertices").ravel()
+    assert abs(J[:, cols] - J0).max() == 0 and J[:, layout.index("normals").ravel()].nnz == 0
+    assert _fd_check(lambda y: module.terms(y, layout, mesh), x) < 1e-7
+    flat = _translational()
+    assert np.abs(module.at_positions(flat, flat.V)[0]).max() < 1e-12
 
 
 @pytest.mark.parametrize("name", ["normals", "axes"])

@@ -1,18 +1,18 @@
 """Corner angles and their exact gradients: the one kernel behind every angle in ``optimize``.
 
-The measures (:func:`optimize.mesh.measures.corner_angles`), the default method's
-angle constraints (:mod:`optimize.terms.angles`), the paper's angle
-constraints (:mod:`optimize.solvers.paper.combine`: angle sum, conical balance,
-circular pairs, each a signed sum of corner angles plus a constant) and the
-strip analysis all take their angles from here; the compiled counterpart is
+The measures (:func:`optimize.mesh.measures.corner_angles`), the angle
+constraints of both methods (:mod:`optimize.terms.angles`: angle sum, conical
+balance, circular pairs, each a signed sum of corner angles minus a constant;
+the paper's methods evaluate the same rows on fixed patterns,
+:mod:`optimize.solvers.paper.system`) and the strip analysis all take their angles from here; the compiled counterpart is
 ``optimize.kernels`` ``angles``.  For every corner ``c`` of the mesh
 (``topology`` corner order) the angle is
 
     phi_c = angle(u, w),  u = V[next] - V[p],  w = V[prev] - V[p],  p = V[corner_vertex]
 
-with ``phi = atan2(|u x w|, u . w)`` (accurate near 0 and pi), its gradient with
-respect to the three vertices involved, and assembles signed sums of angles
-into a residual vector and a sparse Jacobian in one call (:func:`optimize.solvers.paper.combine.combine`).
+with ``phi = atan2(|u x w|, u . w)`` (accurate near 0 and pi) and its gradient with
+respect to the three vertices involved (signed sums of angles become residual
+rows and a sparse Jacobian in :func:`optimize.terms.angles.angle_rows`).
 
 Gradients (``nrm = u x w``)::
 

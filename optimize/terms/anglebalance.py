@@ -12,9 +12,10 @@ Block: ``vertices (n, 3)``.  One row per vertex.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..mesh import Mesh
-from .angles import angle_rows
+from .angles import angle_rows, rows_at
 from .variables import Layout
 
 SIGNS = np.array([1.0, -1.0, 1.0, -1.0])
@@ -38,3 +39,9 @@ def terms(x: np.ndarray, layout: Layout, mesh: Mesh, parts: bool = False,
     which : (p',) int positions in ``interior_valence4`` to restrict the rows to.
     """
     return angle_rows(x, layout, mesh, *rows(mesh, which), parts=parts)
+
+
+def at_positions(mesh: Mesh, V: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
+    """The rows at positions ``V (n, 3)``, ``w1 - w2 + w3 - w4`` per interior valence-4 vertex: residual ``(p,)`` and
+    Jacobian ``(p, 3 n)`` with columns ``x = V.ravel()`` (the unknowns are the vertices alone)."""
+    return rows_at(mesh, V, *rows(mesh))

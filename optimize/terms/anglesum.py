@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..mesh import Mesh
-from .angles import angle_rows
+from .angles import angle_rows, rows_at
 from .variables import Layout
 
 
@@ -27,3 +27,9 @@ def rows(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def terms(x: np.ndarray, layout: Layout, mesh: Mesh) -> tuple[np.ndarray, sp.csr_matrix]:
     """Residual ``(2q,)`` and Jacobian ``(2q, layout.size)``."""
     return angle_rows(x, layout, mesh, *rows(mesh))
+
+
+def at_positions(mesh: Mesh, V: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
+    """The rows at positions ``V (n, 3)``, ``(phi1 + phi3 - pi, phi2 + phi4 - pi)`` per quad: residual ``(p,)`` and
+    Jacobian ``(p, 3 n)`` with columns ``x = V.ravel()`` (the unknowns are the vertices alone)."""
+    return rows_at(mesh, V, *rows(mesh))

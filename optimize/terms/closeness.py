@@ -18,6 +18,12 @@ import scipy.sparse as sp
 from ..proximity.surface import Reference
 
 
+def closeness_residual(V: np.ndarray, Y: np.ndarray, N: np.ndarray) -> np.ndarray:
+    """(n,) float: ``r_i = (v_i - y_i) . n_i`` for vertices, footpoints and unit normals ``(n, 3)``
+    (in the units of ``V``; the paper's methods divide by their mean edge length)."""
+    return np.einsum("ij,ij->i", V - Y, N)
+
+
 def closeness_terms(V: np.ndarray, ref: Reference, Y: np.ndarray | None = None,
                     N: np.ndarray | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
     """Tangent-plane closeness ``((v_i - y_i) . n_i)^2`` linearized at ``V``.
@@ -34,7 +40,7 @@ def closeness_terms(V: np.ndarray, ref: Reference, Y: np.ndarray | None = None,
     if Y is None or N is None:
         Y, N = ref.closest(V)
     n = len(V)
-    r = np.einsum("ij,ij->i", V - Y, N)
+    r = closeness_residual(V, Y, N)
     rows = np.repeat(np.arange(n), 3)
     cols = np.arange(3 * n)
     J = sp.csr_matrix((N.ravel(), (rows, cols)), shape=(n, 3 * n))

@@ -17,12 +17,17 @@ class Layout:
 
     blocks: dict[str, tuple[int, int]] = field(default_factory=dict)
 
-    def add(self, name: str, count: int, width: int) -> "Layout":
+    def add(self, name: str, count: int, width: int) -> Layout:
         """Append a block of ``count`` items of ``width`` scalars; returns self."""
         if name in self.blocks:
             raise ValueError(f"Layout: block {name!r} already exists")
         self.blocks[name] = (int(count), int(width))
         return self
+
+    @classmethod
+    def vertices_only(cls, n: int) -> Layout:
+        """The unknowns ``vertices (n, 3)`` alone: ``x = V.ravel()`` (the paper's methods)."""
+        return cls().add("vertices", n, 3)
 
     @property
     def size(self) -> int:

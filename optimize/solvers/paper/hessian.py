@@ -5,8 +5,8 @@ constraint row is a sum of local functions (a corner angle of three points; a
 quad's determinants of four points), so ``sum_i y_i Hess c_i`` is assembled
 from small dense blocks, ``(9, 9)`` per corner and ``(12, 12)`` per quad,
 each by central differences of the *exact* local gradients
-(:func:`optimize.mesh.corners.angle_local`, :func:`optimize.solvers.paper.det.det_local`,
-:func:`optimize.solvers.paper.det.det_combined_local`) with a step of ``1e-6`` times
+(:func:`optimize.mesh.corners.angle_local`, :func:`optimize.terms.determinants.det_local`,
+:func:`optimize.terms.determinants.det_combined_local`) with a step of ``1e-6`` times
 the element size (error about ``1e-10`` relative), for all elements at once.
 """
 from __future__ import annotations
@@ -18,7 +18,8 @@ import scipy.sparse as sp
 
 from ...mesh import Mesh
 from ...mesh.corners import angle_local, corner_vertices
-from .det import det_combined_local, det_local, det_quads
+from ...terms.variables import Layout
+from ...terms.determinants import det_combined_local, det_local, det_quads
 
 REL_STEP = 1e-6
 
@@ -44,13 +45,13 @@ def local_hessians(grad: Callable, X: np.ndarray) -> np.ndarray:
     return 0.5 * (Hs + np.swapaxes(Hs, -1, -2))
 
 
-def _assemble(blocks: np.ndarray, vid: np.ndarray, n: int) -> sp.csr_matrix:
-    """(3 n, 3 n) sparse from ``blocks (k, 3a, 3a)`` over the vertices ``vid (k, a)``."""
+def _assemble(blocks: np.ndarray, vid: np.ndarray, layout: Layout) -> sp.csr_matrix:
+    """(N, N) sparse (``N = layout.size``) from ``blocks (k, 3a, 3a)`` over the vertices ``vid (k, a)``."""
     k, a = vid.shape
-    idx = (3 * vid[:, :, None] + np.arange(3)).reshape(k, 3 * a)
+    idx = layout.index("vertices")[vid].reshape(k, 3 * a)
     rows = np.broadcast_to(idx[:, :, None], blocks.shape)
     cols = np.broadcast_to(idx[:, None, :], blocks.shape)
-    return sp.csr_matrix((blocks.ravel(), (rows.ravel(), cols.ravel())), shape=(3 * n, 3 * n))
+    return sp.csr_matrix((blocks.ravel(), (rows.ravel(), cols.ravel())), shape=(layout.size, layout.size))
 
 
 def constraint_curvature(mesh: Mesh, terms: list, V: np.ndarray, y: np.ndarray,
@@ -59,23 +60,23 @@ def constraint_curvature(mesh: Mesh, terms: list, V: np.ndarray, y: np.ndarray,
 
     y : (r,) multipliers, laid out as ``blocks`` (term name -> slice of rows).
     """
-    n = mesh.n_vertices
+    layout = Layout.vertices_only(mesh.n_vertices)
     vid = corner_vertices(mesh.topology)
     quads = mesh.F[det_quads(mesh), :4]
     w = np.zeros(len(vid))
-    out = sp.csr_matrix((3 * n, 3 * n))
+    out = sp.csr_matrix((layout.size, layout.size))
     for term in terms:
         yb = y[blocks[term.name]]
         if term.kind == "det":
             Hs = local_hessians(det_local, V[quads])  # (q, 4, 12, 12)
-            out = out + _assemble(np.einsum("qj,qjab->qab", yb.reshape(-1, 4), Hs), quads, n)
+            out = out + _assemble(np.einsum("qj,qjab->qab", yb.reshape(-1, 4), Hs), quads, layout)
         elif term.kind == "det1":
             Hs = local_hessians(det_combined_local, V[quads])  # (q, 12, 12)
-            out = out + _assemble(yb[:, None, None] * Hs, quads, n)
+            out = out + _assemble(yb[:, None, None] * Hs, quads, layout)
         else:
             w += term.signs_matrix(len(vid)).T @ yb
     use = np.nonzero(w)[0]
     if use.size:
         Hs = local_hessians(angle_local, V[vid[use]])  # (u, 9, 9)
-        out = out + _assemble(w[use, None, None] * Hs, vid[use], n)
+        out = out + _assemble(w[use, None, None] * Hs, vid[use], layout)
     return out.tocsr()

@@ -89,7 +89,7 @@ class Linearized:
     def __init__(self, p: Problem, x: np.ndarray, w1: float, w2: float, foot, band, solver: SPDSolver):
         self.p, self.band, self.solver = p, band, solver
         P = p.system.pattern
-        c, self.a = p.system.evaluate_data(x.reshape(-1, 3), jac=True, weighted=True)
+        c, self.a = p.system.evaluate_data(p.vertices(x), jac=True, weighted=True)
         f, gh = p.least_squares(x, w1, w2, foot)
         self.E = float(c @ c) + f
         self.g = np.bincount(P.indices, weights=self.a * c[P.rows], minlength=P.shape[1]) + gh
@@ -145,7 +145,7 @@ class Linearized:
 
 def energy(p: Problem, x: np.ndarray, w1: float, w2: float, foot) -> float:
     """The penalty energy ``E`` at ``x`` (footpoints ``foot`` fixed)."""
-    c = p.system.evaluate_data(x.reshape(-1, 3), jac=False, weighted=True)
+    c = p.system.evaluate_data(p.vertices(x), jac=False, weighted=True)
     return float(c @ c) + p.least_squares(x, w1, w2, foot, grad=False)
 
 

@@ -1,8 +1,10 @@
 """The data of one run of the paper's methods, shared by penalty, SQP and hybrid.
 
-Named variable layout: the unknown vector is ``x = ((V - c) / h).ravel()``, the
-vertex positions centred at their mean ``c`` and divided by the mean edge
-length ``h``, so that every residual and step is scale-free (angles and
+Named variable layout (:class:`optimize.terms.variables.Layout`, the default
+method's): the unknown vector has one block, ``vertices (n, 3)``, the vertex
+positions centred at their mean ``c`` and divided by the mean edge length ``h``
+(:func:`optimize.mesh.measures.normalization`, the default method's
+normalization), so that every residual and step is scale-free (angles and
 determinants do not change, fairness is ``K x`` and closeness ``((v - y) . n) / h``).
 Fixed vertices are removed: Jacobians are restricted to the ``free``
 coordinates and steps are scattered back with :meth:`Problem.step`.
@@ -30,10 +32,12 @@ from ...proximity.footpoints import Footpoints
 from ...proximity.surface import Reference
 from ...remesh.conjugacy import record_net
 from ...result import OptimizeResult, check_folds, record_shape
+from ...terms.closeness import closeness_residual
+from ...terms.determinants import det_values
 from ...terms.fairness import fairness_matrix
 from ...terms.fixed import resolve
+from ...terms.variables import Layout
 from ...tolerances import DEFAULT, Tolerances
-from .det import det_values
 from .system import ConstraintSystem, Pattern
 from .targets import sqp_terms, target_terms, tested_defects
 
@@ -66,11 +70,12 @@ class Problem:
             raise ConfigError(f"fairness={fairness}, closeness={closeness}: weights must be >= 0")
         self.center, self.h = measures.normalization(mesh)
         n = mesh.n_vertices
+        self.layout = Layout.vertices_only(n)  # x = ((V - center) / h), named
         self.fixed = resolve(mesh, fixed)
-        mask = np.ones(3 * n, dtype=bool)
-        mask[(3 * self.fixed[:, None] + np.arange(3)).ravel()] = False
+        mask = np.ones(self.layout.size, dtype=bool)
+        mask[self.layout.index("vertices")[self.fixed].ravel()] = False
         self.free = np.nonzero(mask)[0]
-        self._all_free = len(self.free) == 3 * n
+        self._all_free = len(self.free) == self.layout.size
         self.K_full = fairness_matrix(mesh)  # (3t, 3n)
         self.K = self._cols(self.K_full)  # (3t, k) on the free coordinates
         self.sqp_terms = sqp_terms(mesh, self.terms)
@@ -88,9 +93,9 @@ class Problem:
     def _hessian_pattern(self) -> None:
         """The fixed pattern ``hpat`` of ``w1 K^T K + w2 C^T C`` (and the diagonal) on the free coordinates."""
         k = len(self.free)
-        colmap = np.full(3 * self.mesh.n_vertices, -1, dtype=np.int64)
+        colmap = np.full(self.layout.size, -1, dtype=np.int64)
         colmap[self.free] = np.arange(k)
-        cc = colmap.reshape(-1, 3)
+        cc = colmap[self.layout.index("vertices")]  # (n, 3) free column of each coordinate
         self._cv = np.nonzero(cc[:, 0] >= 0)[0]  # vertices with free coordinates (all three)
         cc = cc[self._cv]  # (f, 3)
         KtK = (self.K.T @ self.K).tocoo()
@@ -145,7 +150,8 @@ class Problem:
 
     def _system(self, name: str, terms: list) -> ConstraintSystem:
         if name not in self._systems:
-            self._systems[name] = ConstraintSystem(self.mesh, terms, None if self._all_free else self.free)
+            self._systems[name] = ConstraintSystem(self.mesh, terms, None if self._all_free else self.free,
+                                                   self.layout)
         return self._systems[name]
 
     # -- variables ----------------------------------------------------------
@@ -158,11 +164,15 @@ class Problem:
 
     def x0(self) -> np.ndarray:
         """(3 n,) float: the scaled input positions."""
-        return ((self.mesh.V - self.center) / self.h).ravel()
+        return self.layout.pack(vertices=(self.mesh.V - self.center) / self.h)
+
+    def vertices(self, x: np.ndarray) -> np.ndarray:
+        """(n, 3) float: the ``vertices`` block of ``x`` (scaled positions; a view)."""
+        return self.layout.view(x, "vertices")
 
     def positions(self, x: np.ndarray) -> np.ndarray:
         """(n, 3) float: model positions of the scaled vector ``x (3 n,)``."""
-        return self.center + self.h * x.reshape(-1, 3)
+        return self.center + self.h * self.vertices(x)
 
     def step(self, x: np.ndarray, s: np.ndarray, alpha: float = 1.0) -> np.ndarray:
         """(3 n,) float: ``x`` moved by ``alpha * s`` on the free coordinates (``s (k,)``)."""
@@ -190,7 +200,7 @@ class Problem:
         (:func:`optimize.solvers.paper.targets.sqp_terms`).
         """
         system = self.sqp_system if sqp else self.system
-        out = system.evaluate(x.reshape(-1, 3), jac=jac, weighted=weighted)
+        out = system.evaluate(self.vertices(x), jac=jac, weighted=weighted)
         return (*out, system.blocks) if jac else out
 
     def fairness(self, x: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
@@ -211,10 +221,12 @@ class Problem:
     def closeness(self, x: np.ndarray, foot=None, jac: bool = True):
         """Unweighted tangent-plane closeness rows ``(r (n,), J (n, k))`` at footpoints ``foot``.
 
-        ``foot = (Y, N)`` from :meth:`footpoints` (recomputed at ``x`` when None).
+        ``foot = (Y, N)`` from :meth:`footpoints` (recomputed at ``x`` when None).  The rows
+        are :func:`optimize.terms.closeness.closeness_terms`'s over ``h`` (``J`` the same matrix,
+        on the free columns, its values set on a pattern built once).
         """
         Y, N = self.footpoints(x) if foot is None else foot
-        r = np.einsum("ij,ij->i", self.positions(x) - Y, N) / self.h
+        r = closeness_residual(self.positions(x), Y, N) / self.h
         if not jac:
             return r
         if self._close is None:
@@ -235,7 +247,7 @@ class Problem:
                 g += w1 * kernels.matvec(self.Kt, r)
         if w2 > 0:
             Y, N = self.footpoints(x) if foot is None else foot
-            r = np.einsum("ij,ij->i", self.positions(x) - Y, N) / self.h
+            r = closeness_residual(self.positions(x), Y, N) / self.h
             f += w2 * float(r @ r)
             if grad:
                 G = N * r[:, None]
@@ -245,7 +257,7 @@ class Problem:
     # -- measures and result ------------------------------------------------
     def measure(self, x: np.ndarray) -> dict:
         """Max defects at ``x``: planarity, conical, circular, det (quads), fairness energy."""
-        Vs = x.reshape(-1, 3)  # every measure is scale-free: the scaled positions will do
+        Vs = self.vertices(x)  # every measure is scale-free: the scaled positions will do
         t = self.mesh.topology
         known = {}  # values a system computed at this x (the last trial step), if any
         for system in self._systems.values():

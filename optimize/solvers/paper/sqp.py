@@ -274,12 +274,12 @@ def run_sqp(p: Problem, x: np.ndarray, *, max_iter: int, callback=None, kkt_tol:
         ti = time.perf_counter()
         foot = p.footpoints(x) if w2 > 0 else None
         f, g, H = objective(p, x, w1, w2, foot=foot)
-        c, a = p.sqp_system.evaluate_data(x.reshape(-1, 3))
+        c, a = p.sqp_system.evaluate_data(p.vertices(x))
         A, blocks = p.sqp_system.pattern.csr(a), p.sqp_system.blocks
         y = np.zeros(len(c)) if y is None else y
         h_data, curvature = H.data, None
         if hessian == "exact" and np.any(y):
-            curvature = p.cols2(constraint_curvature(p.mesh, p.sqp_terms, x.reshape(-1, 3), y, blocks))
+            curvature = p.cols2(constraint_curvature(p.mesh, p.sqp_terms, p.vertices(x), y, blocks))
             H = H + curvature
         tm["assemble"] += time.perf_counter() - ti
         ts = time.perf_counter()

@@ -16,7 +16,14 @@ import scipy.sparse as sp
 from ... import kernels
 from ...mesh import Mesh
 from ...mesh.corners import angle_local, angle_values, corner_vertices
-from .det import ALTERNATING, det_combined_local, det_local, det_quads, det_values
+from ...terms.determinants import (
+    ALTERNATING,
+    det_combined_local,
+    det_local,
+    det_quads,
+    det_values,
+)
+from ...terms.variables import Layout
 
 
 class Pattern:
@@ -71,17 +78,21 @@ class ConstraintSystem:
     """Residuals ``c (r,)`` and Jacobian ``A (r, k)`` of a list of terms, on free columns.
 
     mesh : Mesh.  terms : list of :class:`optimize.solvers.paper.targets.Term`.
-    free : (k,) int free coordinates of ``x = V.ravel()`` (None: all ``3 n``).
+    free : (k,) int free coordinates of ``x`` (None: all of them).
+    layout : the unknowns' :class:`optimize.terms.variables.Layout` (default
+        :meth:`~optimize.terms.variables.Layout.vertices_only`, ``x = V.ravel()``).
     """
 
-    def __init__(self, mesh: Mesh, terms: list, free: np.ndarray | None = None):
+    def __init__(self, mesh: Mesh, terms: list, free: np.ndarray | None = None, layout: Layout | None = None):
         self.mesh, self.terms = mesh, terms
         t = mesh.topology
+        layout = Layout.vertices_only(mesh.n_vertices) if layout is None else layout
+        iv = layout.index("vertices")  # (n, 3)
         self.vid = corner_vertices(t).astype(np.int64)  # (c, 3)
-        nc, n = len(self.vid), mesh.n_vertices
-        ccols = (3 * self.vid[:, :, None] + np.arange(3)).reshape(nc, 9)
+        nc = len(self.vid)
+        ccols = iv[self.vid].reshape(nc, 9)
         self.quads = np.ascontiguousarray(mesh.F[det_quads(mesh), :4], dtype=np.int64)
-        qcols = (3 * self.quads[:, :, None] + np.arange(3)).reshape(-1, 12)
+        qcols = iv[self.quads].reshape(-1, 12)
         self.blocks, self._entries, rows, cols, at = {}, [], [], [], 0
         for term in terms:
             if term.kind in ("det", "det1"):
@@ -101,7 +112,7 @@ class ConstraintSystem:
         self.n_rows = at
         self._kinds = {term.kind for term in terms}
         self._last = None
-        self.pattern = Pattern(np.concatenate(rows), np.concatenate(cols), (at, 3 * n), free)
+        self.pattern = Pattern(np.concatenate(rows), np.concatenate(cols), (at, layout.size), free)
         # where each term's triplets land in the CSR data (-1: a fixed coordinate), for the kernels
         dest = np.full(sum(len(r_) for r_ in rows), -1, dtype=np.int64)
         dest[self.pattern.keep] = self.pattern.inv
@@ -187,7 +198,7 @@ class ConstraintSystem:
                     vals.append(w * loc["G1"])
             else:
                 corner, sign, S = ent
-                cs.append(w * (kernels.matvec(S, loc["phi"]) + term.const))
+                cs.append(w * (kernels.matvec(S, loc["phi"]) - term.offset))
                 if jac and not fused:
                     vals.append((w * sign)[:, None] * loc["G"][corner])
         c = np.concatenate(cs)

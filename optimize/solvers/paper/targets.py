@@ -9,8 +9,13 @@ circular   opposite-angle pairs per quad (+ angle sum on n-gons, n>4)  planarity
 strip      angle sum + four determinants per quad (weight ``mu = 1``)  planarity, det
 =========  ==========================================================  ==========================
 
-``strip`` requires a single row of quads: open, closed, or closed with a half
-twist (a Moebius band).
+The angle rows are the terms' (:mod:`optimize.terms`): the angle sum
+:mod:`~optimize.terms.facesum`, the balance :mod:`~optimize.terms.anglebalance`,
+the opposite-angle pairs :mod:`~optimize.terms.anglesum` (the default method's
+corner sets; the paper's methods evaluate them on fixed patterns,
+:mod:`optimize.solvers.paper.system`); the determinants are the paper's own
+(:mod:`optimize.terms.determinants`).  ``strip`` requires a single row of quads:
+open, closed, or closed with a half twist (a Moebius band).
 """
 from __future__ import annotations
 
@@ -21,11 +26,7 @@ import scipy.sparse as sp
 
 from ...errors import ConfigError, MeshError
 from ...mesh import Mesh
-from .angle_sum import angle_sum_rows
-from .balance import balance_rows
-from .circular import circular_rows
-from .combine import combine, sign_matrix
-from .det import det_constraints
+from ...terms import anglebalance, anglesum, facesum
 
 TARGETS = ("pq", "conical", "circular", "strip")
 
@@ -35,10 +36,12 @@ class Term:
     """One block of constraint rows.
 
     name : str, key in histories and multiplier slices.
-    kind : "angle" (signed sums of corner angles, given by ``corners``,
-        ``signs``, ``const`` as in :func:`optimize.solvers.paper.combine.combine`),
-        "det" (the four strip determinants of every quad) or "det1" (their
-        alternating mean, one row per quad: :func:`optimize.solvers.paper.det.det_combined_local`).
+    kind : "angle" (signed sums of corner angles: row ``i`` is
+        ``sum_s signs[s] phi[corners[i, s]] - offset[i]`` over the slots ``corners >= 0``,
+        the corner sets of the terms :mod:`optimize.terms.facesum`,
+        :mod:`~optimize.terms.anglebalance` and :mod:`~optimize.terms.anglesum`), "det"
+        (the four strip determinants of every quad) or "det1" (their alternating mean,
+        one row per quad: :func:`optimize.terms.determinants.det_combined_local`).
     weight : float, the block's weight in the penalty energy (``mu`` for ``det``).
     """
 
@@ -47,20 +50,16 @@ class Term:
     weight: float = 1.0
     corners: np.ndarray | None = None
     signs: np.ndarray | float = 1.0
-    const: np.ndarray | None = None
-
-    def evaluate(self, mesh: Mesh, V: np.ndarray, angle_terms) -> tuple[np.ndarray, sp.csr_matrix]:
-        """Residual ``(r,)`` and Jacobian ``(r, 3 n)`` at ``V (n, 3)`` (``angle_terms`` of ``V``)."""
-        if self.kind == "det":
-            return det_constraints(mesh, V)
-        if self.kind == "det1":
-            from .system import ConstraintSystem
-            return ConstraintSystem(mesh, [self]).evaluate(V)
-        return combine(*angle_terms, self.corners, self.signs, self.const, mesh.n_vertices)
+    offset: np.ndarray | None = None
 
     def signs_matrix(self, n_corners: int) -> sp.csr_matrix:
-        """(r, c) sparse: the rows as combinations of corner angles (angle terms only)."""
-        return sign_matrix(self.corners, self.signs, n_corners)
+        """(r, c) sparse ``S``: the rows as combinations of corner angles, ``r = S @ phi - offset``
+        (angle terms only)."""
+        corners = np.asarray(self.corners)
+        signs = np.broadcast_to(np.asarray(self.signs, dtype=float), corners.shape)
+        mask = corners >= 0
+        return sp.csr_matrix((signs[mask], (np.nonzero(mask)[0], corners[mask])),
+                             shape=(corners.shape[0], n_corners))
 
 
 def check_strip(mesh: Mesh) -> None:
@@ -105,14 +104,14 @@ def target_terms(mesh: Mesh, target: str, mu: float | None = None) -> list[Term]
     mu = (1.0 if target == "strip" else 0.0) if mu is None else float(mu)
     sizes = mesh.face_sizes
     if target == "circular":
-        terms = [Term("circular", "angle", 1.0, *circular_rows(mesh))]
+        terms = [Term("circular", "angle", 1.0, *anglesum.rows(mesh))]
         big = np.nonzero(sizes > 4)[0]
         if big.size:
-            terms.append(Term("angle_sum", "angle", 1.0, *angle_sum_rows(mesh, big)))
+            terms.append(Term("angle_sum", "angle", 1.0, *facesum.rows(mesh, big)))
     else:
-        terms = [Term("angle_sum", "angle", 1.0, *angle_sum_rows(mesh))]
+        terms = [Term("angle_sum", "angle", 1.0, *facesum.rows(mesh))]
     if target == "conical":
-        terms.append(Term("balance", "angle", 1.0, *balance_rows(mesh)))
+        terms.append(Term("balance", "angle", 1.0, *anglebalance.rows(mesh)))
     if mu > 0:
         if not np.any(sizes == 4):
             raise ConfigError(f"mu = {mu}: determinant terms need quads, {mesh.name} has none")
@@ -143,11 +142,11 @@ def sqp_terms(mesh: Mesh, terms: list[Term]) -> list[Term]:
         if t.kind == "det":
             out.append(Term("det", "det1", t.weight))
         elif t.name == "circular":
-            out.append(Term("circular", "angle", t.weight, t.corners[0::2], t.signs, t.const[0::2]))
+            out.append(Term("circular", "angle", t.weight, t.corners[0::2], t.signs, t.offset[0::2]))
         elif t.name != "angle_sum":
             out.append(t)
         elif big.size:
-            out.append(Term("angle_sum", "angle", t.weight, *angle_sum_rows(mesh, big)))
+            out.append(Term("angle_sum", "angle", t.weight, *facesum.rows(mesh, big)))
     return out
 
 
