@@ -3,16 +3,17 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from optimize.modelling import shapes
 from optimize.mesh import Mesh
-from optimize.solvers.paper.angle_sum import angle_sum
 from optimize.mesh.corners import corner_angle_gradients
-from optimize.solvers.paper.balance import angle_balance
-from optimize.solvers.paper.circular import circular_angles
-from optimize.solvers.paper.det import det_combined_local, det_constraints
+from optimize.modelling import shapes
 from optimize.solvers.paper.hessian import constraint_curvature
 from optimize.solvers.paper.problem import Problem
 from optimize.solvers.paper.sqp import kkt_matrix, objective
+from optimize.terms.anglebalance import at_positions as angle_balance
+from optimize.terms.anglesum import at_positions as circular_angles
+from optimize.terms.determinants import at_positions as det_constraints
+from optimize.terms.determinants import det_combined_local
+from optimize.terms.facesum import at_positions as angle_sum
 
 RNG = np.random.default_rng(7)
 

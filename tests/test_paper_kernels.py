@@ -11,17 +11,16 @@ import sys
 import numpy as np
 import pytest
 
-from optimize.mesh import measures
-from optimize.proximity import Reference, closest_on_triangles
 from optimize import kernels
-from optimize.solvers.paper import run_paper_method
+from optimize.mesh import measures
 from optimize.mesh.corners import angle_local, corner_vertices
+from optimize.modelling.designs import trefoil_band_mesh as trefoil_band
+from optimize.proximity import Footpoints, Reference, closest_on_triangles
+from optimize.solvers.paper import run_paper_method
 from optimize.solvers.paper.assembly import gram_band
 from optimize.solvers.paper.cache import problem_for
-from optimize.solvers.paper.det import det_local
-from optimize.proximity import Footpoints
 from optimize.solvers.paper.problem import Problem
-from optimize.modelling.designs import trefoil_band_mesh as trefoil_band
+from optimize.terms.determinants import det_local
 
 RNG = np.random.default_rng(5)
 

@@ -2,13 +2,13 @@
 import numpy as np
 import pytest
 
+from optimize.errors import ConfigError, MeshError
 from optimize.mesh import measures
 from optimize.modelling import shapes
-from optimize.errors import ConfigError, MeshError
-from optimize.solvers.paper import check_strip, run_paper_method
-from optimize.solvers.paper.det import det_local
 from optimize.modelling.designs import trefoil_band_mesh as trefoil_band
 from optimize.modelling.strips import strip_mesh
+from optimize.solvers.paper import check_strip, run_paper_method
+from optimize.terms.determinants import det_local
 
 
 def rails(m=8):

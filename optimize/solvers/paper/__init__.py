@@ -3,16 +3,14 @@
 ``optimize_mesh`` is the name ``optimize.api`` dispatches to; it is
 :func:`run_paper_method`.  The per-method entry points live in the modules
 ``optimize.solvers.paper.penalty``, ``.sqp`` and ``.hybrid`` (functions of the same
-names), not re-exported here so that the module names stay importable; for
-the same reason ``angle_sum`` is ``optimize.solvers.paper.angle_sum.angle_sum``.
+names), not re-exported here so that the module names stay importable.  The
+paper's constraints at positions are the terms' (``optimize.terms.facesum``,
+``anglebalance``, ``anglesum``, ``determinants``: ``at_positions``).
 Names load on first use (PEP 562).
 """
 from ..._lazy import lazy_exports
 
 _EXPORTS = {
-    "angle_balance": ".balance",
-    "circular_angles": ".circular",
-    "det_constraints": ".det",
     "METHODS": ".hybrid", "run_paper_method": ".hybrid", "optimize_mesh": ".hybrid:run_paper_method",
     "TARGETS": ".targets", "check_strip": ".targets", "target_terms": ".targets",
 }
