@@ -148,3 +148,27 @@ def test_a_run_with_rhs_beams_and_tube_hubs_passes_its_checks(tmp_path):
     assert facts["parts"]["cad_report"]["beams"]["section"] == "rhs"
     beams = facts["parts"]["beams"]
     assert beams["count"] == 6 * beams["units"] and facts["parts"]["nodes"]["count"] == 3 * facts["parts"]["nodes"]["units"]
+
+
+def test_bom_thickness_of_a_hub_tube_is_its_wall(tmp_path):
+    """A steel shop reads ``thickness_mm`` as the wall or plate: the tube row carries the wall (8), the caps
+    their plate (12), a solid hub (a round bar) its diameter; the cut files group plates by that thickness
+    and never take the tube (no 8 mm steel file from a T 10/12 beam on 8 mm tubes)."""
+    from fabricate.app.config import NestingSection
+    from fabricate.export import write_bom, write_cut_files
+    from fabricate.export.bom import read_bom
+
+    parts = build_parts(dome_structure(n_around=6, k=3), PartSpec(
+        beam={"section": "tee", "web_mm": 10, "flange_mm": 12, "flange_width_mm": 100}, node=dict(TUBE)))
+    write_bom(parts, tmp_path / "bom.csv")
+    rows = [r for r in read_bom(tmp_path / "bom.csv") if r["kind"] == "node"]
+    by_member = {}
+    for r in rows:
+        by_member.setdefault(r["member"], set()).add(float(r["thickness_mm"]))
+    assert by_member == {"tube": {8.0}, "top cap": {12.0}, "bottom cap": {12.0}}
+    files = write_cut_files(parts, tmp_path, NestingSection().model_dump())
+    assert sorted(f for f in files if f.startswith("cut_steel") and f.endswith(".dxf")) == [
+        "cut_steel_10mm.dxf", "cut_steel_12mm.dxf"]
+    solid = built((("connection", "hub"), ("hub", "solid"), ("radius_mm", 90.0)))
+    write_bom(solid, tmp_path / "solid.csv")
+    assert {float(r["thickness_mm"]) for r in read_bom(tmp_path / "solid.csv") if r["kind"] == "node"} == {180.0}
