@@ -172,3 +172,51 @@ def test_bom_thickness_of_a_hub_tube_is_its_wall(tmp_path):
     solid = built((("connection", "hub"), ("hub", "solid"), ("radius_mm", 90.0)))
     write_bom(solid, tmp_path / "solid.csv")
     assert {float(r["thickness_mm"]) for r in read_bom(tmp_path / "solid.csv") if r["kind"] == "node"} == {180.0}
+
+
+def test_nc1_per_hub_tube_reads_back_to_its_bom_row_and_the_check_holds_it(tmp_path):
+    """One DSTV file per hub tube beside the beam plates' (``RO``: a round tube cut square to length),
+    read back by the reader written apart from the writer: piece id, profile ``RO180x8``, diameter, wall,
+    the length between the caps, the weight per metre of the BOM row; ``check_nc1`` expects beams and
+    tubes and catches a wrong length, a plate code on a tube and a missing file."""
+    from fabricate.export import write_bom
+    from fabricate.export.bom import read_bom
+    from fabricate.export.exchange_check import check_nc1
+    from fabricate.export.nc1 import write_nc1
+    from fabricate.export.nc1_read import HEADER, read_nc1
+
+    parts = built(tuple(TUBE.items()))
+    facts = write_nc1(parts, tmp_path / "nc1", order="dome")
+    write_bom(parts, tmp_path / "bom.csv")
+    bom = read_bom(tmp_path / "bom.csv")
+    tubes = {r["id"]: r for r in bom if r["member"] == "tube"}
+    tube = next(g for g in parts.of_kind("node") if g.member == "tube")
+    n_beams = sum(len(g) for g in parts.of_kind("beam"))
+    assert facts["tubes"] == len(tubes) == parts.mesh.n_vertices and facts["files"] == n_beams + len(tubes)
+    k, r, wall = 24, 90.0, 8.0
+    section = _ngon_area(r, k) - _ngon_area(r - wall / np.cos(np.pi / k), k)    # mm2, the model's 24-gon tube
+    for i, pid in enumerate(tube.ids):
+        nc = read_nc1(tmp_path / "nc1" / f"{pid}.nc1")
+        h, row = nc["header"], tubes[pid]
+        assert (h["piece"], h["code"], h["profile"], h["grade"], h["quantity"]) == (pid, "RO", "RO180x8", "S355", 1)
+        assert h["height"] == pytest.approx(180.0, abs=1e-3)
+        assert h["web_thickness"] == h["flange_thickness"] == float(row["thickness_mm"]) == wall
+        assert h["length"] == pytest.approx(float(row["length_mm"]), abs=2e-3)
+        assert h["length"] == pytest.approx(tube.length_mm[i], abs=1e-3)
+        assert h["weight_per_m"] == pytest.approx(section * 1e-6 * 7850.0, rel=1e-5)     # kg/m, independent of L
+        assert h["weight_per_m"] * h["length"] * 1e-3 == pytest.approx(float(row["weight_kg"]), rel=1e-3)
+        assert [h[key] for key in HEADER[16:20]] == [0.0] * 4 and nc["contours"] == []   # square ends
+    assert check_nc1(tmp_path / "nc1", bom)["pass"]
+    first, second, third = sorted(tubes)[:3]
+    path = tmp_path / "nc1" / f"{first}.nc1"
+    lines = path.read_bytes().decode("ascii").split("\r\n")
+    assert lines[2 + HEADER.index("length")].strip() == f"{float(tubes[first]['length_mm']):.3f}"
+    lines[2 + HEADER.index("length")] = "  999.000"
+    path.write_bytes("\r\n".join(lines).encode("ascii"))
+    path = tmp_path / "nc1" / f"{second}.nc1"
+    path.write_bytes(path.read_bytes().replace(b"\r\n  RO\r\n", b"\r\n  B\r\n", 1))
+    (tmp_path / "nc1" / f"{third}.nc1").unlink()
+    result = check_nc1(tmp_path / "nc1", bom)
+    assert not result["pass"] and result["missing"] == [third]
+    bad = dict(b.split(": ", 1) for b in result["bad_files"])
+    assert set(bad) == {first, second} and "length 999" in bad[first] and "profile code 'B'" in bad[second]
