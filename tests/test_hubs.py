@@ -220,3 +220,43 @@ def test_nc1_per_hub_tube_reads_back_to_its_bom_row_and_the_check_holds_it(tmp_p
     assert not result["pass"] and result["missing"] == [third]
     bad = dict(b.split(": ", 1) for b in result["bad_files"])
     assert set(bad) == {first, second} and "length 999" in bad[first] and "profile code 'B'" in bad[second]
+
+
+def test_min_widths_of_regular_polygons_and_a_rectangle():
+    from fabricate.cad.limits import min_widths
+
+    r = 80.0
+    for k, expected in ((24, 2 * r * np.cos(np.pi / 24)), (7, r * (1 + np.cos(np.pi / 7))), (6, 2 * r * np.cos(np.pi / 6))):
+        phi = 2 * np.pi * np.arange(k) / k + 0.3
+        Q = r * np.stack([np.cos(phi), np.sin(phi)], axis=1) + [500.0, -20.0]
+        assert min_widths(Q[None])[0] == pytest.approx(expected, rel=1e-12)
+    rect = np.array([[[0.0, 0.0], [100.0, 0.0], [100.0, 30.0], [0.0, 30.0]]])
+    assert min_widths(rect)[0] == pytest.approx(30.0)
+
+
+def test_shop_limits_flag_the_hub_cap_plates_by_hub_id(tmp_path):
+    """A cap plate is held to the corner limit by its corners (165 deg for a 24-gon) and to the edge limit
+    by its width across flats (178.5 mm for D180; its facets of 23.5 mm are a round plate's, not short
+    edges): flagged by its hub's id in report limits, the headline and the hub row of the steel cut list."""
+    from fabricate.export import write_steel_cut_list
+    from fabricate.report.measures import warnings
+
+    structure = dome_structure(n_around=6, k=3)
+    hubs = {f"N{v + 1:04d}" for v in range(structure.mesh.n_vertices)}
+    across = 180.0 * np.cos(np.pi / 24)
+    loose = build_parts(structure, PartSpec(node=dict(TUBE), limits={
+        "min_corner_deg": 164.0, "min_edge_mm": across - 0.1, "sheet_mm": (1e5, 1e5), "max_panel_kg": 1e6}))
+    assert not any(i[0] == "N" for v in loose.report["limits"].values() for i in v["ids"])
+    tight = build_parts(structure, PartSpec(node=dict(TUBE), limits={
+        "min_corner_deg": 166.0, "min_edge_mm": across + 0.1, "sheet_mm": (1e5, 1e5), "max_panel_kg": 1e6}))
+    lim = tight.report["limits"]
+    for key in ("corner", "edge"):
+        assert {i for i in lim[key]["ids"] if i[0] == "N"} == hubs
+    assert not any(i[0] == "N" for key in ("sheet", "weight") for i in lim[key]["ids"])
+    assert any("N0001" in w and "edge" in w for w in warnings({}, lim))
+    write_steel_cut_list(tight, tmp_path / "steel.csv")
+    with open(tmp_path / "steel.csv", newline="") as fh:
+        rows = {r["id"]: r for r in csv.DictReader(fh)}
+    for h in hubs:
+        assert f"edge >= {across + 0.1:g} mm" in rows[h]["flags"] and "corner >= 166 deg" in rows[h]["flags"]
+        assert rows[h + ".1"]["flags"] == ""                        # the tube is a section: not held to them
