@@ -35,7 +35,7 @@ metre (the model's tube weight over its length, as the BOM), painting surface pe
 outside, ``pi D``), all four cuts 0 (square ends, normal to the node axis); no contour (the
 section and the length define the cut), ``SI`` the id at mid-length.
 
-The reader that checks these files (``tests/dstv_reader.py``) is written
+The reader that checks these files (:mod:`fabricate.export.nc1_read`) is written
 separately from this writer, from the same description.
 """
 from __future__ import annotations
