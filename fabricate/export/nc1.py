@@ -146,22 +146,22 @@ def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -
             density = parts.spec.density(g.kind)
             angles = beam_angles(g)
             for i, pid in enumerate(g.ids):
-                yield pid, nc1_text(g, i, order=order, grade=grade, density=density, angles=angles)
+                yield pid, nc1_text(g, i, order=order, grade=grade, density=density, angles=angles), False
         for g in parts.of_kind("node"):
             if g.member != "tube":
                 continue
             density = parts.spec.group_density(g)
             for i, pid in enumerate(g.ids):
-                yield pid, nc1_tube_text(g, i, order=order, grade=grade, density=density)
+                yield pid, nc1_tube_text(g, i, order=order, grade=grade, density=density), True
 
     try:
         folder.mkdir(parents=True, exist_ok=True)
         mode = 0o666 & ~umask()                 # read once: thousands of small files
-        for pid, text in texts():
+        for pid, text, tube in texts():
             data = text.replace("\n", "\r\n").encode("ascii")
             _write_atomic(folder / f"{pid}.nc1", data, mode)
             files += 1
-            tubes += pid[0] == "N"
+            tubes += tube
             size += len(data)
     except OSError as exc:
         raise ExportError(f"{folder}: cannot write the NC1 files ({exc.strerror or exc})") from None
