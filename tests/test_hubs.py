@@ -148,3 +148,115 @@ def test_a_run_with_rhs_beams_and_tube_hubs_passes_its_checks(tmp_path):
     assert facts["parts"]["cad_report"]["beams"]["section"] == "rhs"
     beams = facts["parts"]["beams"]
     assert beams["count"] == 6 * beams["units"] and facts["parts"]["nodes"]["count"] == 3 * facts["parts"]["nodes"]["units"]
+
+
+def test_bom_thickness_of_a_hub_tube_is_its_wall(tmp_path):
+    """A steel shop reads ``thickness_mm`` as the wall or plate: the tube row carries the wall (8), the caps
+    their plate (12), a solid hub (a round bar) its diameter; the cut files group plates by that thickness
+    and never take the tube (no 8 mm steel file from a T 10/12 beam on 8 mm tubes)."""
+    from fabricate.app.config import NestingSection
+    from fabricate.export import write_bom, write_cut_files
+    from fabricate.export.bom import read_bom
+
+    parts = build_parts(dome_structure(n_around=6, k=3), PartSpec(
+        beam={"section": "tee", "web_mm": 10, "flange_mm": 12, "flange_width_mm": 100}, node=dict(TUBE)))
+    write_bom(parts, tmp_path / "bom.csv")
+    rows = [r for r in read_bom(tmp_path / "bom.csv") if r["kind"] == "node"]
+    by_member = {}
+    for r in rows:
+        by_member.setdefault(r["member"], set()).add(float(r["thickness_mm"]))
+    assert by_member == {"tube": {8.0}, "top cap": {12.0}, "bottom cap": {12.0}}
+    files = write_cut_files(parts, tmp_path, NestingSection().model_dump())
+    assert sorted(f for f in files if f.startswith("cut_steel") and f.endswith(".dxf")) == [
+        "cut_steel_10mm.dxf", "cut_steel_12mm.dxf"]
+    solid = built((("connection", "hub"), ("hub", "solid"), ("radius_mm", 90.0)))
+    write_bom(solid, tmp_path / "solid.csv")
+    assert {float(r["thickness_mm"]) for r in read_bom(tmp_path / "solid.csv") if r["kind"] == "node"} == {180.0}
+
+
+def test_nc1_per_hub_tube_reads_back_to_its_bom_row_and_the_check_holds_it(tmp_path):
+    """One DSTV file per hub tube beside the beam plates' (``RO``: a round tube cut square to length),
+    read back by the reader written apart from the writer: piece id, profile ``RO180x8``, diameter, wall,
+    the length between the caps, the weight per metre of the BOM row; ``check_nc1`` expects beams and
+    tubes and catches a wrong length, a plate code on a tube and a missing file."""
+    from fabricate.export import write_bom
+    from fabricate.export.bom import read_bom
+    from fabricate.export.exchange_check import check_nc1
+    from fabricate.export.nc1 import write_nc1
+    from fabricate.export.nc1_read import HEADER, read_nc1
+
+    parts = built(tuple(TUBE.items()))
+    facts = write_nc1(parts, tmp_path / "nc1", order="dome")
+    write_bom(parts, tmp_path / "bom.csv")
+    bom = read_bom(tmp_path / "bom.csv")
+    tubes = {r["id"]: r for r in bom if r["member"] == "tube"}
+    tube = next(g for g in parts.of_kind("node") if g.member == "tube")
+    n_beams = sum(len(g) for g in parts.of_kind("beam"))
+    assert facts["tubes"] == len(tubes) == parts.mesh.n_vertices and facts["files"] == n_beams + len(tubes)
+    k, r, wall = 24, 90.0, 8.0
+    section = _ngon_area(r, k) - _ngon_area(r - wall / np.cos(np.pi / k), k)    # mm2, the model's 24-gon tube
+    for i, pid in enumerate(tube.ids):
+        nc = read_nc1(tmp_path / "nc1" / f"{pid}.nc1")
+        h, row = nc["header"], tubes[pid]
+        assert (h["piece"], h["code"], h["profile"], h["grade"], h["quantity"]) == (pid, "RO", "RO180x8", "S355", 1)
+        assert h["height"] == pytest.approx(180.0, abs=1e-3)
+        assert h["web_thickness"] == h["flange_thickness"] == float(row["thickness_mm"]) == wall
+        assert h["length"] == pytest.approx(float(row["length_mm"]), abs=2e-3)
+        assert h["length"] == pytest.approx(tube.length_mm[i], abs=1e-3)
+        assert h["weight_per_m"] == pytest.approx(section * 1e-6 * 7850.0, rel=1e-5)     # kg/m, independent of L
+        assert h["weight_per_m"] * h["length"] * 1e-3 == pytest.approx(float(row["weight_kg"]), rel=1e-3)
+        assert [h[key] for key in HEADER[16:20]] == [0.0] * 4 and nc["contours"] == []   # square ends
+    assert check_nc1(tmp_path / "nc1", bom)["pass"]
+    first, second, third = sorted(tubes)[:3]
+    path = tmp_path / "nc1" / f"{first}.nc1"
+    lines = path.read_bytes().decode("ascii").split("\r\n")
+    assert lines[2 + HEADER.index("length")].strip() == f"{float(tubes[first]['length_mm']):.3f}"
+    lines[2 + HEADER.index("length")] = "  999.000"
+    path.write_bytes("\r\n".join(lines).encode("ascii"))
+    path = tmp_path / "nc1" / f"{second}.nc1"
+    path.write_bytes(path.read_bytes().replace(b"\r\n  RO\r\n", b"\r\n  B\r\n", 1))
+    (tmp_path / "nc1" / f"{third}.nc1").unlink()
+    result = check_nc1(tmp_path / "nc1", bom)
+    assert not result["pass"] and result["missing"] == [third]
+    bad = dict(b.split(": ", 1) for b in result["bad_files"])
+    assert set(bad) == {first, second} and "length 999" in bad[first] and "profile code 'B'" in bad[second]
+
+
+def test_min_widths_of_regular_polygons_and_a_rectangle():
+    from fabricate.cad.limits import min_widths
+
+    r = 80.0
+    for k, expected in ((24, 2 * r * np.cos(np.pi / 24)), (7, r * (1 + np.cos(np.pi / 7))), (6, 2 * r * np.cos(np.pi / 6))):
+        phi = 2 * np.pi * np.arange(k) / k + 0.3
+        Q = r * np.stack([np.cos(phi), np.sin(phi)], axis=1) + [500.0, -20.0]
+        assert min_widths(Q[None])[0] == pytest.approx(expected, rel=1e-12)
+    rect = np.array([[[0.0, 0.0], [100.0, 0.0], [100.0, 30.0], [0.0, 30.0]]])
+    assert min_widths(rect)[0] == pytest.approx(30.0)
+
+
+def test_shop_limits_flag_the_hub_cap_plates_by_hub_id(tmp_path):
+    """A cap plate is held to the corner limit by its corners (165 deg for a 24-gon) and to the edge limit
+    by its width across flats (178.5 mm for D180; its facets of 23.5 mm are a round plate's, not short
+    edges): flagged by its hub's id in report limits, the headline and the hub row of the steel cut list."""
+    from fabricate.export import write_steel_cut_list
+    from fabricate.report.measures import warnings
+
+    structure = dome_structure(n_around=6, k=3)
+    hubs = {f"N{v + 1:04d}" for v in range(structure.mesh.n_vertices)}
+    across = 180.0 * np.cos(np.pi / 24)
+    loose = build_parts(structure, PartSpec(node=dict(TUBE), limits={
+        "min_corner_deg": 164.0, "min_edge_mm": across - 0.1, "sheet_mm": (1e5, 1e5), "max_panel_kg": 1e6}))
+    assert not any(i[0] == "N" for v in loose.report["limits"].values() for i in v["ids"])
+    tight = build_parts(structure, PartSpec(node=dict(TUBE), limits={
+        "min_corner_deg": 166.0, "min_edge_mm": across + 0.1, "sheet_mm": (1e5, 1e5), "max_panel_kg": 1e6}))
+    lim = tight.report["limits"]
+    for key in ("corner", "edge"):
+        assert {i for i in lim[key]["ids"] if i[0] == "N"} == hubs
+    assert not any(i[0] == "N" for key in ("sheet", "weight") for i in lim[key]["ids"])
+    assert any("N0001" in w and "edge" in w for w in warnings({}, lim))
+    write_steel_cut_list(tight, tmp_path / "steel.csv")
+    with open(tmp_path / "steel.csv", newline="") as fh:
+        rows = {r["id"]: r for r in csv.DictReader(fh)}
+    for h in hubs:
+        assert f"edge >= {across + 0.1:g} mm" in rows[h]["flags"] and "corner >= 166 deg" in rows[h]["flags"]
+        assert rows[h + ".1"]["flags"] == ""                        # the tube is a section: not held to them

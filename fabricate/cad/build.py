@@ -155,7 +155,7 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                 sibs = tuple(f".{j}" for j in range(1, len(pieces) + 1) if j != k)
                 near = [row + tuple(nid[i] + s for s in sibs) for i, row in enumerate(nb)]
                 groups.append(_group("node", np.char.add(nid, f".{k}"), v, pc["vertices"], pc["faces"],
-                                     pc["normals"], 0, pc.get("back", 1), np.zeros(len(v)), pc.get("thickness", diameter),
+                                     pc["normals"], 0, pc.get("back", 1), np.zeros(len(v)), pc["thickness"],
                                      pc["length"], near, spec,
                                      member=pc["member"]))
         node_facts = {"theta_max_deg": float(np.degrees(nodes["theta_max"].max())), "hub": spec.hub_kind,

@@ -11,7 +11,7 @@ neighbours cannot touch).
 ``tube``: three parts a shop makes from a tube and a plate:
 
 - the tube (member ``tube``): a ``K``-gon of circumradius ``r`` outside and
-  ``r - wall / cos(pi / K)`` inside (a wall ``wall`` thick), between the caps.
+  ``r - wall / cos(pi / K)`` inside (a wall ``wall`` thick, its ``thickness``), between the caps.
   As planar faces it has ``4 K`` convex quads (outside, inside and each end
   annulus split into ``K`` trapezoids), which STEP, STL, 3MF and the checks
   write exactly; :func:`tube_breps` builds its B-rep with build123d (one
@@ -76,7 +76,8 @@ def tube_hubs(node: dict, wall: float, cap: float, node_ids, element) -> list[di
     faces = prism_faces(k)
     return [
         {"member": "tube", "vertices": tube_V, "normals": tube_N, "faces": tube_faces(k), "length": height - 2 * cap,
-         "back": k},  # flat data between an outside face and the inside face behind it (not cut from sheet)
+         "back": k,  # flat data between an outside face and the inside face behind it (not cut from sheet)
+         "thickness": np.full(len(V), float(wall))},  # the wall: what a shop reads as a tube's thickness
         {"member": "top cap", "vertices": np.concatenate([hi_c, hi], axis=1), "normals": N, "faces": faces,
          "length": np.full(len(V), cap), "thickness": np.full(len(V), cap)},
         {"member": "bottom cap", "vertices": np.concatenate([lo, lo_c], axis=1), "normals": N, "faces": faces,

@@ -69,8 +69,10 @@ class NodeSpec:
 class Limits:
     """What the shops can make (mm, degrees, kg); parts beyond them are flagged by id.
 
-    min_corner_deg : smallest panel corner a glass supplier cuts without a special order.
-    min_edge_mm : shortest panel or beam outline edge (of a flange plate: its edges along the beam).
+    min_corner_deg : smallest panel corner a glass supplier cuts without a special order (hub cap
+        plates are held to it too).
+    min_edge_mm : shortest panel or beam outline edge (of a flange plate: its edges along the beam; of a
+        hub cap plate: its width, its edges being the facets of a round plate).
     sheet_mm : the largest glass sheet (jumbo / PLF 6000 x 3210): a panel's stock rectangle must fit.
     max_panel_kg : heaviest panel the site can lift into place.
     """

@@ -2,7 +2,8 @@
 
 Columns: ``id, kind, element`` (mesh face / edge / vertex index),
 ``mesh_vertices`` (space separated), ``area_m2`` (outline face),
-``length_mm`` (beams and nodes), ``thickness_mm``, ``volume_mm3`` (analytic,
+``length_mm`` (beams and nodes; a hub tube: its cut between the caps), ``thickness_mm`` (a panel's
+ply, a plate's thickness; a hub tube: its wall; a solid hub: its diameter), ``volume_mm3`` (analytic,
 full precision: ``fabricate check`` compares the STEP solids with it),
 ``weight_kg`` (volume x density), ``rect_w_mm, rect_h_mm`` (smallest
 bounding rectangle of the flat outline and bevel), ``planarity_mm`` (how far

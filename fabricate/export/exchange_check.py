@@ -7,8 +7,10 @@
   kernel, with the BOM's within ``tol.file_volume`` (``1e-6``) relative.
 - ``3dm``: rhino3dm reads ``model.3dm``; one named object per BOM row on the
   layer of its kind, the BOM row in its user strings, units mm.
-- ``nc1``: one file per beam row, read by the reader written apart from the
-  writer (:mod:`.nc1_read`): piece id, plate thickness, weight within 1e-3.
+- ``nc1``: one file per beam row and per hub tube row, read by the reader written apart from the
+  writer (:mod:`.nc1_read`): piece id, profile code (``B`` plate, ``RO`` tube), plate thickness
+  or tube wall, weight within 1e-3; a tube's length (its cut between the caps) within 2e-3 mm,
+  its flange thickness the wall and its profile ``RO<height>x<wall>``.
 """
 from __future__ import annotations
 
@@ -100,10 +102,38 @@ def check_3dm(path: Path, bom) -> dict:
                                           "bad_units": bad_units})
 
 
+def nc1_expected(bom) -> dict[str, dict]:
+    """The BOM rows that have an NC1 file: every beam plate and every hub tube (``member`` ``tube``)."""
+    return {r["id"]: r for r in bom if r["kind"] == "beam" or (r["kind"] == "node" and r.get("member") == "tube")}
+
+
+def _nc1_bad(h: dict, row: dict) -> str:
+    """Why an NC1 header disagrees with its BOM row ('' when it agrees)."""
+    weight = h["weight_per_m"] * h["length"] * 1e-3
+    tube = row["kind"] == "node"
+    why = []
+    if h["code"] != ("RO" if tube else "B"):
+        why.append(f"profile code {h['code']!r}, expected {'RO' if tube else 'B'}")
+    if abs(h["web_thickness"] - float(row["thickness_mm"])) > 1e-3:
+        why.append(f"web thickness {h['web_thickness']:g} mm, BOM thickness_mm {row['thickness_mm']}")
+    if abs(weight - float(row["weight_kg"])) > 1e-3 * max(float(row["weight_kg"]), 1.0):
+        why.append(f"weight {weight:.3f} kg, BOM weight_kg {row['weight_kg']}")
+    if tube:
+        if abs(h["length"] - float(row["length_mm"])) > 2e-3:
+            why.append(f"length {h['length']:g} mm, BOM length_mm {row['length_mm']}")
+        if h["flange_thickness"] != h["web_thickness"]:
+            why.append(f"flange thickness {h['flange_thickness']:g} mm is not the wall {h['web_thickness']:g} mm")
+        if h["profile"] != f"RO{h['height']:g}x{h['web_thickness']:g}":
+            why.append(f"profile {h['profile']!r}, expected RO{h['height']:g}x{h['web_thickness']:g}")
+    return "; ".join(why)
+
+
 def check_nc1(folder: Path, bom) -> dict:
+    """One NC1 file per :func:`nc1_expected` row, its header held to the row (``bad_files``:
+    ``"<id>: why"``)."""
     from .nc1_read import read_nc1
 
-    rows = {r["id"]: r for r in bom if r["kind"] == "beam"}
+    rows = nc1_expected(bom)
     found, bad = set(), []
     for path in sorted(Path(folder).glob("*.nc1")):
         try:
@@ -113,9 +143,9 @@ def check_nc1(folder: Path, bom) -> dict:
             continue
         found.add(path.stem)
         row = rows.get(path.stem)
-        weight = h["weight_per_m"] * h["length"] * 1e-3
-        if row is not None and (h["piece"] != path.stem
-                                or abs(h["web_thickness"] - float(row["thickness_mm"])) > 1e-3
-                                or abs(weight - float(row["weight_kg"])) > 1e-3 * max(float(row["weight_kg"]), 1.0)):
-            bad.append(path.stem)
+        if row is None:
+            continue
+        why = f"piece {h['piece']!r} in file {path.name}" if h["piece"] != path.stem else _nc1_bad(h, row)
+        if why:
+            bad.append(f"{path.stem}: {why}")
     return _ids_result(set(rows), found, {"bad_files": bad[:20]})

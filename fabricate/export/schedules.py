@@ -357,7 +357,7 @@ def hub_rows(parts, flags: dict) -> tuple[list[tuple], float]:
     for v in sorted(pieces):
         own = pieces[v]
         uid = unit_id(own[0][2])
-        unit_flags = sorted({f for p in own for f in flags.get(p[2], [])})
+        unit_flags = sorted({f for p in own for f in flags.get(p[2], [])} | set(flags.get(uid, [])))  # caps: by hub
         out.append((uid, "", hub_text, "hub", f"{len(own)}", spec.steel_grade, f"{height[v]:.1f}", *blank,
                     f"{weight[v]:.2f}", "", uid, "; ".join(unit_flags)))
         if len(own) == 1:
