@@ -269,6 +269,20 @@ def test_outline_ids_fit_their_parts(tmp_path):
             assert ext.width <= 0.9 * width and ext.height <= height  # drawn inside its part (pt = mm here)
 
 
+def test_a_tall_narrow_part_has_its_id_turned_along_it():
+    """A web strip on a nested sheet (25 x 400 pt) is too narrow for an upright id: it is drawn turned,
+    bottom to top, and its ink stays inside the strip."""
+    from fabricate.report.pictures import _id_patch, outline_label_sizes, upright_or_turned
+
+    w, h, ids = np.array([25.0, 600.0]), np.array([400.0, 400.0]), ["B0137.1", "P0001"]
+    fs, turned = upright_or_turned(w, h, ids)
+    assert outline_label_sizes(w, h, ids)[0] < fs[0] and list(turned) == [True, False]
+    ext = _id_patch([(ids[0], np.zeros(2), fs[0], True)]).get_path().get_extents()
+    assert ext.height > ext.width and ext.width <= w[0] and ext.height <= 0.9 * h[0]
+    up = _id_patch([(ids[0], np.zeros(2), fs[0])]).get_path().get_extents()
+    assert ext.width == pytest.approx(up.height) and ext.height == pytest.approx(up.width)
+
+
 def test_sheet_and_plan_pictures_come_from_the_nested_cut_files(tmp_path):
     """sheets.png draws the real nesting of the cut files (the same Layout the DXF is written from):
     the fullest glass and steel sheet, every part on it placed inside the sheet's margin."""

@@ -224,20 +224,32 @@ def glyph_extent(text: str) -> tuple[float, float]:
     return (0.0, 0.0) if run is None else tuple(float(v) for v in np.ptp(run[0], axis=0))
 
 
-def _id_patch(labels: list[tuple[str, np.ndarray, float]]):
-    """One patch of every id as glyph outlines in data units (mm): ``[(text, centre (2,), height mm)]``.
+def upright_or_turned(widths_pt: np.ndarray, heights_pt: np.ndarray, ids: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Font sizes ``(p,)`` as :func:`outline_label_sizes` and ``turned (p,) bool``: the id reads along
+    the part's long side (turned a quarter, bottom to top) where that gives it a larger size, as on a
+    tall narrow strip of a nested sheet."""
+    upright = outline_label_sizes(widths_pt, heights_pt, ids)
+    turned = outline_label_sizes(heights_pt, widths_pt, ids)
+    turn = turned > upright
+    return np.where(turn, turned, upright), turn
+
+
+def _id_patch(labels: list[tuple]):
+    """One patch of every id as glyph outlines in data units (mm): ``[(text, centre (2,), height mm)]``,
+    or ``(text, centre, height, turned)`` (turned: read bottom to top).
     Thousands of ``ax.text`` take seconds to lay out; glyphs are made once per character and one
     compound path draws at once.  Each id's ink is centred on ``centre``: its box is ``centre`` plus or
-    minus half of :func:`glyph_extent` times its size."""
+    minus half of :func:`glyph_extent` times its size (width and height swapped when turned)."""
     from matplotlib.patches import PathPatch
     from matplotlib.path import Path as MPath
 
     verts, codes = [], []
-    for text, centre, size in labels:
+    for text, centre, size, *turned in labels:
         run = _glyph_run(text)
         if run is None:
             continue
-        verts.append(run[0] * size + centre)
+        V = run[0][:, ::-1] * (-1.0, 1.0) if turned and turned[0] else run[0]   # (x, y) -> (-y, x)
+        verts.append(V * size + centre)
         codes.append(run[1])
     path = MPath(np.concatenate(verts), np.concatenate(codes)) if verts else MPath(np.zeros((0, 2)))
     return PathPatch(path, facecolor="k", edgecolor="none", lw=0)

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .pictures import MAX_SHEET_INCH, _figure, _id_patch, _save, outline_label_sizes
+from .pictures import MAX_SHEET_INCH, _figure, _id_patch, _save, upright_or_turned
 
 SHEET_INCH = 11.0
 """Width of one drawn sheet (inches)."""
@@ -93,8 +93,8 @@ def picture_sheets(sheets: list[dict], path: str | Path, *, title: str) -> Path:
         lo = np.array([q.min(axis=0) for q in polys])
         size = np.array([q.max(axis=0) for q in polys]) - lo
         ids = [pid for pid, _ in s["outlines"]]
-        fs = outline_label_sizes(size[:, 0] * pt, size[:, 1] * pt, ids)
-        labels = [(pid, lo_ + 0.5 * sz, f / pt) for pid, lo_, sz, f in zip(ids, lo, size, fs) if f > 0]
+        fs, turned = upright_or_turned(size[:, 0] * pt, size[:, 1] * pt, ids)
+        labels = [(pid, lo_ + 0.5 * sz, f / pt, t) for pid, lo_, sz, f, t in zip(ids, lo, size, fs, turned) if f > 0]
         if labels:
             ax.add_artist(_id_patch(labels))
         ax.set_xlim(-0.01 * W, 1.01 * W)
