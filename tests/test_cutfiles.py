@@ -90,3 +90,20 @@ def test_to_build123d_is_a_labelled_assembly_of_the_exact_solids(parts):
     for p in list(parts)[::9]:
         s = by_label[p.id]
         assert s.is_valid and s.volume == pytest.approx(p.volume_mm3, rel=1e-9)
+
+
+def test_a_layout_is_made_once_per_parts_and_arguments(parts):
+    """The DXF and the SVG share one layout of the same parts (rectpack runs once); it is the layout a
+    fresh computation gives, read-only; other arguments or other parts get their own."""
+    from fabricate.export import nesting
+
+    lay = nesting.layout(parts)
+    assert nesting.layout(parts, None, 10.0) is lay
+    fresh = nesting._layout(parts, None, 10.0, None, True, ("panel", "beam"), None, "S")
+    for name in ("group", "index", "sheet", "x", "y", "rotated", "utilisation"):
+        assert np.array_equal(getattr(lay, name), getattr(fresh, name))
+        with pytest.raises(ValueError):
+            getattr(lay, name)[:1] = 0
+    assert nesting.layout(parts, spacing=20.0) is not lay
+    assert nesting.layout(parts, spacing=20.0).x.min() == pytest.approx(20.0)
+    assert nesting.layout(build_parts(dome_structure(n_around=6, k=3), PartSpec(glass_thickness=8.0))) is not lay

@@ -17,9 +17,14 @@ Without a sheet the outlines go on one strip about as wide as the square root
 of their total rectangle area (a drawing, not a cutting plan), packed the same
 way.  Above :data:`FAST_ABOVE` parts a sheet only tries the last open sheet
 (``PackingBin.BNF``: linear time, a few more sheets).
+
+A layout is computed once per parts object and arguments (:data:`_LAYOUTS`): the DXF and the SVG of the
+same outlines draw the same layout, and rectpack takes seconds on ten thousand plates.  Its arrays are
+read-only.
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +32,8 @@ import numpy as np
 from optimize.errors import ConfigError
 
 FAST_ABOVE = 4000
+_LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""``{parts: {arguments: Layout}}``: the layouts made of each (immutable) parts object, while it lives."""
 
 
 @dataclass(frozen=True)
@@ -89,6 +96,19 @@ def layout(parts, sheet: tuple[float, float] | None = None, spacing: float = 10.
     rotation : parts may turn by 90 degrees; thickness : only parts of this thickness.
     Raises ConfigError naming the part that cannot fit the sheet.
     """
+    key = (None if sheet is None else tuple(float(s) for s in sheet), float(spacing),
+           None if kerf is None else float(kerf), bool(rotation), tuple(kinds),
+           None if thickness is None else float(thickness), name)
+    try:
+        known = _LAYOUTS.setdefault(parts, {})
+    except TypeError:  # not weak-referenceable: no cache
+        known = {}
+    if key not in known:
+        known[key] = _layout(parts, sheet, spacing, kerf, rotation, kinds, thickness, name)
+    return known[key]
+
+
+def _layout(parts, sheet, spacing, kerf, rotation, kinds, thickness, name) -> Layout:
     import rectpack
 
     margin = float(spacing)
@@ -145,6 +165,8 @@ def layout(parts, sheet: tuple[float, float] | None = None, spacing: float = 10.
     algorithm = (f"rectpack {getattr(rectpack, '__version__', '')} guillotine best short side fit, parts by area, "
                  f"{'next-fit' if fast else 'every open sheet tried'}; rotation "
                  f"{'allowed' if rotation else 'not allowed'}").replace("rectpack  ", "rectpack ")
+    for a in (gidx, pidx, sheet_of, x, y, rotated, util):
+        a.setflags(write=False)
     return Layout(ids=ids, group=gidx, index=pidx, sheet=sheet_of, x=x, y=y, rotated=rotated,
                   size=(float(W), float(H)), sheets=n_sheets, utilisation=util, algorithm=algorithm,
                   nested=nested, margin=margin, kerf=kerf, name=name)
