@@ -109,14 +109,19 @@ def test_a_layout_is_made_once_per_parts_and_arguments(parts):
     assert nesting.layout(build_parts(dome_structure(n_around=6, k=3), PartSpec(glass_thickness=8.0))) is not lay
 
 
+@pytest.mark.parametrize("numpy_from", [0, 48, 10**9])
 @pytest.mark.parametrize("bin_algo", ["BFF", "BNF"])
 @pytest.mark.parametrize("rotation", [True, False])
-def test_faster_guillotine_places_every_rectangle_where_rectpack_does(bin_algo, rotation):
+def test_faster_guillotine_places_every_rectangle_where_rectpack_does(bin_algo, rotation, numpy_from, monkeypatch):
     """Seeded random rectangles (many of equal sizes: ties and merged free sections) on sheets and on
-    a strip: the placements of :mod:`fabricate.export.guillotine` are rectpack's own, rectangle by rectangle."""
+    a strip: the placements of :mod:`fabricate.export.guillotine` are rectpack's own, rectangle by
+    rectangle, with its numpy loops always, from 48 free sections on (the default) and never."""
     import rectpack
 
+    from fabricate.export import guillotine
     from fabricate.export.guillotine import GuillotineBssfSas
+
+    monkeypatch.setattr(guillotine, "NUMPY_FROM", numpy_from)
 
     rng = np.random.default_rng(7)
     sizes = np.concatenate([rng.integers(5, 400, (300, 2)), np.repeat([[100, 40], [40, 100], [250, 250]], 40, 0)])
