@@ -115,3 +115,64 @@ def test_to_build123d_is_a_labelled_assembly_of_the_exact_solids(parts):
     for p in list(parts)[::9]:
         s = by_label[p.id]
         assert s.is_valid and s.volume == pytest.approx(p.volume_mm3, rel=1e-9)
+
+
+def test_a_layout_is_made_once_per_parts_and_arguments(parts):
+    """The DXF and the SVG share one layout of the same parts (rectpack runs once); it is the layout a
+    fresh computation gives, read-only; other arguments or other parts get their own."""
+    from fabricate.export import nesting
+
+    lay = nesting.layout(parts)
+    assert nesting.layout(parts, None, 10.0) is lay
+    fresh = nesting._layout(parts, None, 10.0, None, True, ("panel", "beam"), None, "S")
+    for name in ("group", "index", "sheet", "x", "y", "rotated", "utilisation"):
+        assert np.array_equal(getattr(lay, name), getattr(fresh, name))
+        with pytest.raises(ValueError):
+            getattr(lay, name)[:1] = 0
+    assert nesting.layout(parts, spacing=20.0) is not lay
+    assert nesting.layout(parts, spacing=20.0).x.min() == pytest.approx(20.0)
+    assert nesting.layout(build_parts(dome_structure(n_around=6, k=3), PartSpec(glass_thickness=8.0))) is not lay
+
+
+@pytest.mark.parametrize("numpy_from", [0, 48, 10**9])
+@pytest.mark.parametrize("bin_algo", ["BFF", "BNF"])
+@pytest.mark.parametrize("rotation", [True, False])
+def test_faster_guillotine_places_every_rectangle_where_rectpack_does(bin_algo, rotation, numpy_from, monkeypatch):
+    """Seeded random rectangles (many of equal sizes: ties and merged free sections) on sheets and on
+    a strip: the placements of :mod:`fabricate.export.guillotine` are rectpack's own, rectangle by
+    rectangle, with its numpy loops always, from 48 free sections on (the default) and never."""
+    import rectpack
+
+    from fabricate.export import guillotine
+    from fabricate.export.guillotine import GuillotineBssfSas
+
+    monkeypatch.setattr(guillotine, "NUMPY_FROM", numpy_from)
+
+    rng = np.random.default_rng(7)
+    sizes = np.concatenate([rng.integers(5, 400, (300, 2)), np.repeat([[100, 40], [40, 100], [250, 250]], 40, 0)])
+    for bins in ([(1000, 600, float("inf"))], [(5000, 100000, 1)]):
+        placed = []
+        for algo in (rectpack.GuillotineBssfSas, GuillotineBssfSas):
+            packer = rectpack.newPacker(mode=rectpack.PackingMode.Offline, rotation=rotation, pack_algo=algo,
+                                        sort_algo=rectpack.SORT_AREA, bin_algo=getattr(rectpack.PackingBin, bin_algo))
+            for i, (w, h) in enumerate(sizes.tolist()):
+                packer.add_rect(w, h, rid=i)
+            for W, H, count in bins:
+                packer.add_bin(W, H, count=count)
+            packer.pack()
+            placed.append(sorted(packer.rect_list(), key=lambda r: r[5]))
+        assert len(placed[0]) == len(sizes) and placed[1] == placed[0]
+
+
+def test_layouts_of_the_parts_are_rectpacks(parts):
+    import rectpack
+
+    from fabricate.export import nesting
+
+    for args in ((None, 10.0, None, True, ("panel", "beam"), None, "S"),
+                 ((12000.0, 2500.0), 10.0, 3.0, True, ("beam",), None, "B"),
+                 ((12000.0, 2500.0), 10.0, 3.0, False, ("beam",), None, "B")):
+        ours, theirs = nesting._layout(parts, *args), nesting._layout(parts, *args, algo=rectpack.GuillotineBssfSas)
+        assert ours.sheets == theirs.sheets and ours.size == theirs.size
+        for name in ("sheet", "x", "y", "rotated", "utilisation"):
+            assert np.array_equal(getattr(ours, name), getattr(theirs, name))

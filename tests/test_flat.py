@@ -158,3 +158,20 @@ def test_a_wrong_bevel_in_flat_json_fails_the_check(tmp_path):
     (tmp_path / "flat.json").write_text(json.dumps(doc))
     res = check_flat(tmp_path / "flat.json", bom, meshes=meshes)
     assert not res["pass"] and res["failures"][0]["id"] == doc["groups"][-1]["ids"][0]
+
+
+def test_hausdorff_of_all_parts_at_once_equals_one_at_a_time():
+    """check_flat's batched Hausdorff bound (parts grouped by corner count, face loops with repeated
+    corners) gives what one part at a time on the distinct corners gives."""
+    from fabricate.export.flatdata import _hausdorff, _hausdorff_all
+
+    rng = np.random.default_rng(4)
+    X = rng.normal(size=(9, 8, 3)) * 100
+    corners = [None if i == 4 else X[i][rng.integers(0, 8, 24 if i % 2 else 30)] + rng.normal(size=3) * 1e-3
+               for i in range(9)]
+    got = _hausdorff_all(X, corners)
+    assert got[4] is None
+    for i, B in enumerate(corners):
+        if B is not None:
+            assert got[i] == _hausdorff(X[i], np.unique(B, axis=0))
+            assert got[i] > 1e-4

@@ -17,9 +17,15 @@ Without a sheet the outlines go on one strip about as wide as the square root
 of their total rectangle area (a drawing, not a cutting plan), packed the same
 way.  Above :data:`FAST_ABOVE` parts a sheet only tries the last open sheet
 (``PackingBin.BNF``: linear time, a few more sheets).
+
+rectpack's guillotine class runs with its two inner loops rewritten (:mod:`fabricate.export.guillotine`:
+the same placements, 2 to 5 times faster).  A layout is computed once per parts object and arguments (:data:`_LAYOUTS`): the DXF and the SVG of the
+same outlines draw the same layout, and rectpack takes seconds on ten thousand plates.  Its arrays are
+read-only.
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +33,8 @@ import numpy as np
 from optimize.errors import ConfigError
 
 FAST_ABOVE = 4000
+_LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""``{parts: {arguments: Layout}}``: the layouts made of each (immutable) parts object, while it lives."""
 
 
 @dataclass(frozen=True)
@@ -96,7 +104,24 @@ def layout(parts, sheet: tuple[float, float] | None = None, spacing: float = 10.
     rotation : parts may turn by 90 degrees; thickness : only parts of this thickness.
     Raises ConfigError naming the part that cannot fit the sheet.
     """
+    key = (None if sheet is None else tuple(float(s) for s in sheet), float(spacing),
+           None if kerf is None else float(kerf), bool(rotation), tuple(kinds),
+           None if thickness is None else float(thickness), name)
+    try:
+        known = _LAYOUTS.setdefault(parts, {})
+    except TypeError:  # not weak-referenceable: no cache
+        known = {}
+    if key not in known:
+        known[key] = _layout(parts, sheet, spacing, kerf, rotation, kinds, thickness, name)
+    return known[key]
+
+
+def _layout(parts, sheet, spacing, kerf, rotation, kinds, thickness, name, algo=None) -> Layout:
+    """:func:`layout` without the cache; ``algo``: the packing algorithm class (default
+    :class:`fabricate.export.guillotine.GuillotineBssfSas`, rectpack's placements)."""
     import rectpack
+
+    from .guillotine import GuillotineBssfSas
 
     margin = float(spacing)
     kerf = margin if kerf is None else float(kerf)
@@ -129,7 +154,7 @@ def layout(parts, sheet: tuple[float, float] | None = None, spacing: float = 10.
         W = bw + 2 * margin - kerf
     fast = len(rect) > FAST_ABOVE
     packer = rectpack.newPacker(mode=rectpack.PackingMode.Offline, rotation=rotation,
-                                pack_algo=rectpack.GuillotineBssfSas, sort_algo=rectpack.SORT_AREA,
+                                pack_algo=algo or GuillotineBssfSas, sort_algo=rectpack.SORT_AREA,
                                 bin_algo=rectpack.PackingBin.BNF if fast else rectpack.PackingBin.BFF)
     for i in range(len(rect)):  # rectpack takes one rectangle per call
         packer.add_rect(int(w[i]), int(h[i]), rid=i)
@@ -152,6 +177,8 @@ def layout(parts, sheet: tuple[float, float] | None = None, spacing: float = 10.
     algorithm = (f"rectpack {getattr(rectpack, '__version__', '')} guillotine best short side fit, parts by area, "
                  f"{'next-fit' if fast else 'every open sheet tried'}; rotation "
                  f"{'allowed' if rotation else 'not allowed'}").replace("rectpack  ", "rectpack ")
+    for a in (gidx, pidx, sheet_of, x, y, rotated, util):
+        a.setflags(write=False)
     return Layout(ids=ids, group=gidx, index=pidx, sheet=sheet_of, x=x, y=y, rotated=rotated,
                   size=(float(W), float(H)), sheets=n_sheets, utilisation=util, algorithm=algorithm,
                   nested=nested, margin=margin, kerf=kerf, name=name)

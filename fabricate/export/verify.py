@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .separation import overlapping_boxes, separated
+
 
 def face_polygons(shape) -> list[np.ndarray]:
     """Outer-wire corner loops ``(k, 3)`` of every face of an OCC solid, in wire order
@@ -100,27 +102,6 @@ def match_outline(outline: np.ndarray, faces: list[np.ndarray]) -> tuple[int, fl
     best = int(np.argmin(err))
     a3, _ = polygon_measures(P[best % len(idx)])
     return idx[best % len(idx)], abs(a3 - a2) / max(a3, 1e-300), float(err[best])
-
-
-def overlapping_boxes(lo: np.ndarray, hi: np.ndarray, pad: float = 0.0) -> np.ndarray:
-    """(q, 2) int pairs ``i < j`` whose bounding boxes ``lo, hi (p, 3)`` overlap (sweep and prune
-    along the axis with the fewest candidate pairs)."""
-    best = None
-    for ax in range(lo.shape[1] if lo.ndim == 2 and len(lo) else 1):
-        order = np.argsort(lo[:, ax], kind="stable")
-        end = np.searchsorted(lo[order, ax], hi[order, ax] + pad, side="right")
-        count = np.maximum(end - (np.arange(len(order)) + 1), 0)
-        if best is None or count.sum() < best[1].sum():
-            best = (order, count)
-    order, count = best
-    start = np.arange(len(order)) + 1
-    i = np.repeat(np.arange(len(order)), count)
-    j = start[i] + (np.arange(count.sum()) - np.repeat(np.cumsum(count) - count, count))
-    a, b = order[i], order[j]
-    for ax in range(lo.shape[1]):                  # one axis at a time: fewer pairs to gather each time
-        keep = (lo[a, ax] <= hi[b, ax] + pad) & (lo[b, ax] <= hi[a, ax] + pad)
-        a, b = a[keep], b[keep]
-    return np.stack([np.minimum(a, b), np.maximum(a, b)], axis=1)
 
 
 class Solid:
@@ -223,31 +204,19 @@ def solids_of(objects: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, So
 
 def _separated(solids: list[Solid], a: np.ndarray, b: np.ndarray, tol: float, hull: bool) -> np.ndarray:
     """``(q,) bool``: a supporting plane of ``solids[a]`` has all of ``solids[b]`` outside (within
-    ``tol``): :meth:`Solid.separates` for every pair at once (planes and vertices padded).  With
-    ``hull`` False only face planes with the whole part on one side are tried (no convex hull)."""
+    ``tol``): :meth:`Solid.separates` for every pair at once (pairs bucketed by plane and vertex
+    counts, :func:`fabricate.export.separation.separated`).  With ``hull`` False only face planes with
+    the whole part on one side are tried (no convex hull)."""
     if not len(a):
         return np.zeros(0, bool)
-    used = np.unique(np.concatenate([a, b]))
-    k = np.full(len(solids), -1, np.int64)
-    k[used] = np.arange(len(used))
-    S = [solids[i] for i in used.tolist()]
-    planes = [s.support_planes if hull else s.face_support for s in S]
-    P = max(1, max(len(n) for n, _ in planes))
-    Q = max(len(s.V) for s in S)
-    Np = np.zeros((len(S), P, 3))
-    Cp = np.full((len(S), P), np.inf)                          # a padded plane separates nothing
-    Vp = np.zeros((len(S), Q, 3))
-    for i, ((n, c), s) in enumerate(zip(planes, S)):
-        Np[i, :len(n)], Cp[i, :len(n)] = n, c
-        Vp[i, :len(s.V)], Vp[i, len(s.V):] = s.V, s.V[0]       # a repeated vertex changes no minimum
-    a, b = k[a], k[b]
-    out = np.zeros(len(a), bool)
-    step = max(1, 4_000_000 // (P * Q))
-    for i in range(0, len(a), step):                           # chunks of pairs: bounded memory
-        sa, sb = a[i:i + step], b[i:i + step]
-        d = np.matmul(Np[sa], Vp[sb].transpose(0, 2, 1)) - Cp[sa][:, :, None]
-        out[i:i + step] = (d.min(axis=2) >= -tol).any(axis=1)
-    return out
+    used = np.unique(np.concatenate([a, b])).tolist()
+    planes: list = [None] * len(solids)
+    corners: list = [None] * len(solids)
+    for i in used:
+        s = solids[i]
+        planes[i] = s.support_planes if hull else s.face_support
+        corners[i] = s.V
+    return separated(planes, corners, a, b, tol)
 
 
 def intersections(solids: list[Solid], linear_tol: float) -> dict:

@@ -1,0 +1,162 @@
+"""rectpack's guillotine packer (best short side fit, short axis split), its loops over free sections in numpy.
+
+:class:`GuillotineBssfSas` places every rectangle exactly where
+``rectpack.GuillotineBssfSas`` places it: the same free sections in the same
+order, the same choice among them (the first of the best fits, unrotated ones
+before rotated ones), the same merging of free sections.  What changes is the
+cost of the loops over the free sections, which grow into the thousands on
+one drawing strip of ten thousand plates: rectpack evaluates the fitness of
+each section twice in generator expressions, merges a new section with every
+section through ``Rectangle.join`` (three method calls and six property
+lookups per pair) and removes the chosen one by ``list.remove`` (a Python
+``__eq__`` per section before it).  Here the coordinates of the sections are
+mirrored in a numpy array: the best fit is an ``argmin``, the sections a new
+one touches are found at once and only those go through the join rules, in
+list order, and the chosen section is removed by its index (equal sections
+never coexist: merging drops a section that another contains).
+
+Imported by :func:`fabricate.export.nesting.layout` only (rectpack stays a
+lazy import); ``tests/test_cutfiles.py`` compares its placements with
+rectpack's own class.
+"""
+from __future__ import annotations
+
+import numpy as np
+import rectpack
+from rectpack.geometry import Rectangle
+from rectpack.pack_algo import PackingAlgorithm
+
+NUMPY_FROM = 48
+"""From this many free sections on, the loops run in numpy (below, plain loops are faster)."""
+
+
+class GuillotineBssfSas(rectpack.GuillotineBssfSas):
+    """``rectpack.GuillotineBssfSas`` over a numpy mirror ``_xywh (n, 4)`` of its free sections (same placements)."""
+
+    def reset(self):
+        PackingAlgorithm.reset(self)
+        self._xywh = np.zeros((64, 4))
+        self._sections = []
+        self._add_section(Rectangle(0, 0, self.width, self.height))
+
+    def _push(self, s) -> None:
+        n = len(self._sections)
+        if n == len(self._xywh):
+            self._xywh = np.concatenate([self._xywh, np.zeros_like(self._xywh)])
+        self._xywh[n] = (s.x, s.y, s.width, s.height)
+        self._sections.append(s)
+
+    def _drop(self, idx: list[int]) -> None:
+        """Remove the sections at the increasing indices ``idx``."""
+        n = len(self._sections)
+        keep = np.ones(n, bool)
+        keep[idx] = False
+        self._xywh[:n - len(idx)] = self._xywh[:n][keep]
+        for i in reversed(idx):
+            del self._sections[i]
+
+    def _fittest(self, w, h) -> tuple[int | None, bool]:
+        """Index of the free section of least fitness ``min(section w - w, section h - h)``, the first such
+        in list order, unrotated fits before rotated ones (rectpack's ``min`` over the chained fits)."""
+        secs = self._sections
+        best, idx, rot = None, None, False
+        if len(secs) < NUMPY_FROM:                       # a few sections: a plain loop is faster
+            for i, s in enumerate(secs):
+                sw, sh = s.width, s.height
+                if w <= sw and h <= sh:
+                    f = min(sw - w, sh - h)
+                    if best is None or f < best:
+                        best, idx = f, i
+            if self.rot:
+                for i, s in enumerate(secs):
+                    sw, sh = s.width, s.height
+                    if h <= sw and w <= sh:
+                        f = min(sw - h, sh - w)
+                        if best is None or f < best:
+                            best, idx, rot = f, i, True
+            return idx, rot
+        A = self._xywh[:len(secs)]
+        W, H = A[:, 2], A[:, 3]
+        ok = (w <= W) & (h <= H)
+        if ok.any():
+            f = np.where(ok, np.minimum(W - w, H - h), np.inf)
+            idx = int(np.argmin(f))
+            best = f[idx]
+        if self.rot:
+            ok = (h <= W) & (w <= H)
+            if ok.any():
+                f = np.where(ok, np.minimum(W - h, H - w), np.inf)
+                j = int(np.argmin(f))
+                if best is None or f[j] < best:
+                    idx, rot = j, True
+        return idx, rot
+
+    def _select_fittest_section(self, w, h):
+        idx, rot = self._fittest(w, h)
+        return (None, None) if idx is None else (self._sections[idx], rot)
+
+    def add_rect(self, width, height, rid=None):
+        assert width > 0 and height > 0
+        idx, rotated = self._fittest(width, height)
+        if idx is None:
+            return None
+        if rotated:
+            width, height = height, width
+        section = self._sections[idx]
+        self._drop([idx])
+        self._split(section, width, height)
+        rect = Rectangle(section.x, section.y, width, height, rid)
+        self.rectangles.append(rect)
+        return rect
+
+    def _add_section(self, section):
+        """Merge ``section`` with the free sections as rectpack does (passes over the list in order until
+        one changes nothing; a section it contains is dropped, one containing it or sharing a full edge
+        with it is joined into it), then append it.  Only sections touching the current box can join:
+        those are found with numpy and go through ``Rectangle.join``'s rules one by one."""
+        section.rid = 0
+        if self._merge and self._sections:
+            x, y, w, h = section.x, section.y, section.width, section.height
+            before = -1
+            while self._sections and before != len(self._sections):
+                before = len(self._sections)
+                A = self._xywh[:before]
+                drop: list[int] = []
+                pos = 0
+                while pos < before:
+                    if before - pos < NUMPY_FROM:              # a few sections: every one through the rules
+                        near = range(pos, before)
+                    else:
+                        sub = A[pos:]
+                        apart = ((y > sub[:, 1] + sub[:, 3]) | (y + h < sub[:, 1]) | (x > sub[:, 0] + sub[:, 2])
+                                 | (x + w < sub[:, 0]))
+                        near = (np.flatnonzero(~apart) + pos).tolist()
+                    grown = False
+                    for t in near:
+                        s = self._sections[t]
+                        ox, oy, ow, oh = s.x, s.y, s.width, s.height
+                        if oy >= y and ox >= x and oy + oh <= y + h and ox + ow <= x + w:
+                            drop.append(t)                         # section contains s
+                            continue
+                        if y > oy + oh or y + h < oy or x > ox + ow or x + w < ox:
+                            continue                               # apart, not even touching: kept
+                        if y >= oy and x >= ox and y + h <= oy + oh and x + w <= ox + ow:
+                            x, y, w, h = ox, oy, ow, oh            # s contains section
+                        elif x == ox and w == ow:                  # above or below, same width
+                            lo, hi = min(y, oy), max(y + h, oy + oh)
+                            y, h = lo, hi - lo
+                        elif y == oy and h == oh:                  # left or right, same height
+                            lo, hi = min(x, ox), max(x + w, ox + ow)
+                            x, w = lo, hi - lo
+                        else:
+                            continue                               # touching: kept
+                        drop.append(t)
+                        grown = True                               # the box changed: look again after t
+                        pos = t + 1
+                        break
+                    if not grown:
+                        break
+                if drop:
+                    self._drop(drop)
+            section.x, section.y, section.width, section.height = x, y, w, h
+        self._push(section)
