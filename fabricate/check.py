@@ -34,8 +34,8 @@ with it:
   audits the whole file), units mm, one CUT outline (id in XDATA) and
   one ETCH id per part cut from sheet (panel, beam, hub cap), and each outline has the area
   (``tol.file_area``, ``1e-9`` relative) and the edge lengths (``tol.file_edge_mm``, ``1e-6`` mm) of
-  the flat data's outline
-  with the same id (without ``flat.json``: a face of the STEP solid).
+  the flat data's outline with the same id, a BOM row's (without ``flat.json``: its area
+  against the BOM's).
 - ``svg``: parses, one group per part cut from sheet.
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
   element / object / file per BOM row with the same id; IFC schema-valid with the volume of
@@ -164,8 +164,8 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
         ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
         ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
         ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
-        ("dxf", "dxf", "step", lambda: (_check_dxf(paths["dxf"], bom, read["step"], paths["flat"],
-                                                   None if step_reader == "occ" else "text", tol), None)),
+        ("dxf", "dxf", None, lambda: (_check_dxf(paths["dxf"], bom, paths["flat"],
+                                                 None if step_reader == "occ" else "text", tol), None)),
         ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
         ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
                                                                  full="ifc_geometry" not in skip,
@@ -434,10 +434,11 @@ def _check_flat(path, bom, read):
     return check_flat(path, bom, step_solids=read.get("step"), meshes=read.get("3mf"))
 
 
-def _check_dxf(path, bom, solids_step, flat_path=None, reader=None, tol: Tolerances = DEFAULT):
+def _check_dxf(path, bom, flat_path=None, reader=None, tol: Tolerances = DEFAULT):
     """CUT outlines against the flat data's outlines (which the flat check holds to the STEP solids),
     or, without flat.json, their areas against the BOM's (a beam's true outline, V ends and ridge
-    included, is not a face of its solid).
+    included, is not a face of its solid).  Every outline's id must be a BOM row's (the STEP check
+    holds the solids' names to the same rows), so the DXF is read without waiting for the STEP.
 
     ``reader``: ``"text"`` (the independent DXF reader, linted) or None (ezdxf loads and audits)."""
     from .export.verify import match_outline
@@ -459,12 +460,12 @@ def _check_dxf(path, bom, solids_step, flat_path=None, reader=None, tol: Toleran
             outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
     outlines, facts = read_outlines(path)
     flat = [r["id"] for r in bom if cut_from_sheet(r["kind"], r.get("member", ""))]
+    rows = {r["id"] for r in bom}
     missing = sorted(set(flat) - set(outlines))
     worst_a, worst_e, worst_id, failures = 0.0, 0.0, None, []
     for pid, Q in outlines.items():  # one outline per part
-        shape = solids_step.get(pid)
-        if shape is None:
-            failures.append({"id": pid, "error": "no STEP solid of that name"})
+        if pid not in rows:
+            failures.append({"id": pid, "error": "no BOM row of that id"})
             continue
         if pid not in outline_of:
             failures.append({"id": pid, "error": "not in flat.json"})

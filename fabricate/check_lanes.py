@@ -3,11 +3,11 @@ IFC check in another, the others in this one, at the same time.
 
 The text reader's STEP check is the longest single check of a big run (a 165 MB file: about
 4 s of CPU); nothing else waits for it but the flat data check (which compares each part with
-its STEP solid) and the DXF check (which looks up every outline's solid by name).  The IFC
+its STEP solid).  The IFC
 check's schema validation (ifcopenshell's, in Python: about 10 s for the railway station's
 12,000 elements) needs nothing else.  So each group of :data:`LANES` whose file is big enough
 runs in a child (``python -c 'from fabricate.check_lanes import main; main()'``) while this
-process runs the 3MF, STL, intersection, bearing, SVG, 3dm and NC1 checks; the children's
+process runs the 3MF, STL, intersection, bearing, DXF, SVG, 3dm and NC1 checks; the children's
 results are merged in the usual order.  The results are the same as one lane's (a test holds
 it so): a child runs :func:`fabricate.check._check_outputs` itself, on the same files, with the
 same readers.
@@ -28,7 +28,7 @@ import sys
 from pathlib import Path
 
 log = logging.getLogger(__name__)
-LANES = ((frozenset({"step", "flat", "dxf"}), "step"), (frozenset({"ifc"}), "ifc"))
+LANES = ((frozenset({"step", "flat"}), "step"), (frozenset({"ifc"}), "ifc"))
 """Checks run together in a child, and the key (of ``fabricate.check.FILES``) of the file whose size decides."""
 LANE_BYTES = {"step": 16 << 20, "ifc": 4 << 20}
 

@@ -60,6 +60,7 @@ def test_a_broken_step_file_reads_the_same_in_the_child(run_dir, tmp_path, monke
     assert one["checks"]["step"]["pass"] is False and "error" in one["checks"]["step"]
     assert _without_seconds(two) == _without_seconds(one)
     assert two["checks"]["flat"]["against"] == "3mf"                # no solids: the flat data against the 3MF
+    assert two["checks"]["dxf"]["pass"] is True                     # the DXF does not wait for the STEP
 
 
 @pytest.mark.parametrize("how", ["no interpreter", "fails", "garbage"])
