@@ -121,14 +121,14 @@ class RunState:
     defects: dict = field(default_factory=dict)
 
 
+DEFECTS = {"planarity": measures.planarity, "conical": measures.conical_defect,
+           "circular": measures.circular_defect}
+
+
 def target_defects(form: Formulation, V: np.ndarray) -> dict[str, np.ndarray]:
-    """The measured defects the target must bring under tolerance, ``name -> (k,)``."""
-    out = {"planarity": measures.planarity(form.mesh, V)}
-    if form.target == "conical":
-        out["conical"] = measures.conical_defect(form.mesh, V)
-    if form.target == "circular":
-        out["circular"] = measures.circular_defect(form.mesh, V)
-    return out
+    """The measured defects the target must bring under tolerance, ``name -> (k,)``: those the
+    problem description tests (``form.spec.tests``)."""
+    return {name: DEFECTS[name](form.mesh, V) for name in form.spec.tests}
 
 
 def _score(defects: dict, tol: Tolerances) -> float:
