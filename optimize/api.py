@@ -27,7 +27,7 @@ from .solvers.guided import Convex, Glide, solve
 from .terms import convexity
 from .terms import fixed as fixed_mod
 from .terms.formulation import Formulation
-from .terms.problem import describe, resolve_formulation  # noqa: F401 (resolve_formulation re-exported)
+from .terms.problem import GLIDE_EDGE_FLOOR, describe, resolve_formulation  # noqa: F401 (re-exported)
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
@@ -39,7 +39,6 @@ NO_CONVEX_FOLD_ADVICE = ("run with convexity kept (drop --no-convex / convex=Fal
 
 HELD_ADVICE = ("what helps: remeshing along principal directions (--remesh auto, input.remesh: auto), "
                "or the paper's penalty method (--method penalty), which sometimes finds one")
-GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
 
 
 def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DEFAULTS.method,
@@ -126,7 +125,8 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
                               f"({pardiso.load_error()}); install the 'mkl' package or use 'auto' / 'superlu'")
     t0 = time.perf_counter()
     spec = describe(mesh, target, "default", formulation=formulation, beams=torsion_free_beams, fixed=fixed,
-                    glide_boundary=glide_boundary, fairness=fairness, closeness=closeness, reference=reference)
+                    glide_boundary=glide_boundary, convex=convex, fairness=fairness, closeness=closeness,
+                    reference=reference)
     centre, h = spec.centre, spec.scale
     norm = spec.normalized()
     ref_mesh = reference if reference is not None else mesh
@@ -134,18 +134,16 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     ref = Reference(ref_norm)
     _check_meetable(mesh, target, fixed, fixed_mod.resolve(mesh, fixed), tol)
     fixed_idx = spec.fixed  # with a gliding boundary, its corners too
+    listed = {t.module for t in spec.terms}
     glide = None
-    if glide_boundary:
-        bnd = np.setdiff1d(np.nonzero(mesh.topology.is_boundary_vertex)[0], fixed_idx)
-        if bnd.size:
-            E = mesh.topology.edges
-            at = mesh.topology.is_boundary_edge & np.isin(E, bnd).any(1)  # a gliding vertex cannot slide onto its neighbour
-            floor = GLIDE_EDGE_FLOOR * np.linalg.norm(norm.V[E[at, 0]] - norm.V[E[at, 1]], axis=1)
-            glide = Glide(bnd, BoundaryCurve(ref_norm), E[at], floor)
+    if "glide" in listed:  # the vertices and edges the description chose; the curve and floors here
+        E = spec.sets["glide_edges"]
+        floor = GLIDE_EDGE_FLOOR * np.linalg.norm(norm.V[E[:, 0]] - norm.V[E[:, 1]], axis=1)
+        glide = Glide(spec.sets["glide"], BoundaryCurve(ref_norm), E, floor)
     form = Formulation(norm, target, spec=spec)
     x0 = form.start(norm.V)
     keep = None
-    if convex:
+    if "convexity" in listed:
         corners, floor = convexity.floors(norm, norm.V, tol.fold)
         keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0

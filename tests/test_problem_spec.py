@@ -128,3 +128,19 @@ def test_bad_descriptions_name_the_key():
         describe(tri, "pq", "penalty", mu=1.0)
     with pytest.raises(MeshError, match="strip"):
         describe(shapes.grid(3, 3), "strip", "penalty")
+
+
+def test_default_lists_gliding_and_convexity_after_the_target_rows():
+    m = shapes.perturbed(shapes.grid(5, 4, size=(4.0, 3.0)), 0.1, seed=2)
+    plain = describe(m, "pq", "default")
+    spec = describe(m, "pq", "default", glide_boundary=True, convex=True)
+    names = [t.name for t in spec.rows("least_squares")]
+    assert names == [t.name for t in plain.rows("least_squares")] + ["glide", "edge_floor", "convexity"]
+    t = m.topology
+    corners = fixed_mod.corner_vertices(m)
+    assert np.array_equal(spec.sets["glide"], np.setdiff1d(np.nonzero(t.is_boundary_vertex)[0], corners))
+    E = spec.sets["glide_edges"]
+    edge_id = {tuple(sorted(e)) for e in t.edges[t.is_boundary_edge].tolist()}
+    assert len(E) and all(tuple(sorted(e)) in edge_id for e in E.tolist())  # boundary edges only
+    assert np.isin(E, spec.sets["glide"]).any(axis=1).all()  # each at a gliding vertex
+    assert [t.name for t in Formulation(m, "pq", spec=spec).rows] == [t.name for t in plain.rows("least_squares")]

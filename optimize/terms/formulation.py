@@ -51,6 +51,11 @@ from . import (
 from .problem import DEFAULT_TARGETS as TARGETS
 from .problem import UNKNOWNS, ProblemSpec, TermSpec, describe
 
+ROWS = ("planarity", "unit", "diagonals", "conical", "anglebalance", "circular", "anglesum", "nodeaxes")
+"""The term modules a Formulation evaluates; the description's other least-squares terms
+(``glide``, ``edgefloor``, ``convexity``) need data the solver carries (the boundary curve,
+the floors: ``solvers.guided.Glide``, ``Convex``)."""
+
 
 def fit_axes(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Axes ``(p, 3)`` and ``c (p,)`` best fitting ``n . a = c`` for unit normals ``N (p, s, 3)``
@@ -92,8 +97,9 @@ class Formulation:
         are its.  ``mesh`` is the mesh the unknowns' ``vertices`` block lives on (the
         optimizer passes the normalized input: same faces and topology).
 
-    The layout, the index sets and the list of rows are the description's; this class
-    prepares what the rows need (diagonal quadruples, beam edges) and evaluates them.
+    The layout, the index sets and the list of rows (its least-squares terms of the
+    modules ``ROWS``) are the description's; this class prepares what the rows need
+    (diagonal quadruples, beam edges) and evaluates them.
     """
 
     def __init__(self, mesh: Mesh, target: str, unknowns: str = "auxiliary", beams: bool = False,
@@ -111,7 +117,7 @@ class Formulation:
         self.target = spec.target
         self.unknowns = spec.unknowns
         self.layout = spec.layout
-        self.rows = spec.rows("least_squares")
+        self.rows = tuple(t for t in spec.rows("least_squares") if t.module in ROWS)
         self.cone_vertices = spec.sets["cone_vertices"]
         self.quads = spec.sets["quads"]
         self.ngons = spec.sets["ngons"]

@@ -4,8 +4,8 @@ A :class:`ProblemSpec` is frozen and says, for one run of one method on one
 mesh and target, everything that is decided before the first iteration:
 
 - the unknowns' :class:`~optimize.terms.variables.Layout` (named slices) and the
-  index sets its blocks are counted on (``sets``: cone vertices, circle quads,
-  n-gons, vertices with node-axis unknowns);
+  index sets its blocks and terms are counted on (``sets``: cone vertices, circle
+  quads, n-gons, vertices with node-axis unknowns, gliding vertices and edges);
 - the normalization the unknowns live in: ``x_vertices = (V - centre) / scale``,
   ``scale`` the mean edge length (:func:`optimize.mesh.measures.normalization`);
 - the fixed vertices (removed from the unknowns);
@@ -24,7 +24,8 @@ method     terms (kind)
 default    least squares, every row at most quadratic (``unknowns="auxiliary"``):
            planarity on unit face normals, cone axes (conical), circle centres
            (circular); or on positions only (``"vertices"``): the diagonals, the
-           angle balance, the opposite-angle sums, node axes and planar beams
+           angle balance, the opposite-angle sums, node axes and planar beams;
+           then boundary gliding, its edge floors, convexity (when asked for)
 penalty    least squares, weighted: the paper's angle sum per face, angle balance
            (conical), opposite-angle pairs (circular), strip determinants (``mu``)
 sqp        constraints: the same, with the determinants' alternating mean
@@ -58,6 +59,7 @@ KINDS = ("constraint", "least_squares", "energy")
 DEFAULT_TARGETS = ("pq", "conical", "circular")
 PAPER_TARGETS = ("pq", "conical", "circular", "strip")
 UNKNOWNS = ("auxiliary", "vertices")
+GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
 
 
 def _frozen(d: dict | None = None) -> Mapping:
@@ -199,7 +201,7 @@ def check_strip(mesh: Mesh) -> None:
 
 
 def describe(mesh: Mesh, target: str, method: str = "default", *, formulation: str = "auxiliary",
-             beams=False, fixed=None, glide_boundary: bool = False, fairness: float = 0.0,
+             beams=False, fixed=None, glide_boundary: bool = False, convex: bool = False, fairness: float = 0.0,
              closeness: float = 0.0, reference: Mesh | None = None, mu: float | None = None) -> ProblemSpec:
     """The :class:`ProblemSpec` of ``method`` for ``target`` on ``mesh``.
 
@@ -208,6 +210,10 @@ def describe(mesh: Mesh, target: str, method: str = "default", *, formulation: s
         True | False | ``"auto"`` (when the mesh has interior vertices of valence other than 4).
     fixed : None | "none" | "boundary" | "corners" | (k,) int (:func:`optimize.terms.fixed.resolve`);
         with ``glide_boundary`` (default method) the corner vertices are fixed too.
+    glide_boundary : (default method) the free boundary vertices glide on the reference's
+        boundary curve (``sets["glide"]``, term ``glide``), and the boundary edges at them keep
+        ``GLIDE_EDGE_FLOOR`` of their start length (``sets["glide_edges"]``, term ``edge_floor``).
+    convex : (default method) convex corners stay convex (term ``convexity``).
     fairness, closeness, reference : the energies.
     mu : the paper's determinant weight (None: :func:`default_mu` of ``method``).
     Raises :class:`ConfigError` for an unknown method, target, formulation or fixed value,
@@ -217,7 +223,7 @@ def describe(mesh: Mesh, target: str, method: str = "default", *, formulation: s
     if method not in METHODS:
         raise ConfigError(f"method: {method!r} is not known, expected one of {METHODS}")
     if method == "default":
-        return _describe_default(mesh, target, formulation, beams, fixed, glide_boundary,
+        return _describe_default(mesh, target, formulation, beams, fixed, glide_boundary, convex,
                                  Energies(float(fairness), float(closeness), reference))
     return _describe_paper(mesh, target, method, fixed, fairness, closeness, reference, mu)
 
@@ -231,7 +237,7 @@ def _common(mesh: Mesh, fixed, glide_boundary: bool) -> tuple[np.ndarray, float,
 
 
 def _describe_default(mesh: Mesh, target: str, formulation: str, beams, fixed, glide_boundary: bool,
-                      energies: Energies) -> ProblemSpec:
+                      convex: bool, energies: Energies) -> ProblemSpec:
     """The default method's rows (module docstring; ``optimize.terms.formulation``)."""
     if target not in DEFAULT_TARGETS:
         raise ConfigError(f"target: {target!r} is not known, expected one of {DEFAULT_TARGETS}")
@@ -281,6 +287,17 @@ def _describe_default(mesh: Mesh, target: str, formulation: str, beams, fixed, g
         if target == "circular":
             L.add("centres", len(sets["quads"]), 3).add("radius2", len(sets["quads"]), 1)
             terms += [TermSpec("circles", "circular", ls), TermSpec("circular", "anglesum", ls)]
+    if glide_boundary:  # the solver carries the curve and the floors (solvers.guided.Glide)
+        bnd = np.setdiff1d(np.nonzero(t.is_boundary_vertex)[0], fixed_idx)
+        if bnd.size:
+            E = t.edges
+            at = t.is_boundary_edge & np.isin(E, bnd).any(1)  # a gliding vertex cannot slide onto its neighbour
+            sets["glide"], sets["glide_edges"] = bnd, E[at]
+            terms.append(TermSpec("glide", "glide", ls))
+            if at.any():
+                terms.append(TermSpec("edge_floor", "edgefloor", ls, options={"floor": GLIDE_EDGE_FLOOR}))
+    if convex:  # the solver carries the floors (solvers.guided.Convex)
+        terms.append(TermSpec("convexity", "convexity", ls))
     terms += [TermSpec("fairness", "fairness", "energy", energies.fairness),
               TermSpec("closeness", "closeness", "energy", energies.closeness)]
     return ProblemSpec(mesh, target, "default", unknowns, L, centre, scale, fixed_idx, _frozen(sets),
