@@ -147,8 +147,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
         corners, floor = convexity.floors(norm, norm.V, tol.fold)
         keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0
-    run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=spec.energies.fairness,
-                closeness=spec.energies.closeness, tol=tol, max_iter=int(max_iter), callback=callback,
+    run = solve(form, x0, ref=ref, glide=glide, tol=tol, max_iter=int(max_iter), callback=callback,
                 backend=linear_solver, convex=keep, far=guided.FAR)
     L = form.layout
     Xn = L.view(run.x, "vertices")
