@@ -1,7 +1,9 @@
 """``optimize_mesh``: make a mesh PQ, conical or circular, fair and close to a reference.
 
 The default method is the regularized Gauss-Newton of :mod:`optimize.solvers.guided`
-on the quadratic formulation of :mod:`optimize.terms.formulation`.  The paper's own
+on the quadratic formulation of :mod:`optimize.terms.formulation`, built from the
+run's problem description (:func:`optimize.terms.problem.describe`: unknowns,
+normalization, fixed vertices, rows, energies).  The paper's own
 methods (``"penalty"``, ``"sqp"``, ``"hybrid"``) live in ``optimize.solvers.paper`` and
 are imported only when asked for.
 """
@@ -25,6 +27,7 @@ from .solvers.guided import Convex, Glide, solve
 from .terms import convexity
 from .terms import fixed as fixed_mod
 from .terms.formulation import Formulation
+from .terms.problem import GLIDE_EDGE_FLOOR, describe, resolve_formulation  # noqa: F401 (re-exported)
 from .tolerances import Tolerances
 
 log = logging.getLogger(__name__)
@@ -36,15 +39,6 @@ NO_CONVEX_FOLD_ADVICE = ("run with convexity kept (drop --no-convex / convex=Fal
 
 HELD_ADVICE = ("what helps: remeshing along principal directions (--remesh auto, input.remesh: auto), "
                "or the paper's penalty method (--method penalty), which sometimes finds one")
-GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
-
-
-def resolve_formulation(target: str, formulation: str) -> str:
-    """The unknowns ``"auto"`` stands for: positions only for ``conical`` (3x smaller
-    factors, fewer iterations; see ``optimize.terms.formulation``), auxiliary otherwise."""
-    if formulation != "auto":
-        return formulation
-    return "vertices" if target == "conical" else "auxiliary"
 
 
 def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DEFAULTS.method,
@@ -130,36 +124,30 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
             raise ConfigError(f"linear_solver: 'pardiso' needs Intel MKL, which did not load "
                               f"({pardiso.load_error()}); install the 'mkl' package or use 'auto' / 'superlu'")
     t0 = time.perf_counter()
-    centre, h = measures.normalization(mesh)
-    norm = mesh.with_vertices((mesh.V - centre) / h)
+    spec = describe(mesh, target, "default", formulation=formulation, beams=torsion_free_beams, fixed=fixed,
+                    glide_boundary=glide_boundary, convex=convex, fairness=fairness, closeness=closeness,
+                    reference=reference)
+    centre, h = spec.centre, spec.scale
+    norm = spec.normalized()
     ref_mesh = reference if reference is not None else mesh
     ref_norm = ref_mesh.with_vertices((ref_mesh.V - centre) / h) if reference is not None else norm
     ref = Reference(ref_norm)
-    fixed_idx = fixed_mod.resolve(mesh, fixed)
-    _check_meetable(mesh, target, fixed, fixed_idx, tol)
+    _check_meetable(mesh, target, fixed, fixed_mod.resolve(mesh, fixed), tol)
+    fixed_idx = spec.fixed  # with a gliding boundary, its corners too
+    listed = {t.module for t in spec.terms}
     glide = None
-    if glide_boundary:  # corners stay: a point cannot glide around a kink of the curve
-        fixed_idx = np.union1d(fixed_idx, fixed_mod.corner_vertices(mesh))
-        bnd = np.setdiff1d(np.nonzero(mesh.topology.is_boundary_vertex)[0], fixed_idx)
-        if bnd.size:
-            E = mesh.topology.edges
-            at = mesh.topology.is_boundary_edge & np.isin(E, bnd).any(1)  # a gliding vertex cannot slide onto its neighbour
-            floor = GLIDE_EDGE_FLOOR * np.linalg.norm(norm.V[E[at, 0]] - norm.V[E[at, 1]], axis=1)
-            glide = Glide(bnd, BoundaryCurve(ref_norm), E[at], floor)
-    unknowns = resolve_formulation(target, formulation)
-    t = mesh.topology
-    beams = (target == "conical" and unknowns == "vertices"
-             and (bool(t.interior_irregular.size) if torsion_free_beams == "auto"
-                  else bool(torsion_free_beams)))
-    form = Formulation(norm, target, unknowns, beams=beams)
+    if "glide" in listed:  # the vertices and edges the description chose; the curve and floors here
+        E = spec.sets["glide_edges"]
+        floor = GLIDE_EDGE_FLOOR * np.linalg.norm(norm.V[E[:, 0]] - norm.V[E[:, 1]], axis=1)
+        glide = Glide(spec.sets["glide"], BoundaryCurve(ref_norm), E, floor)
+    form = Formulation(norm, target, spec=spec)
     x0 = form.start(norm.V)
     keep = None
-    if convex:
+    if "convexity" in listed:
         corners, floor = convexity.floors(norm, norm.V, tol.fold)
         keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0
-    run = solve(form, x0, ref=ref, fixed=fixed_idx, glide=glide, fairness=fairness,
-                closeness=closeness, tol=tol, max_iter=int(max_iter), callback=callback,
+    run = solve(form, x0, ref=ref, glide=glide, tol=tol, max_iter=int(max_iter), callback=callback,
                 backend=linear_solver, convex=keep, far=guided.FAR)
     L = form.layout
     Xn = L.view(run.x, "vertices")

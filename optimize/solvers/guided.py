@@ -121,14 +121,14 @@ class RunState:
     defects: dict = field(default_factory=dict)
 
 
+DEFECTS = {"planarity": measures.planarity, "conical": measures.conical_defect,
+           "circular": measures.circular_defect}
+
+
 def target_defects(form: Formulation, V: np.ndarray) -> dict[str, np.ndarray]:
-    """The measured defects the target must bring under tolerance, ``name -> (k,)``."""
-    out = {"planarity": measures.planarity(form.mesh, V)}
-    if form.target == "conical":
-        out["conical"] = measures.conical_defect(form.mesh, V)
-    if form.target == "circular":
-        out["circular"] = measures.circular_defect(form.mesh, V)
-    return out
+    """The measured defects the target must bring under tolerance, ``name -> (k,)``: those the
+    problem description tests (``form.spec.tests``)."""
+    return {name: DEFECTS[name](form.mesh, V) for name in form.spec.tests}
 
 
 def _score(defects: dict, tol: Tolerances) -> float:
@@ -147,15 +147,18 @@ def _embed(M: sp.spmatrix, n_cols: int) -> sp.csr_matrix:
     return sp.csr_matrix((M.data, M.indices, M.indptr), shape=(M.shape[0], n_cols))
 
 
-def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np.ndarray,
-          glide: Glide | None, fairness: float, closeness: float, tol: Tolerances,
+def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None,
+          glide: Glide | None, tol: Tolerances,
           max_iter: int, callback=None, backend: str = "auto", patience: int = 10,
           convex: Convex | None = None, far: float | None = FAR,
           decay: float = 0.5, finish: float = 2.0,
           soft_iters: int = 10) -> RunState:
     """Run the iteration from ``x0 (layout.size,)`` (normalized coordinates).
 
-    fixed : (k,) int vertices whose coordinates are not unknowns.
+    The problem is ``form``'s description (``form.spec``): its rows, its fixed vertices
+    (whose coordinates are not unknowns) and its energies (the fairness and closeness
+    weights).  ref : the closeness reference in normalized coordinates (None: no closeness).
+    glide, convex : the data of the description's ``glide`` and ``convexity`` terms.
     far : the fairness weight is scaled by ``min(1, worst defect / far)`` (see ``FAR``;
         None: always in full, the earlier behaviour).
     decay : factor applied to the soft weights after each iteration; they are
@@ -173,6 +176,8 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None, fixed: np
     """
     t_start = time.perf_counter()
     L = form.layout
+    fixed = form.spec.fixed
+    fairness, closeness = form.spec.energies.fairness, form.spec.energies.closeness
     timings = {"closest": 0.0, "assemble": 0.0, "solve": 0.0, "measure": 0.0}
     free = np.ones(L.size, dtype=bool)
     free[L.index("vertices")[fixed].ravel()] = False

@@ -48,10 +48,13 @@ from . import (
     planarity,
     unit,
 )
-from .variables import Layout
+from .problem import DEFAULT_TARGETS as TARGETS
+from .problem import UNKNOWNS, ProblemSpec, TermSpec, describe
 
-TARGETS = ("pq", "conical", "circular")
-UNKNOWNS = ("auxiliary", "vertices")
+ROWS = ("planarity", "unit", "diagonals", "conical", "anglebalance", "circular", "anglesum", "nodeaxes")
+"""The term modules a Formulation evaluates; the description's other least-squares terms
+(``glide``, ``edgefloor``, ``convexity``) need data the solver carries (the boundary curve,
+the floors: ``solvers.guided.Glide``, ``Convex``)."""
 
 
 def fit_axes(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -84,48 +87,52 @@ def fit_circles(P: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 class Formulation:
-    """Layout, starting vector and constraints of ``target`` for the topology of ``mesh``.
+    """Layout, starting vector and constraint rows of ``target`` for the topology of ``mesh``.
 
     unknowns : ``"auxiliary"`` (vertices plus normals, axes, centres; every row
         at most quadratic) or ``"vertices"`` (positions only, see above).
+    beams : node axes as unknowns with planar beams (conical, ``"vertices"`` only).
+    spec : the problem description (:func:`optimize.terms.problem.describe`, method
+        ``"default"``) to build from; when given, ``target``, ``unknowns`` and ``beams``
+        are its.  ``mesh`` is the mesh the unknowns' ``vertices`` block lives on (the
+        optimizer passes the normalized input: same faces and topology).
+
+    The layout, the index sets and the list of rows (its least-squares terms of the
+    modules ``ROWS``) are the description's; this class prepares what the rows need
+    (diagonal quadruples, beam edges) and evaluates them.
     """
 
-    def __init__(self, mesh: Mesh, target: str, unknowns: str = "auxiliary", beams: bool = False):
-        if target not in TARGETS:
-            raise ConfigError(f"target: {target!r} is not known, expected one of {TARGETS}")
-        if unknowns not in UNKNOWNS:
-            raise ConfigError(f"formulation: {unknowns!r} is not known, expected one of {UNKNOWNS}")
+    def __init__(self, mesh: Mesh, target: str, unknowns: str = "auxiliary", beams: bool = False,
+                 *, spec: ProblemSpec | None = None):
+        if spec is None:
+            if target not in TARGETS:
+                raise ConfigError(f"target: {target!r} is not known, expected one of {TARGETS}")
+            if unknowns not in UNKNOWNS:
+                raise ConfigError(f"formulation: {unknowns!r} is not known, expected one of {UNKNOWNS}")
+            if beams and unknowns == "auxiliary":
+                raise ConfigError("torsion_free_beams: written for formulation 'vertices' only, not 'auxiliary'")
+            spec = describe(mesh, target, "default", formulation=unknowns, beams=bool(beams))
+        self.spec = spec
         self.mesh = mesh
-        self.target = target
-        self.unknowns = unknowns
-        self.cone_vertices = mesh.topology.interior_valence4 if target == "conical" else np.zeros(0, int)
-        self.quads = circular.circle_faces(mesh) if target == "circular" else np.zeros(0, int)
-        self.angle_mask = np.ones(len(self.cone_vertices), dtype=bool)
-        self.axis_vertices = np.zeros(0, dtype=np.int64)  # vertices with node-axis unknowns (beams)
-        if unknowns == "vertices":
-            self.layout = Layout().add("vertices", mesh.n_vertices, 3)
-            self.quadruples = diagonals.quadruples(mesh, max_size=4)
-            self.ngons = np.nonzero(mesh.face_sizes > 4)[0]
-            if len(self.ngons):  # a unit normal per n-gon (see constraints.diagonals)
-                self.layout.add("ngon_normals", len(self.ngons), 3)
-            if beams and target == "conical":  # node axes as unknowns, planar beams (constraints.nodeaxes)
-                self.axis_vertices = nodeaxes.axis_vertices(mesh)
-                self.beam_edges = nodeaxes.beam_edges(mesh)
-                self.axis_row = np.full(mesh.n_vertices, -1, dtype=np.int64)
-                self.axis_row[self.axis_vertices] = np.arange(len(self.axis_vertices))
-                p = len(self.axis_vertices)
-                self.layout.add("node_axes", p, 3).add("node_cos", p, 1)
-            return
-        if beams:
-            raise ConfigError("torsion_free_beams: written for formulation 'vertices' only, not 'auxiliary'")
-        self.layout = L = Layout().add("vertices", mesh.n_vertices, 3).add("normals", mesh.n_faces, 3)
-        if target == "conical":
-            L.add("axes", len(self.cone_vertices), 3).add("cos", len(self.cone_vertices), 1)
+        self.target = spec.target
+        self.unknowns = spec.unknowns
+        self.layout = spec.layout
+        self.rows = tuple(t for t in spec.rows("least_squares") if t.module in ROWS)
+        self.cone_vertices = spec.sets["cone_vertices"]
+        self.quads = spec.sets["quads"]
+        self.ngons = spec.sets["ngons"]
+        self.axis_vertices = spec.sets["axis_vertices"]  # vertices with node-axis unknowns (beams)
         # cone vertices with an angle-balance row: all of them (self.angle_mask).  (Adding
         # rows only where a vertex is caught on the degenerate branch was tried: no reliable
         # detector was found before convergence, it flagged most vertices anyway.)
-        if target == "circular":
-            L.add("centres", len(self.quads), 3).add("radius2", len(self.quads), 1)
+        self.angle_mask = np.ones(len(self.cone_vertices), dtype=bool)
+        modules = {t.module for t in self.rows}
+        if "diagonals" in modules:
+            self.quadruples = diagonals.quadruples(mesh, max_size=4)
+        if len(self.axis_vertices):
+            self.beam_edges = nodeaxes.beam_edges(mesh)
+            self.axis_row = np.full(mesh.n_vertices, -1, dtype=np.int64)
+            self.axis_row[self.axis_vertices] = np.arange(len(self.axis_vertices))
 
     def start(self, V: np.ndarray) -> np.ndarray:
         """The starting unknown vector for positions ``V (n, 3)``."""
@@ -155,40 +162,46 @@ class Formulation:
         """``(r, J, wide)``: the compact-stencil constraints (each row within one face,
         or one vertex and its faces' normals) and the list of wide ones as
         ``(r_w, J_w, parts)`` with ``J_w = sum(parts)``, each part within one face
-        (the angle balance couples a whole vertex star; with ``exact_angles`` it
-        is among the compact rows instead)."""
-        if self.unknowns == "vertices":
-            return self._vertex_terms(x)
-        parts = [planarity.terms(x, self.layout, self.mesh), unit.terms(x, self.layout, "normals")]
-        wide = []
-        if self.target == "conical":
-            parts += [conical.terms(x, self.layout, self.mesh), unit.terms(x, self.layout, "axes")]
-            which = np.nonzero(self.angle_mask)[0]
-            if exact_angles:
-                parts.append(anglebalance.terms(x, self.layout, self.mesh, which=which))
+        (the angle balance of the auxiliary formulation couples a whole vertex star;
+        with ``exact_angles`` it is among the compact rows instead).  The rows are the
+        description's least-squares terms, in its order."""
+        parts, wide = [], []
+        for term in self.rows:
+            if term.options.get("split") and not exact_angles:
+                wide.append(self._rows(term, x, parts=True))
             else:
-                wide.append(anglebalance.terms(x, self.layout, self.mesh, parts=True, which=which))
-        if self.target == "circular":
-            parts += [circular.terms(x, self.layout, self.mesh), anglesum.terms(x, self.layout, self.mesh)]
+                parts.append(self._rows(term, x))
         return (np.concatenate([r for r, _ in parts]), sp.vstack([J for _, J in parts], format="csr"),
                 wide)
 
-    def _vertex_terms(self, x: np.ndarray):
-        """``split_terms`` of the vertex-only formulation (every row compact)."""
-        parts = [diagonals.terms(x, self.layout, self.mesh, self.quadruples)]
-        if len(self.ngons):
-            parts += [planarity.terms(x, self.layout, self.mesh, faces=self.ngons, block="ngon_normals"),
-                      unit.terms(x, self.layout, "ngon_normals")]
-        if self.target == "conical" and len(self.cone_vertices):
-            parts.append(anglebalance.terms(x, self.layout, self.mesh))
-        if self.target == "circular" and len(self.quads):
-            parts.append(anglesum.terms(x, self.layout, self.mesh))
-        if len(self.axis_vertices):
-            parts += [nodeaxes.cone_terms(x, self.layout, self.mesh, self.axis_vertices),
-                      unit.terms(x, self.layout, "node_axes"),
-                      nodeaxes.beam_terms(x, self.layout, self.beam_edges, self.axis_row)]
-        return (np.concatenate([r for r, _ in parts]), sp.vstack([J for _, J in parts], format="csr"),
-                [])
+    def _rows(self, term: TermSpec, x: np.ndarray, parts: bool = False):
+        """``(r, J)`` of one of the description's terms at ``x`` (``parts``: the angle
+        balance's per-corner Jacobians too)."""
+        L, mesh, m, opt = self.layout, self.mesh, term.module, term.options
+        if m == "planarity":
+            faces = opt.get("faces")
+            if faces is None:
+                return planarity.terms(x, L, mesh)
+            return planarity.terms(x, L, mesh, faces=self.spec.sets[faces], block=opt["block"])
+        if m == "unit":
+            return unit.terms(x, L, opt["block"])
+        if m == "diagonals":
+            return diagonals.terms(x, L, mesh, self.quadruples)
+        if m == "conical":
+            return conical.terms(x, L, mesh)
+        if m == "anglebalance":
+            if self.unknowns == "vertices":
+                return anglebalance.terms(x, L, mesh)
+            return anglebalance.terms(x, L, mesh, parts=parts, which=np.nonzero(self.angle_mask)[0])
+        if m == "circular":
+            return circular.terms(x, L, mesh)
+        if m == "anglesum":
+            return anglesum.terms(x, L, mesh)
+        if m == "nodeaxes" and opt["part"] == "cone":
+            return nodeaxes.cone_terms(x, L, mesh, self.axis_vertices)
+        if m == "nodeaxes":
+            return nodeaxes.beam_terms(x, L, self.beam_edges, self.axis_row)
+        raise ValueError(f"term {term.name!r}: module {m!r} is not a row of the default method")
 
     def axis_defects(self, x: np.ndarray) -> dict[str, np.ndarray]:
         """With node-axis unknowns: ``{"node_cone": |n . a - c| (r,), "beam": |(e x a_v) . a_w| / |e|

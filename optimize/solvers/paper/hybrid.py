@@ -15,7 +15,7 @@ because a Newton-KKT step pursuing a far-away optimum of the objective left
 the constraints faster than it restored them; since SQP's proximal weight
 grows after any step that leaves the constraints worse
 (:mod:`optimize.solvers.paper.sqp`) it converges on all 21, taking more iterations.  Both phases use the determinant
-rows on quad meshes (``mu = 1``, :func:`optimize.solvers.paper.targets.default_mu`).
+rows on quad meshes (``mu = 1``, :func:`optimize.terms.problem.default_mu`).
 The history holds both phases (``entry["phase"]``).
 """
 from __future__ import annotations
@@ -30,7 +30,6 @@ from ...tolerances import DEFAULT, Tolerances
 from .cache import problem_for
 from .penalty import penalty, run_penalty
 from .sqp import KKT_PATIENCE, KKT_TOL, check_hessian, run_sqp, sqp
-from .targets import default_mu
 
 METHODS = ("penalty", "sqp", "hybrid")
 
@@ -43,8 +42,7 @@ def hybrid(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fix
     """Penalty then SQP on ``mesh`` (unchanged); parameters as :func:`run_paper_method`."""
     t0 = time.perf_counter()
     with problem_for(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
-                     closeness=closeness, tol=tol,
-                     mu=default_mu(mesh, target, "hybrid") if mu is None else mu) as p:
+                     closeness=closeness, tol=tol, mu=mu, method="hybrid") as p:
         first = run_penalty(p, p.x0(), max_iter=min(penalty_iter, max_iter), callback=callback,
                             stop_at=switch)
         second = run_sqp(p, first.x, max_iter=max(max_iter - first.nit, 0), callback=callback,
@@ -75,7 +73,7 @@ def run_paper_method(mesh: Mesh, target: str = "pq", method: str = "hybrid", *,
     fairness, closeness : weights ``w1, w2`` (the penalty method halves them every iteration).
     tol : Tolerances.  max_iter : iteration budget.  callback : ``callback(entry: dict)``.
     options : method extras: ``mu`` (determinant weight; default
-        :func:`optimize.solvers.paper.targets.default_mu`), ``kkt_tol``,
+        :func:`optimize.terms.problem.default_mu`), ``kkt_tol``,
         ``kkt_patience``, ``hessian`` (sqp, hybrid), ``switch`` and
         ``penalty_iter`` (hybrid).
 

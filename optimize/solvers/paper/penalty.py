@@ -247,7 +247,7 @@ def penalty(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fi
     """
     t0 = time.perf_counter()
     with problem_for(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
-                     closeness=closeness, tol=tol, mu=mu) as p:
+                     closeness=closeness, tol=tol, mu=mu, method="penalty") as p:
         run = run_penalty(p, p.x0(), max_iter=max_iter, callback=callback)
         run.timings["total"] = time.perf_counter() - t0
         return p.result(run.x, status=run.status, nit=run.nit, history=run.history, timings=run.timings,

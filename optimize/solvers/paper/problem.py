@@ -1,6 +1,9 @@
 """The data of one run of the paper's methods, shared by penalty, SQP and hybrid.
 
-Named variable layout (:class:`optimize.terms.variables.Layout`, the default
+What the run solves comes from its problem description
+(:class:`optimize.terms.problem.ProblemSpec`, :func:`~optimize.terms.problem.describe`,
+the default method's too): the layout, the normalization, the fixed vertices, the
+rows and the energies.  Named variable layout (:class:`optimize.terms.variables.Layout`, the default
 method's): the unknown vector has one block, ``vertices (n, 3)``, the vertex
 positions centred at their mean ``c`` and divided by the mean edge length ``h``
 (:func:`optimize.mesh.measures.normalization`, the default method's
@@ -35,11 +38,10 @@ from ...result import OptimizeResult, check_folds, record_shape
 from ...terms.closeness import closeness_residual
 from ...terms.determinants import det_values
 from ...terms.fairness import fairness_matrix
-from ...terms.fixed import resolve
-from ...terms.variables import Layout
+from ...terms.problem import ProblemSpec, describe
 from ...tolerances import DEFAULT, Tolerances
 from .system import ConstraintSystem, Pattern
-from .targets import sqp_terms, target_terms, tested_defects
+from .targets import prepare_all
 
 FOOT_MARGIN = 0.3  # footpoint candidates are renewed for vertices that moved this many mean edges
 
@@ -55,36 +57,47 @@ class Problem:
     fixed : None | "boundary" | "corners" | (k,) int vertex indices that do not move.
     fairness, closeness : initial weights ``w1, w2`` of ``f_fair`` and ``f_close``.
     tol : Tolerances of the tested defects.
-    mu : weight of the determinant terms (default 1 for strips, else 0).
+    mu : weight of the determinant terms (default
+        :func:`optimize.terms.problem.default_mu` of ``method``).
+    method : "penalty" (its rows only), "sqp" (its constraints only) or "hybrid" (both).
+    spec : the description (:func:`optimize.terms.problem.describe`) to build from;
+        when given, ``target``, ``reference``, ``fixed``, the weights, ``mu`` and
+        ``method`` are taken from it.
+
+    The layout, normalization, fixed set, rows and energies are the description's
+    (:attr:`spec`); the penalty rows :attr:`terms` are its least-squares terms, SQP's
+    :attr:`sqp_terms` its constraints, prepared by
+    :func:`optimize.solvers.paper.targets.prepare_all`.
     """
 
     def __init__(self, mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=None,
                  fairness: float = DEFAULTS.fairness, closeness: float = DEFAULTS.closeness, tol: Tolerances = DEFAULT,
-                 mu: float | None = None):
-        self.mesh, self.target, self.tol = mesh, target, tol
-        self.terms = target_terms(mesh, target, mu)
-        self.tests = tested_defects(target, mu)
-        self.w_fair, self.w_close = float(fairness), float(closeness)
-        if self.w_fair < 0 or self.w_close < 0:
-            from ...errors import ConfigError
-            raise ConfigError(f"fairness={fairness}, closeness={closeness}: weights must be >= 0")
-        self.center, self.h = measures.normalization(mesh)
-        n = mesh.n_vertices
-        self.layout = Layout.vertices_only(n)  # x = ((V - center) / h), named
-        self.fixed = resolve(mesh, fixed)
+                 mu: float | None = None, method: str = "hybrid", spec: ProblemSpec | None = None):
+        if spec is None:
+            spec = describe(mesh, target, method, fixed=fixed, fairness=fairness, closeness=closeness,
+                            reference=reference, mu=mu)
+        self.spec = spec
+        self.mesh, self.target, self.tol = spec.mesh, spec.target, tol
+        mesh = spec.mesh
+        self.terms = prepare_all(spec, "least_squares")
+        self.sqp_terms = prepare_all(spec, "constraint")
+        self.tests = spec.tests
+        self.w_fair, self.w_close = spec.energies.fairness, spec.energies.closeness
+        self.center, self.h = spec.centre, spec.scale
+        self.layout = spec.layout  # x = ((V - center) / h), named
+        self.fixed = spec.fixed
         mask = np.ones(self.layout.size, dtype=bool)
         mask[self.layout.index("vertices")[self.fixed].ravel()] = False
         self.free = np.nonzero(mask)[0]
         self._all_free = len(self.free) == self.layout.size
         self.K_full = fairness_matrix(mesh)  # (3t, 3n)
         self.K = self._cols(self.K_full)  # (3t, k) on the free coordinates
-        self.sqp_terms = sqp_terms(mesh, self.terms)
         self._systems = {}
         self.vid = corner_vertices(mesh.topology).astype(np.int64)  # (c, 3) corner, next, previous vertex
         self.quads = np.ascontiguousarray(mesh.F[mesh.face_sizes == 4, :4], dtype=np.int64)  # (q, 4)
         self._close = None  # the closeness Jacobian's pattern, built when asked for
         self._hessian_pattern()
-        self.reference = mesh if reference is None else reference
+        self.reference = mesh if spec.energies.reference is None else spec.energies.reference
         self._ref = self._foot = None
         self.has_quads = bool(np.any(mesh.face_sizes == 4))
         self._quads_only = bool(np.all(mesh.face_sizes <= 4))  # planarity: quads (triangles count 0)
@@ -197,7 +210,7 @@ class Problem:
         ``blocks`` (dict name -> slice of the rows); only ``c`` without ``jac``.
         With ``weighted`` each block is multiplied by ``sqrt(weight)`` (the
         penalty energy's rows).  ``sqp`` selects SQP's rows
-        (:func:`optimize.solvers.paper.targets.sqp_terms`).
+        (the description's constraints, :func:`optimize.terms.problem.describe`).
         """
         system = self.sqp_system if sqp else self.system
         out = system.evaluate(self.vertices(x), jac=jac, weighted=weighted)

@@ -16,15 +16,15 @@ Gauss-Newton SQP step); ``hessian="exact"`` adds it
 (:mod:`optimize.solvers.paper.hessian`), which makes the stationarity converge fast
 once the multipliers are settled (see ``--sweep`` below for how often each
 converges).  SQP's rows are
-:func:`optimize.solvers.paper.targets.sqp_terms` (determinants instead of angle sums
-for quads).
+the description's constraints (:func:`optimize.terms.problem.describe`: determinants
+instead of angle sums for quads).
 
 Near-singular systems (the paper falls back to an SVD):
 
 - ``eps = 1e-8`` (a stabilized-SQP block, S. Wright 1998) keeps the matrix
   non-singular for redundant or degenerate rows (rows whose gradients are
-  dependent or vanish at the solution; :func:`optimize.solvers.paper.targets.sqp_terms`
-  already removes the known ones), whose multipliers are not unique or do not
+  dependent or vanish at the solution; the description's constraints
+  (:func:`optimize.terms.problem.describe`) leave out the known ones), whose multipliers are not unique or do not
   exist; the linearized constraints then hold up to ``eps |dy|``.
 - ``delta`` is a proximal (Levenberg-Marquardt) term: the tangent-plane
   closeness and the fairness leave ``H`` singular (vertices may slide along
@@ -91,7 +91,6 @@ from .cache import problem_for
 from .hessian import constraint_curvature
 from .penalty import Run
 from .problem import Problem
-from .targets import default_mu
 
 log = logging.getLogger(__name__)
 
@@ -378,17 +377,16 @@ def sqp(mesh: Mesh, target: str = "pq", *, reference: Mesh | None = None, fixed=
     """Run SQP on ``mesh`` (unchanged); the result's ``multipliers`` are those of the last KKT solve.
 
     Multipliers are ordered like the constraint rows: the blocks of
-    :func:`optimize.solvers.paper.targets.target_terms` (``history[-1]["multiplier_blocks"]``).
+    the description's constraints (``history[-1]["multiplier_blocks"]``).
     mu : > 0 adds the determinant rows (default: 1 on quad meshes, see
-        :func:`optimize.solvers.paper.targets.default_mu`).
+        :func:`optimize.terms.problem.default_mu`).
     kkt_tol, kkt_patience : the stationarity test (module docstring).
     hessian : "gauss-newton" (default) or "exact" (adds the constraint
         curvature ``sum y_i Hess c_i``, :mod:`optimize.solvers.paper.hessian`).
     """
     t0 = time.perf_counter()
     with problem_for(mesh, target, reference=reference, fixed=fixed, fairness=fairness,
-                     closeness=closeness, tol=tol,
-                     mu=default_mu(mesh, target, "sqp") if mu is None else mu) as p:
+                     closeness=closeness, tol=tol, mu=mu, method="sqp") as p:
         run = run_sqp(p, p.x0(), max_iter=max_iter, callback=callback, kkt_tol=kkt_tol,
                       kkt_patience=kkt_patience, hessian=check_hessian(hessian))
         run.timings["total"] = time.perf_counter() - t0

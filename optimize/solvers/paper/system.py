@@ -5,8 +5,8 @@ the positions of the Jacobian's nonzeros never change.  :class:`Pattern`
 computes, once, where each triplet of a fixed ``(rows, cols)`` list lands in
 a CSR matrix (duplicates summed, fixed columns dropped, free columns
 renumbered), so each evaluation is one ``np.bincount`` instead of a COO sort.
-:class:`ConstraintSystem` lays the blocks of :func:`optimize.solvers.paper.targets.target_terms`
-out in that way.
+:class:`ConstraintSystem` lays the blocks of :class:`optimize.solvers.paper.targets.Term`
+(the problem description's rows, prepared) out in that way.
 """
 from __future__ import annotations
 
