@@ -193,6 +193,21 @@ def test_kept_problem_is_reused_only_for_the_same_input():
     assert take(m, reference=ref) is not p and take(m, reference=ref) is take(m, reference=ref)
 
 
+@pytest.mark.parametrize("target", ["pq", "conical"])
+def test_a_reused_problem_gives_the_fresh_result(target, monkeypatch):
+    """The second identical hybrid run on an n-gon mesh reuses the first's problem: it must end where a
+    run on a fresh problem ends (the closest-point warm start left by the first run once changed it)."""
+    import optimize.solvers.paper.cache as cache
+    from optimize.modelling import shapes
+
+    mesh = shapes.perturbed(shapes.capped_cylinder(), 0.03, seed=12)
+    monkeypatch.setattr(cache, "REUSE", False)
+    fresh = run_paper_method(mesh, target, "hybrid", max_iter=60).mesh.V
+    monkeypatch.setattr(cache, "REUSE", True)
+    for _ in range(2):
+        assert np.array_equal(run_paper_method(mesh, target, "hybrid", max_iter=60).mesh.V, fresh)
+
+
 def test_kkt_ldl_and_its_lu_fallback_solve_the_same_system(compiled):
     from optimize.solvers.paper.assembly import kkt_band
     from optimize.solvers.paper.sqp import kkt_matrix, objective

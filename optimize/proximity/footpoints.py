@@ -68,6 +68,13 @@ class Footpoints:
         self.delegate = False
         self.queries = self.rebuilt = 0
 
+    def reset(self) -> None:
+        """Forget the warm start (last query points, candidates, closest triangles): the next query
+        answers as the first one did, so a run on a reused structure does not depend on earlier runs
+        (ties between equally close triangles are broken the same way)."""
+        self.P0 = self.tri = None
+        self.delegate = False
+
     def closest(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``Y (q, 3)`` exact closest points on the reference and ``N (q, 3)`` unit normals there."""
         P = np.asarray(P, dtype=np.float64).reshape(-1, 3)

@@ -11,10 +11,13 @@ problem is therefore kept as long as the input mesh lives (a weak
 reference) and reused when the same mesh (vertex positions and faces
 unchanged), reference and options come again.
 
-Reuse is exact: nothing in a Problem depends on an earlier run's iterates
-except the closest-point candidates, whose answers are exact for any query
-(:class:`optimize.proximity.Footpoints`), and value caches keyed by
-the very positions they were computed at.
+Reuse is exact: a reused problem gives the result of a fresh one.  Nothing in a
+Problem depends on an earlier run's iterates except value caches keyed by the
+very positions they were computed at, and the closest-point search's warm start
+(:class:`optimize.proximity.Footpoints`): its answers are exact for any query,
+but a point equally close to two triangles may get the other one's normal, so
+the warm start is reset when a problem is reused (:meth:`Problem.reset_warm_start`;
+without it a second identical hybrid run on an n-gon mesh ended elsewhere).
 """
 from __future__ import annotations
 
@@ -73,7 +76,10 @@ def _take(mesh, target, reference, fixed, options):
             p, V, F, ref, refV, lock = entry
             if (ref is reference and np.array_equal(V, mesh.V) and np.array_equal(F, mesh.F)
                     and (ref is None or np.array_equal(refV, ref.V))):
-                return (p, lock) if lock.acquire(blocking=False) else (fresh(), None)
+                if lock.acquire(blocking=False):
+                    p.reset_warm_start()
+                    return p, lock
+                return fresh(), None
     p, lock = fresh(), threading.Lock()
     lock.acquire()
     with _GUARD:

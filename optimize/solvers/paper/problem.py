@@ -220,6 +220,11 @@ class Problem:
         """Unweighted fairness rows ``(K x (3t,), K (3t, k))`` in mean-edge units."""
         return kernels.matvec(self.K_full, x), self.K
 
+    def reset_warm_start(self) -> None:
+        """Before a run on a reused problem: the closest-point search starts afresh (its structure kept)."""
+        if self._foot is not None:
+            self._foot.reset()
+
     @property
     def foot_search(self) -> Footpoints:
         """Exact closest points with candidates kept between iterations (built on first use)."""
