@@ -246,8 +246,8 @@ class OutputsSection(section_base(OutputsOptions, extra={"nesting": (NestingSect
     what each key means: :class:`fabricate.app.options.OutputsOptions`).
 
     ``check``: how the written files are re-validated (``fabricate.check``):
-    ``full`` (every check, with OpenCASCADE reading model.step back: about 10 ms
-    per part), ``fast`` (the same without the STEP read-back), ``off``, or
+    ``full`` (every check, model.step read back by the independent text reader),
+    ``fast`` (the same without the STEP read-back), ``off``, or
     ``auto`` (full up to :data:`CHECK_AUTO_MAX_PARTS` parts, fast above).
     """
 
