@@ -20,7 +20,7 @@ def option(default: Any = MISSING, *, unit: str = "", help: str = "", alias: str
     """A dataclass field with what its config key needs in the metadata: bounds (``ge`` ... ``lt``,
     ``min_length`` / ``max_length``, ``pattern``), the bounds of each item of a tuple (``items``),
     the YAML name when it is not a Python name (``alias``), the unit and a one-line help."""
-    meta = {k: v for k, v in dict(unit=unit, help=help, alias=alias, ge=ge, gt=gt, le=le, lt=lt,
-                                  min_length=min_length, max_length=max_length, pattern=pattern,
-                                  items=items).items() if v not in (None, "")}
+    given = {"unit": unit, "help": help, "alias": alias, "ge": ge, "gt": gt, "le": le, "lt": lt,
+             "min_length": min_length, "max_length": max_length, "pattern": pattern, "items": items}
+    meta = {k: v for k, v in given.items() if v not in (None, "")}
     return field(default=default, metadata=meta)
