@@ -2,12 +2,13 @@
 
 The frozen option objects of every stage (``fabricate.cad.spec.PartSpec``,
 ``fabricate.structure.options.StructureOptions``, ``fabricate.app.options``)
-declare each field with :func:`option`: its default, bounds, unit and one-line
+declare each field with :func:`option` (:func:`optimize.fields.option`, re-exported here,
+the one the optimizer's settings use too): its default, bounds, unit and one-line
 help.  The config sections are derived from them
 (``fabricate.app.config_section.section_base``), and :func:`check_fields` holds
 a constructed object to the same choices and lower bounds, so each is written
 once.  This module is the bottom layer of ``fabricate``: it imports only the
-standard library and :mod:`optimize.errors`.
+standard library, :mod:`optimize.errors` and :mod:`optimize.fields`.
 """
 from __future__ import annotations
 
@@ -15,26 +16,14 @@ import functools
 import math
 import types
 import typing
-from dataclasses import MISSING, field, fields
-from typing import Any, Literal, get_args, get_origin
+from dataclasses import fields
+from typing import Literal, get_args, get_origin
 
 from optimize.errors import ConfigError
+from optimize.fields import option  # noqa: F401 - re-exported: the option objects of fabricate use it
 
 MAX_MM = 10_000.0
 """Largest |layer distance| and beam depth (mm): 10 m."""
-
-
-def option(default: Any = MISSING, *, unit: str = "", help: str = "", alias: str | None = None,
-           ge: float | None = None, gt: float | None = None, le: float | None = None, lt: float | None = None,
-           min_length: int | None = None, max_length: int | None = None, pattern: str | None = None,
-           items: dict | None = None):
-    """A dataclass field with what its config key needs in the metadata: bounds (``ge`` ... ``lt``,
-    ``min_length`` / ``max_length``, ``pattern``), the bounds of each item of a tuple (``items``),
-    the YAML name when it is not a Python name (``alias``), the unit and a one-line help."""
-    meta = {k: v for k, v in dict(unit=unit, help=help, alias=alias, ge=ge, gt=gt, le=le, lt=lt,
-                                  min_length=min_length, max_length=max_length, pattern=pattern,
-                                  items=items).items() if v not in (None, "")}
-    return field(default=default, metadata=meta)
 
 
 def choices(annotation) -> tuple | None:

@@ -15,9 +15,10 @@ import math
 import numbers
 from dataclasses import dataclass, field, fields, replace
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any, Literal, Mapping
 
 from .errors import ConfigError
+from .fields import option
 from .tolerances import Tolerances
 
 TARGETS = ("pq", "conical", "circular", "strip")
@@ -35,6 +36,12 @@ FORMULATIONS = ("auto", "auxiliary", "vertices")
 PAPER_EXTRAS = ("mu", "kkt_tol", "kkt_patience", "hessian", "switch", "penalty_iter")
 """Settings only the paper's methods have (which method takes which: ``optimize.solvers.paper.run_paper_method``)."""
 MAX_ITER_LIMIT = 100_000
+"""Largest ``max_iter`` a run takes."""
+MAX_ITER = 10_000
+"""Largest ``max_iter`` of a configuration file (the upper bound of the field, a plausibility limit
+like every upper bound of :func:`optimize.fields.option`; a run itself takes up to :data:`MAX_ITER_LIMIT`)."""
+MAX_WEIGHT = 1e6
+"""Largest fairness or closeness weight of a configuration file (the fields' upper bound)."""
 
 CHOICES: Mapping[str, tuple] = MappingProxyType({
     "target": TARGETS, "method": METHODS, "linear_solver": LINEAR_SOLVERS, "formulation": FORMULATIONS,
@@ -46,6 +53,11 @@ CHOICES: Mapping[str, tuple] = MappingProxyType({
 @dataclass(frozen=True)
 class OptimizeOptions:
     """Every setting of one optimizer run (the mesh, reference, fixed vertices and callback aside).
+
+    Each field but ``tol`` and ``paper`` is an :func:`optimize.fields.option`: its default, the
+    bounds of its config key and a one-line help (``fabricate``'s ``optimize`` section is derived
+    from them).  The lower bounds of the weights are checked here too; ``max_iter`` takes
+    0 .. :data:`MAX_ITER_LIMIT` here, 1 .. :data:`MAX_ITER` in a config file.
 
     target : one of :data:`TARGETS`.
     method : one of :data:`METHODS`.
@@ -62,17 +74,21 @@ class OptimizeOptions:
         which is checked by ``optimize.solvers.paper.run_paper_method``); read-only mapping.
     """
 
-    target: str = "pq"
-    method: str = "default"
-    fairness: float = 1e-3
-    closeness: float = 1e-2
-    max_iter: int = 200
+    target: Literal[TARGETS] = option("pq", help="what the mesh is made (one of TARGETS)")
+    method: Literal[METHODS] = option("default", help="default: regularized Gauss-Newton; penalty, sqp, "
+                                      "hybrid: the paper's")
+    fairness: float = option(1e-3, ge=0, le=MAX_WEIGHT, help="weight of the fairness energy (relative to "
+                             "the constraints)")
+    closeness: float = option(1e-2, ge=0, le=MAX_WEIGHT, help="weight of the closeness to the reference surface")
+    max_iter: int = option(200, ge=1, le=MAX_ITER, help="iteration budget per level (the solver stops "
+                           "earlier on its tests)")
     tol: Tolerances = field(default_factory=Tolerances)
-    linear_solver: str = "auto"
-    formulation: str = "auto"
-    torsion_free_beams: Any = "auto"
-    convex: bool = True
-    glide_boundary: bool = False
+    linear_solver: Literal[LINEAR_SOLVERS] = option("auto", help="sparse backend of the default method")
+    formulation: Literal[FORMULATIONS] = option("auto", help="unknowns of the default method")
+    torsion_free_beams: Literal["auto"] | bool = option("auto", help="conical: node axes solved with every "
+                                                        "interior beam planar (auto: where needed)")
+    convex: bool = option(True, help="default method: corners convex in the input stay convex")
+    glide_boundary: bool = option(False, help="free boundary vertices glide on the reference's boundary")
     paper: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self):
@@ -81,9 +97,9 @@ class OptimizeOptions:
             if not any(val is c or (type(val) is type(c) and val == c) for c in CHOICES[key]):
                 raise ConfigError(f"{key}: {val!r} is not known, expected one of {CHOICES[key]}")
         for key in ("fairness", "closeness"):
-            val = getattr(self, key)
-            if isinstance(val, bool) or not isinstance(val, numbers.Real) or not (math.isfinite(val) and val >= 0):
-                raise ConfigError(f"{key}: weight {val!r}, expected a finite number >= 0")
+            val, low = getattr(self, key), _FIELDS[key].metadata["ge"]
+            if isinstance(val, bool) or not isinstance(val, numbers.Real) or not (math.isfinite(val) and val >= low):
+                raise ConfigError(f"{key}: weight {val!r}, expected a finite number >= {low:g}")
             object.__setattr__(self, key, float(val))
         mi = self.max_iter
         if isinstance(mi, bool) or not (isinstance(mi, numbers.Integral)
@@ -118,6 +134,9 @@ class OptimizeOptions:
         out = {f.name: getattr(self, f.name) for f in fields(self)}
         out["tol"], out["paper"] = self.tol.as_dict(), dict(self.paper)
         return out
+
+
+_FIELDS = {f.name: f for f in fields(OptimizeOptions)}
 
 
 def resolve_optimizer(optimizer=None):

@@ -149,3 +149,33 @@ def test_the_shared_command_line_arguments_parse_alike(tmp_path, capsys):
     path.write_text("name: c\ninput: {shape: {name: dome}}\n")
     assert main(["size", str(path), "--set", "parts.joint_gap=8,9"]) == 2
     assert "--set parts.joint_gap: fabricate size takes one value per key" in capsys.readouterr().err
+
+
+def test_the_optimize_section_is_derived_from_the_optimizers_options():
+    """Defaults, choices, bounds and help of ``optimize`` are the fields of optimize.options.OptimizeOptions,
+    written once; only ``target`` (null: the input's own, ``none``) and ``fixed`` are the section's own."""
+    import optimize.options as opt
+    from fabricate.app.config import OptimizeSection
+
+    assert OPTIONS[OptimizeSection.__mro__[1]] is opt.OptimizeOptions
+    app_only = {"target", "fixed"}
+    hints = typing.get_type_hints(opt.OptimizeOptions)
+    derived = [f for f in dataclasses.fields(opt.OptimizeOptions) if f.name not in app_only | {"tol", "paper"}]
+    assert set(OptimizeSection.model_fields) == app_only | {f.name for f in derived}
+    bounds = ("ge", "gt", "le", "lt")
+    for f in derived:
+        key = OptimizeSection.model_fields[f.name]
+        assert key.get_default() == f.default == getattr(opt.DEFAULTS, f.name), f.name
+        assert key.annotation == hints[f.name], f.name  # the choices are the option's Literal
+        assert key.description == f.metadata["help"], f.name
+        given = {b: getattr(m, b) for m in key.metadata for b in bounds if getattr(m, b, None) is not None}
+        assert given == {b: f.metadata[b] for b in bounds if b in f.metadata}, f.name  # no bound of the app's own
+    assert (opt.OptimizeOptions.__dataclass_fields__["max_iter"].metadata["le"] == opt.MAX_ITER
+            and opt.OptimizeOptions.__dataclass_fields__["fairness"].metadata["le"] == opt.MAX_WEIGHT)
+    for bad in ({"max_iter": 0}, {"max_iter": opt.MAX_ITER + 1}, {"fairness": -1e-9}, {"closeness": 2 * opt.MAX_WEIGHT},
+                {"method": "newton"}, {"torsion_free_beams": "yes please"}):
+        with pytest.raises(ValidationError):
+            OptimizeSection.model_validate(bad)
+    assert OptimizeSection.model_validate({"max_iter": opt.MAX_ITER, "closeness": opt.MAX_WEIGHT}).max_iter == opt.MAX_ITER
+    with pytest.raises(opt.ConfigError, match=r"fairness: weight -1.0, expected a finite number >= 0"):
+        opt.OptimizeOptions(fairness=-1.0)  # the object holds the same lower bound

@@ -57,8 +57,8 @@ from .options import (CHECK_AUTO_MAX_PARTS, TOLERANCE_KEYS, UNIT_TO_MM, OffsetOp
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
 
 
-MAX_ITER = 10_000
-"""Largest ``optimize.max_iter``."""
+MAX_ITER = OPT.MAX_ITER
+"""Largest ``optimize.max_iter`` (:data:`optimize.options.MAX_ITER`)."""
 
 
 def _resolve_path(value: Any, info: ValidationInfo) -> Path | None:
@@ -183,21 +183,16 @@ class SubdivisionSection(Section):
     levels: int | None = Field(default=None, ge=0, le=6)  # Catmull-Clark: 4^6 = 4096 faces per face
 
 
-class OptimizeSection(Section):
-    """The optimizer's settings; defaults and choices are :data:`optimize.options.DEFAULTS` and
-    :data:`optimize.options.CHOICES` (one place), ``target: null`` the input's own, ``none`` no optimization."""
+_OPTIMIZE_KEYS = ["target", "method", "formulation", "linear_solver", "torsion_free_beams", "fairness", "closeness",
+                  "max_iter", "fixed", "glide_boundary", "convex"]
 
-    target: Literal[OPT.TARGETS + ("none",)] | None = None
-    method: Literal[OPT.METHODS] = OPT.DEFAULTS.method
-    formulation: Literal[OPT.FORMULATIONS] = OPT.DEFAULTS.formulation
-    linear_solver: Literal[OPT.LINEAR_SOLVERS] = OPT.DEFAULTS.linear_solver
-    torsion_free_beams: Literal["auto"] | bool = OPT.DEFAULTS.torsion_free_beams
-    fairness: float = Field(default=OPT.DEFAULTS.fairness, ge=0, le=1e6)
-    closeness: float = Field(default=OPT.DEFAULTS.closeness, ge=0, le=1e6)
-    max_iter: int = Field(default=OPT.DEFAULTS.max_iter, ge=1, le=MAX_ITER)
-    fixed: Literal["boundary", "corners"] | list[int] | None = None
-    glide_boundary: bool = OPT.DEFAULTS.glide_boundary
-    convex: bool = OPT.DEFAULTS.convex
+
+class OptimizeSection(section_base(OPT.OptimizeOptions, order=_OPTIMIZE_KEYS, extra={
+        "target": (Literal[OPT.TARGETS + ("none",)] | None, Field(default=None)),
+        "fixed": (Literal["boundary", "corners"] | list[int] | None, Field(default=None))})):
+    """The optimizer's settings: defaults, choices and bounds are the fields of
+    :class:`optimize.options.OptimizeOptions` (one place; ``tol`` is the tolerances section); of the
+    section only: ``target: null`` the input's own, ``none`` no optimization, and the ``fixed`` vertices."""
 
     @field_validator("fixed")
     @classmethod

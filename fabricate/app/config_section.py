@@ -54,10 +54,11 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
                  order: typing.Sequence[str] | None = None) -> type[Section]:
     """A :class:`Section` whose keys are the fields of the frozen dataclass ``options``: each key's
     default is the field's, its bounds, alias, unit and help those of the field metadata
-    (:func:`fabricate.fields.option`; ``meta`` adds to it by field name, for an option class that has
+    (:func:`optimize.fields.option`; ``meta`` adds to it by field name, for an option class that has
     none, like :class:`optimize.tolerances.Tolerances`).  A ``tuple[X, ...]`` field is a YAML list
     (with ``items`` bounds on each item).  ``extra``: further keys ``{name: (annotation, Field)}`` of
-    the section only (nested sections); ``order``: the order of the keys.  Subclass the result to add
+    the section only (nested sections, or a field's key as the section has it); ``order``: the order of
+    the keys (a field it leaves out is no key of the section).  Subclass the result to add
     validators and methods; :meth:`Section.to_options` gives the option object back."""
     hints = typing.get_type_hints(options)
     fields: dict[str, tuple] = {}
