@@ -27,24 +27,37 @@ KIND_LAYER = {"panel": "glass", "beam": "steel", "node": "nodes"}
 
 
 def _mesh(rh, V: np.ndarray, faces) -> object:
-    """A rhino3dm Mesh of polygons ``faces`` over ``V (n, 3)`` (double precision vertices)."""
+    """A rhino3dm Mesh of polygons ``faces`` over ``V (n, 3)`` (double precision vertices); ``faces``
+    as rows (``-1`` padding) or as :func:`_mesh_faces` made them once for many parts of one shape."""
     m = rh.Mesh()
     m.Vertices.UseDoublePrecisionVertices = True
     m.Vertices.SetCount(len(V))
+    point, set_point = rh.Point3d, m.Vertices.SetPoint3dAt
     for j, (x, y, z) in enumerate(V.tolist()):  # Vertices.Add(x, y, z) would round to float32
-        m.Vertices.SetPoint3dAt(j, rh.Point3d(x, y, z))
-    for face in faces:
-        face = [int(i) for i in face if i >= 0]
-        if len(face) == 3:
-            m.Faces.AddFace(face[0], face[1], face[2])
-        elif len(face) == 4:
-            m.Faces.AddFace(*face)
-        else:  # fan: the faces are planar and convex
-            for j in range(1, len(face) - 1):
-                m.Faces.AddFace(face[0], face[j], face[j + 1])
+        set_point(j, point(x, y, z))
+    add = m.Faces.AddFace
+    for face in (faces if isinstance(faces, _Faces) else _mesh_faces(faces)):
+        add(*face)
     m.Normals.ComputeNormals()
     m.Compact()
     return m
+
+
+class _Faces(list):
+    """Triangles and quads (tuples of vertex indices) of :func:`_mesh_faces`."""
+
+
+def _mesh_faces(faces) -> _Faces:
+    """Polygons as rhino3dm faces: triangles and quads as they are, larger ones as fans (the faces are
+    planar and convex)."""
+    out = _Faces()
+    for face in faces:
+        face = [int(i) for i in face if i >= 0]
+        if len(face) in (3, 4):
+            out.append(tuple(face))
+        else:
+            out.extend((face[0], face[j], face[j + 1]) for j in range(1, len(face) - 1))
+    return out
 
 
 def _attributes(rh, layer: int, name: str, strings: dict) -> object:
@@ -76,6 +89,7 @@ def write_3dm(parts, path, *, structure=None, mesh=None) -> dict:
     for g in parts.groups:
         layer = KIND_LAYER[g.kind]
         density = parts.spec.group_density(g)
+        faces = _mesh_faces(g.faces)                     # the same polygons for every part of the group
         for i, pid in enumerate(g.ids):
             row = {"id": pid, "kind": g.kind, "element": int(g.element[i]),
                    "volume_mm3": repr(float(g.volume_mm3[i])),
@@ -83,7 +97,7 @@ def write_3dm(parts, path, *, structure=None, mesh=None) -> dict:
                    "area_m2": f"{g.area_mm2[i] * 1e-6:.6f}", "length_mm": f"{g.length_mm[i]:.3f}",
                    "thickness_mm": f"{g.thickness_mm[i]:.3f}", "planarity_mm": f"{g.planarity_mm[i]:.3g}",
                    "neighbours": " ".join(g.neighbours[i])}
-            model.Objects.AddMesh(_mesh(rh, g.vertices[i], g.faces), _attributes(rh, index[layer], pid, row))
+            model.Objects.AddMesh(_mesh(rh, g.vertices[i], faces), _attributes(rh, index[layer], pid, row))
             counts[layer] += 1
     if mesh is not None:
         model.Objects.AddMesh(_mesh(rh, mesh.V, mesh.F), _attributes(rh, index["design mesh"], "design", {}))
