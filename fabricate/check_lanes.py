@@ -101,7 +101,8 @@ def stop(proc: subprocess.Popen | None) -> None:
 def main() -> None:
     """The child: ``OUTDIR NAMES SKIP`` (comma lists) -> pickled ``{name: result}`` of NAMES on stdout."""
     signal.signal(signal.SIGINT, lambda *_: os._exit(130))       # Ctrl-C reaches the parent, which cleans up
-    from .check import _check_outputs, heap_reuse
+    from .check import _check_outputs
+    from .check_heap import heap_reuse
 
     outdir = Path(sys.argv[1])
     names, skip = (frozenset(s for s in arg.split(",") if s) for arg in sys.argv[2:4])

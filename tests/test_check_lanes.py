@@ -11,7 +11,8 @@ from cad_fixtures import dome_parts
 
 import fabricate.check_lanes as lanes
 import fabricate.export as ex
-from fabricate.check import check_outputs, heap_reuse
+from fabricate.check import check_outputs
+from fabricate.check_heap import heap_reuse
 from fabricate.export.step_tokens import Records
 from optimize.errors import ExportError
 
