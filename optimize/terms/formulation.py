@@ -38,6 +38,7 @@ from ..errors import ConfigError
 from ..mesh import Mesh
 from ..mesh.axes import fit_star_axes
 from ..mesh.measures import face_normals
+from ..options import DEFAULT_TARGETS as TARGETS
 from . import (
     anglebalance,
     anglesum,
@@ -48,7 +49,6 @@ from . import (
     planarity,
     unit,
 )
-from .problem import DEFAULT_TARGETS as TARGETS
 from .problem import UNKNOWNS, ProblemSpec, TermSpec, describe
 
 ROWS = ("planarity", "unit", "diagonals", "conical", "anglebalance", "circular", "anglesum", "nodeaxes")

@@ -50,14 +50,12 @@ import numpy as np
 
 from ..errors import ConfigError, MeshError
 from ..mesh import Mesh, measures
+from ..options import DEFAULT_TARGETS, METHODS, TARGETS
 from . import circular, nodeaxes
 from . import fixed as fixed_mod
 from .variables import Layout
 
-METHODS = ("default", "penalty", "sqp", "hybrid")
 KINDS = ("constraint", "least_squares", "energy")
-DEFAULT_TARGETS = ("pq", "conical", "circular")
-PAPER_TARGETS = ("pq", "conical", "circular", "strip")
 UNKNOWNS = ("auxiliary", "vertices")
 GLIDE_EDGE_FLOOR = 0.5  # with a gliding boundary, no boundary edge below half its start length
 
@@ -307,8 +305,8 @@ def _describe_default(mesh: Mesh, target: str, formulation: str, beams, fixed, g
 def _describe_paper(mesh: Mesh, target: str, method: str, fixed, fairness, closeness, reference,
                     mu: float | None) -> ProblemSpec:
     """The paper's rows (section 2.2 and section 3; ``optimize.solvers.paper.targets``)."""
-    if target not in PAPER_TARGETS:
-        raise ConfigError(f"target {target!r} is not known to the paper's methods, expected one of {PAPER_TARGETS}")
+    if target not in TARGETS:
+        raise ConfigError(f"target {target!r} is not known to the paper's methods, expected one of {TARGETS}")
     if target == "strip":
         check_strip(mesh)
     mu = default_mu(mesh, target, method) if mu is None else float(mu)

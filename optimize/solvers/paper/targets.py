@@ -29,8 +29,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...mesh import Mesh
+from ...options import TARGETS
 from ...terms import anglebalance, anglesum, facesum
-from ...terms.problem import PAPER_TARGETS as TARGETS
 from ...terms.problem import ProblemSpec, TermSpec, check_strip, describe
 
 __all__ = ["TARGETS", "Term", "check_strip", "prepare", "prepare_all", "target_terms"]
