@@ -45,6 +45,18 @@ def tube_faces(k: int) -> tuple[tuple[int, ...], ...]:
     return tuple(out)
 
 
+def tube_step_faces(k: int) -> tuple[tuple, tuple[int, ...]]:
+    """The ``k``-gon tube of :func:`tube_faces` with annular ends: ``(faces, normal_of)``, ``2 k`` quads
+    (outside, inside) then the upper and the lower end, each ``(outer loop, hole loop)`` (outer
+    counter-clockwise about the outward normal, the hole clockwise); ``normal_of``: the face of
+    :func:`tube_faces` whose normal each has."""
+    ring = [tuple(o * k + j for j in range(k)) for o in range(4)]                 # ol, ou, il, iu
+    quads = tube_faces(k)[:2 * k]
+    upper = (ring[1], ring[3][::-1])                                               # normal +axis
+    lower = (ring[0][::-1], ring[2])                                               # normal -axis
+    return quads + (upper, lower), tuple(range(2 * k)) + (2 * k, 3 * k)
+
+
 def tube_hubs(node: dict, wall: float, cap: float, node_ids, element) -> list[dict]:
     """Split solid hubs into tube, top cap and bottom cap: ``[{"member", "vertices", "normals", "faces", "length"}]``.
 

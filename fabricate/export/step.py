@@ -40,24 +40,33 @@ class _Template:
     """The Part 21 text of one solid, as a ``%`` template over a row of numbers.
 
     Entity ids are local (``0..count-1``) plus the part's base id; real
-    numbers come from the part's points, edge directions, face normals and
-    face reference directions.  ``fill`` gathers every field of every part in
+    numbers come from the part's points, edge directions and face normals (a
+    face's plane has no reference direction, ``$``: readers take one
+    perpendicular to its normal).  ``fill`` gathers every field of every part in
     one fancy-index operation.
+
+    faces : ``(nf,)`` loops of vertex indices, or, for a face with holes, a tuple of loops (the
+    outer one counter-clockwise about the outward normal, each hole clockwise);
+    normal_of : ``(nf,)`` the row of the group's normals that holds each face's normal (default
+    ``0..nf-1``).
     """
 
-    def __init__(self, faces: tuple[tuple[int, ...], ...], nv: int):
-        E, per_face = edge_table(faces)
+    def __init__(self, faces: tuple, nv: int, normal_of: tuple[int, ...] | None = None):
+        faces = tuple(f if isinstance(f[0], tuple) else (f,) for f in faces)   # every face: its loops
+        loops = [loop for f in faces for loop in f]
+        E, per_loop = edge_table(tuple(loops))
         self.edges = E
         self.faces = faces
+        self.normal_of = np.arange(len(faces)) if normal_of is None else np.asarray(normal_of, dtype=np.int64)
         self.nv, self.ne, self.nf = nv, len(E), len(faces)
         lines: list[str] = []
         fields: list[int] = []          # column of the source matrix for every field
         nid = [0]
-        # source columns: [local ids (count)] [points 3 nv] [dirs 3 ne] [normals 3 nf] [refs 3 nf]
-        counts = 2 * nv + 4 * self.ne + sum(len(f) for f in faces) + 7 * self.nf + 1
+        # source columns: [local ids (count)] [points 3 nv] [dirs 3 ne] [normals 3 nf]
+        counts = 2 * nv + 4 * self.ne + sum(len(f) for f in loops) + 2 * len(loops) + 4 * self.nf + 1
         self.count = counts
         c_pt, c_dir = counts, counts + 3 * nv
-        c_nrm, c_ref = c_dir + 3 * self.ne, c_dir + 3 * self.ne + 3 * self.nf
+        c_nrm = c_dir + 3 * self.ne
 
         def new(text: str, cols: list[int]) -> int:
             i = nid[0]
@@ -77,15 +86,17 @@ class _Template:
             line = new("LINE('',#%d,#%d)", [pt[a], vec])
             ec.append(new("EDGE_CURVE('',#%d,#%d,#%d,.T.)", [vp[a], vp[b], line]))
         face_ids = []
-        for fi, (face, row) in enumerate(zip(faces, per_face)):
-            oe = [new("ORIENTED_EDGE('',*,*,#%d," + (".T.)" if fwd else ".F.)"), [ec[e]]) for e, fwd in row]
-            loop = new("EDGE_LOOP('',(" + ",".join(["#%d"] * len(oe)) + "))", oe)
-            bound = new("FACE_OUTER_BOUND('',#%d,.T.)", [loop])
+        rows = iter(per_loop)
+        for fi, face in enumerate(faces):
+            bounds = []
+            for li in range(len(face)):
+                oe = [new("ORIENTED_EDGE('',*,*,#%d," + (".T.)" if fwd else ".F.)"), [ec[e]]) for e, fwd in next(rows)]
+                loop = new("EDGE_LOOP('',(" + ",".join(["#%d"] * len(oe)) + "))", oe)
+                bounds.append(new(("FACE_BOUND" if li else "FACE_OUTER_BOUND") + "('',#%d,.T.)", [loop]))
             nrm = new(f"DIRECTION('',({REAL},{REAL},{REAL}))", xyz(c_nrm + 3 * fi))
-            ref = new(f"DIRECTION('',({REAL},{REAL},{REAL}))", xyz(c_ref + 3 * fi))
-            ax = new("AXIS2_PLACEMENT_3D('',#%d,#%d,#%d)", [pt[face[0]], nrm, ref])
+            ax = new("AXIS2_PLACEMENT_3D('',#%d,#%d,$)", [pt[face[0][0]], nrm])
             pl = new("PLANE('',#%d)", [ax])
-            face_ids.append(new("ADVANCED_FACE('',(#%d),#%d,.T.)", [bound, pl]))
+            face_ids.append(new("ADVANCED_FACE('',(" + ",".join(["#%d"] * len(bounds)) + "),#%d,.T.)", bounds + [pl]))
         self.shell = new("CLOSED_SHELL('',(" + ",".join(["#%d"] * len(face_ids)) + "))", face_ids)
         assert nid[0] == counts
         self.text = "".join(lines)
@@ -98,13 +109,8 @@ class _Template:
         a, b = self.edges[:, 0], self.edges[:, 1]
         D = V[:, b] - V[:, a]
         D /= np.linalg.norm(D, axis=2, keepdims=True)
-        first = np.array([f[0] for f in self.faces])
-        second = np.array([f[1] for f in self.faces])
-        R = V[:, second] - V[:, first]
-        R -= np.einsum("pfi,pfi->pf", R, N)[..., None] * N
-        R /= np.linalg.norm(R, axis=2, keepdims=True)
-        src = np.concatenate([ids.astype(float), V.reshape(p, -1), D.reshape(p, -1), N.reshape(p, -1),
-                              R.reshape(p, -1)], axis=1)
+        src = np.concatenate([ids.astype(float), V.reshape(p, -1), D.reshape(p, -1),
+                              N[:, self.normal_of].reshape(p, -1)], axis=1)
         return src[:, self.fields]
 
 
@@ -202,7 +208,7 @@ def write_step(parts, path, *, engine: str = "direct", name: str = "model", pcur
 
 def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
     groups = [g for g in parts.groups if len(g)]
-    templates = [_Template(g.faces, g.vertices.shape[1]) for g in groups]
+    templates = [_Template(step_faces(g)[0], g.vertices.shape[1], step_faces(g)[1]) for g in groups]
     style_base = {kind: N_GLOBAL + 1 + 7 * i for i, kind in enumerate(KINDS)}
     next_id = N_GLOBAL + 1 + 7 * len(KINDS)
     bases = []
@@ -243,6 +249,17 @@ def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the STEP file ({exc.strerror or exc})") from None
     return {"entities": int(next_id), "pcurves": False}
+
+
+def step_faces(group) -> tuple[tuple, tuple[int, ...] | None]:
+    """``(faces, normal_of)`` of a group's solids in STEP (:class:`_Template`): its polygons, except
+    a hub tube's, whose ends are written as one annulus each, a face with a hole
+    (:func:`fabricate.cad.hubs.tube_step_faces`), as OpenCASCADE's writer does."""
+    if group.kind == "node" and group.member == "tube":
+        from fabricate.cad.hubs import tube_step_faces
+
+        return tube_step_faces(group.vertices.shape[1] // 4)
+    return group.faces, None
 
 
 def _safe(text: str) -> str:

@@ -9,7 +9,8 @@ item -> ... -> ``COLOUR_RGB``), and measures every solid from the file alone:
 
 - ``closed``: every edge curve of the shell is used by exactly two of its face
   loops, once in each direction (a closed, consistently oriented 2-manifold);
-- ``euler``: ``V - E + F`` of the shell (2 for one solid without holes);
+- ``euler``: ``V - E + 2F - L`` of the shell (``L`` loops; ``V - E + F`` when no face has a
+  hole): 2 for one solid without through holes, 0 for a tube;
 - ``loops_closed``: each loop's edges join end to start;
 - ``on_plane`` / ``on_line``: the largest distance of a loop vertex from its
   face's ``PLANE`` and of an edge's end points from its ``LINE`` (mm);
@@ -22,8 +23,11 @@ item -> ... -> ``COLOUR_RGB``), and measures every solid from the file alone:
 It never uses the writer (:mod:`fabricate.export.step`) nor OpenCASCADE, so
 it is an independent reading of what the file says.  It reads what a planar
 B-rep writer produces (AP203/AP214 entity names, one or more entities per
-line, whitespace between tokens allowed); a file with other geometry (curved
-surfaces, inner bounds) is reported as unsupported, not guessed at.
+line, whitespace between tokens allowed); planar faces may have holes (one
+``FACE_OUTER_BOUND`` and a ``FACE_BOUND`` per hole, turning the other way:
+``normals_agree`` holds each to its side, ``euler`` is the Euler-Poincare
+``V - E + 2F - L`` with ``L`` loops).  A file with other geometry (curved
+surfaces) is reported as unsupported, not guessed at.
 """
 from __future__ import annotations
 
@@ -63,11 +67,11 @@ SMALL = {  # few entities (a few per part): their groups are read in Python
 BIG = {  # the planar B-rep: kind -> entity name (read with numpy, :mod:`step_tokens`)
     "point": b"CARTESIAN_POINT", "direction": b"DIRECTION", "vertex": b"VERTEX_POINT", "vector": b"VECTOR",
     "line": b"LINE", "edge": b"EDGE_CURVE", "oriented": b"ORIENTED_EDGE", "loop": b"EDGE_LOOP",
-    "bound": b"FACE_OUTER_BOUND", "axis": b"AXIS2_PLACEMENT_3D", "plane": b"PLANE", "face": b"ADVANCED_FACE",
+    "bound": b"FACE_OUTER_BOUND", "inner": b"FACE_BOUND", "axis": b"AXIS2_PLACEMENT_3D", "plane": b"PLANE", "face": b"ADVANCED_FACE",
     "shell": b"CLOSED_SHELL", "solid": b"MANIFOLD_SOLID_BREP"}
 UNSUPPORTED = (b"B_SPLINE", b"CYLINDRICAL_SURFACE", b"CONICAL_SURFACE", b"SPHERICAL_SURFACE",
                b"TOROIDAL_SURFACE", b"SURFACE_OF_", b"OFFSET_SURFACE")
-UNSUPPORTED_NAMES = (b"CIRCLE", b"ELLIPSE", b"FACE_BOUND", b"FACE_SURFACE")
+UNSUPPORTED_NAMES = (b"CIRCLE", b"ELLIPSE", b"FACE_SURFACE")
 MAX_SPARSE = 4           # ids up to 4 x the record count (+ 10^6) are looked up in a dense array
 
 
@@ -111,6 +115,20 @@ class _Lookup:
         if (seen > 1 if self.dense else seen).any():
             dup = int(np.argmax(seen > 1)) if self.dense else int(self.sorted[np.argmax(seen)])
             raise ExportError(f"{path}: entity id #{dup} is used twice")
+
+    def at_either(self, refs, codes: tuple[int, int], what: str) -> tuple[np.ndarray, np.ndarray]:
+        """``(rows, is the second kind)`` of ``refs``, each an entity of one of two kinds."""
+        refs = np.asarray(refs, dtype=np.int64).ravel()
+        if self.dense:
+            i = np.clip(refs, 0, len(self.row) - 1)
+            kind = np.where(refs >= len(self.row), -1, self.kind[i])
+        else:
+            i = np.clip(np.searchsorted(self.sorted, refs), 0, max(len(self.sorted) - 1, 0))
+            kind = np.where(self.sorted[i] != refs, -1, self.kind[i])
+        bad = (kind != codes[0]) & (kind != codes[1])
+        if bad.any():
+            raise ExportError(f"{self.path}: #{int(refs[np.argmax(bad)])} is not a {what}")
+        return self.row[i], kind == codes[1]
 
     def at(self, refs, code: int, what: str) -> np.ndarray:
         """Rows of ``refs`` in kind ``code``; ExportError when a reference is not such an entity."""
@@ -178,19 +196,14 @@ def _parse_body(data: bytes, a: int, b: int, path):
     lp, G["lp_off"] = R.ref_list(rows["loop"], close["loop"], n["loop"])
     G["lp_oe"] = at(lp, "oriented")
     br, bf, _ = R.template(rows["bound"], close["bound"], ",#,?)", n["bound"])
-    G["b_loop"], G["b_fwd"] = at(br[0], "loop"), bf[0]
+    ir, if_, _ = R.template(rows["inner"], close["inner"], ",#,?)", n["inner"])
+    G["b_loop"] = np.concatenate([at(br[0], "loop"), at(ir[0], "loop")]).astype(np.int64)
+    G["b_fwd"] = np.concatenate([bf[0], if_[0]]).astype(bool)
+    G["b_outer"] = np.arange(len(G["b_loop"])) < len(br[0])     # FACE_OUTER_BOUND first, then FACE_BOUND
     ar = _axes(R, rows["axis"], close["axis"])
     G["a_pt"], G["a_dir"] = at(ar[:, 0], "point"), at(ar[:, 1], "direction")
     G["p_axis"] = at(R.template(rows["plane"], close["plane"], ",#)", n["plane"])[0][0], "axis")
-    fr = rows["face"]
-    many = R.ref_hi[fr] - R.ref_lo[fr] > 2
-    if many.any():
-        raise ExportError(f"{path}: ADVANCED_FACE #{int(R.ids[fr[np.argmax(many)]])} has inner bounds (holes) "
-                          "or more arguments; this check reads faces with one bound only "
-                          "(run `fabricate check --occ`)")
-    fref, ff, _ = R.template(fr, close["face"], ",(#),#,?)", n["face"])
-    G["f_bound"], G["f_plane"], G["f_same"] = at(fref[0], "bound"), at(fref[1], "plane"), ff[0]
-    G["n_faces"] = np.int64(len(fr))
+    _faces(R, rows["face"], close["face"], G, L, code)
     sh, G["sh_off"] = R.ref_list(rows["shell"], close["shell"], n["shell"])
     G["sh_face"] = at(sh, "face")
     sr = rows["solid"]
@@ -202,6 +215,27 @@ def _parse_body(data: bytes, a: int, b: int, path):
         name = rx.pattern[1:rx.pattern.index(b"\\(")]
         K[k] = _Kind(R.texts(R.of(name)), rx, path)
     return G, K
+
+
+def _faces(R, fr, close, G, L, code) -> None:
+    """Faces with one or more bounds (``ADVANCED_FACE('',(#b1,#b2,...),#plane,.T.)``): ``f_plane``,
+    ``f_same`` (F,), and their bounds ``f_bounds`` (rows of ``b_loop``) from ``f_off (F + 1,)``."""
+    nb = R.ref_hi[fr] - R.ref_lo[fr] - 1                       # bounds of each face
+    if len(fr) and nb.min() < 1:
+        raise ExportError(f"{R.path}: ADVANCED_FACE #{int(R.ids[fr[np.argmin(nb)]])} has no bound")
+    off = np.concatenate([[0], np.cumsum(nb)]).astype(np.int64)
+    G["f_plane"], G["f_same"] = np.zeros(len(fr), np.int64), np.zeros(len(fr), bool)
+    refs = np.zeros(int(off[-1]), np.int64)
+    for k in np.unique(nb).tolist():                           # one template per number of bounds
+        sel = np.flatnonzero(nb == k)
+        got, flags, _ = R.template(fr[sel], close[sel], ",(" + ",".join("#" * k) + "),#,?)", "ADVANCED_FACE")
+        G["f_plane"][sel] = L.at(got[k], code["plane"], "PLANE")
+        G["f_same"][sel] = flags[0]
+        for j in range(k):
+            refs[off[sel] + j] = got[j]
+    rows, inner = L.at_either(refs, (code["bound"], code["inner"]), "FACE_OUTER_BOUND or FACE_BOUND")
+    G["f_bounds"] = rows + np.where(inner, int(np.count_nonzero(G["b_outer"])), 0)
+    G["f_off"], G["n_faces"] = off, np.int64(len(fr))
 
 
 def _axes(R, rows, close) -> np.ndarray:
@@ -236,22 +270,25 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
     pts, dirs, vert_pt, e_v, e_line = G["point"], G["direction"], G["vert_pt"], G["e_v"], G["e_line"]
     l_pt, l_vec, v_dir, o_edge, o_fwd = G["l_pt"], G["l_vec"], G["v_dir"], G["o_edge"], G["o_fwd"]
     lp_oe, lp_off, b_loop, b_fwd = G["lp_oe"], G["lp_off"], G["b_loop"], G["b_fwd"]
-    a_pt, a_dir, p_axis, f_bound, f_plane, f_same = G["a_pt"], G["a_dir"], G["p_axis"], G["f_bound"], \
-        G["f_plane"], G["f_same"]
+    a_pt, a_dir, p_axis, f_plane, f_same = G["a_pt"], G["a_dir"], G["p_axis"], G["f_plane"], G["f_same"]
     sh_face, sh_off, s_shell, S = G["sh_face"], G["sh_off"], G["s_shell"], G["S"]
     Fc = np.arange(int(G["n_faces"]))
     E = e_line
 
-    # geometry of every face loop: vertices in traversal order (bound orientation applied)
-    face_loop = b_loop[f_bound]
-    face_fwd = b_fwd[f_bound]
-    counts = np.diff(lp_off)[face_loop]                                   # (F,) edges per face
+    # geometry of every bound of every face (U uses of a loop): vertices in traversal order (bound
+    # orientation applied); a face with holes has its outer bound and one bound per hole
+    use_face = np.repeat(Fc, np.diff(G["f_off"]))                         # (U,) face of each bound
+    f_bounds = G["f_bounds"]
+    face_loop = b_loop[f_bounds]
+    face_fwd = b_fwd[f_bounds]
+    counts = np.diff(lp_off)[face_loop]                                   # (U,) edges per bound
     starts = lp_off[face_loop]
-    fidx = np.repeat(np.arange(len(Fc)), counts)
+    uidx = np.repeat(np.arange(len(face_loop)), counts)                   # (sum k,) bound of each edge use
+    fidx = use_face[uidx]                                                 # (sum k,) face of each edge use
     k = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
-    rev = ~face_fwd[fidx]
-    pos = np.where(rev, counts[fidx] - 1 - k, k)                          # bound .F.: loop reversed
-    oe = lp_oe[starts[fidx] + pos]
+    rev = ~face_fwd[uidx]
+    pos = np.where(rev, counts[uidx] - 1 - k, k)                          # bound .F.: loop reversed
+    oe = lp_oe[starts[uidx] + pos]
     fwd = o_fwd[oe] ^ rev                                                 # direction the edge is walked
     edge = o_edge[oe]
     v_from = np.where(fwd, e_v[edge, 0], e_v[edge, 1])
@@ -264,18 +301,23 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
     P = pts[vert_pt[v_from]]                                              # (sum k, 3)
     P1 = P[nxt]
     cross = np.cross(P, P1)
-    area_vec = 0.5 * np.add.reduceat(cross, first, axis=0)               # (F, 3) Newell
+    area_vec = 0.5 * np.add.reduceat(cross, first, axis=0)               # (U, 3) Newell
     ax = p_axis[f_plane]
     normal = dirs[a_dir[ax]] * np.where(f_same, 1.0, -1.0)[:, None]
     normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-300)
     origin = pts[a_pt[ax]]
     on_plane = np.abs(np.einsum("ij,ij->i", P - origin[fidx], normal[fidx]))
-    agree = np.einsum("ij,ij->i", area_vec, normal) > 0
+    along = np.einsum("ij,ij->i", area_vec, normal[use_face])            # (U,) signed area about the normal
+    outer = _outer_bounds(G["b_outer"][f_bounds], along, use_face, len(Fc))
+    agree = np.where(outer, along > 0, along < 0)                         # holes turn the other way
     d0 = P1 - P
     d1 = d0[nxt]
     turn = np.arctan2(np.einsum("ij,ij->i", np.cross(d0, d1), normal[fidx]), np.einsum("ij,ij->i", d0, d1))
     simple = np.abs(np.abs(np.add.reduceat(turn, first)) - 2 * np.pi) < 1e-6
-    vol_face = np.einsum("ij,ij->i", area_vec, origin) / 3.0              # planar face: n.x constant
+    outer_use = np.zeros(len(Fc), np.int64)
+    outer_use[use_face[outer]] = np.flatnonzero(outer)                    # (F,) the outer bound of each face
+    vol_face = np.bincount(use_face, weights=np.einsum("ij,ij->i", area_vec, origin[use_face]),
+                           minlength=len(Fc)) / 3.0                        # planar face: n.x constant
 
     # edge points on their lines
     lp = pts[l_pt[e_line]]
@@ -305,26 +347,27 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
     n_edges = np.bincount(uk // len(E), minlength=n_s)
     vkey = np.unique(el_solid[m] * len(vert_pt) + v_from[m])
     n_verts = np.bincount(vkey // len(vert_pt), minlength=n_s)
-    euler = n_verts - n_edges + sh_count
+    use_solid = face_solid[use_face]
+    n_loops = np.bincount(use_solid[use_solid >= 0], minlength=n_s)
+    euler = n_verts - n_edges + 2 * sh_count - n_loops                     # Euler-Poincare: faces with holes
 
-    def per_solid(values, how):
+    def per_solid(values, solid, how):
         out = np.zeros(n_s) if how == "max" else np.ones(n_s, dtype=bool)
-        sel = face_solid >= 0 if len(values) == len(Fc) else m
-        solid = face_solid if len(values) == len(Fc) else el_solid
+        sel = solid >= 0
         if how == "max":
             np.maximum.at(out, solid[sel], values[sel])
         else:
             np.logical_and.at(out, solid[sel], values[sel])
         return out
 
-    lc, ag, sm = (per_solid(x, "all") for x in (loops_closed, agree, simple))
-    plane_err = per_solid(on_plane, "max")
-    line_err = per_solid(on_line[edge], "max")
+    lc, ag, sm = (per_solid(x, use_solid, "all") for x in (loops_closed, agree, simple))
+    plane_err = per_solid(on_plane, el_solid, "max")
+    line_err = per_solid(on_line[edge], el_solid, "max")
     volume = np.bincount(face_solid[face_solid >= 0], weights=vol_face[face_solid >= 0], minlength=n_s)
     out = {}
     for si, (sid, label) in enumerate(S):
         name = names.get(int(sid)) or label.decode("ascii", "replace")
-        out[name] = _Facts(P, first, counts, s_faces[s_first[si]:s_first[si + 1]], {
+        out[name] = _Facts(P, first[outer_use], counts[outer_use], s_faces[s_first[si]:s_first[si + 1]], {
             "volume_mm3": float(volume[si]), "closed": bool(closed[si]), "euler": int(euler[si]),
             "loops_closed": bool(lc[si]), "normals_agree": bool(ag[si]), "simple": bool(sm[si]),
             "on_plane_mm": float(plane_err[si]), "on_line_mm": float(line_err[si]),
@@ -339,9 +382,20 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
     return out, file_facts
 
 
+def _outer_bounds(flagged: np.ndarray, along: np.ndarray, use_face: np.ndarray, n_faces: int) -> np.ndarray:
+    """``(U,) bool``: the outer bound of each face.  A face's ``FACE_OUTER_BOUND`` when it has one,
+    else its bound of largest area about the face normal (a ``FACE_BOUND`` may bound a face alone or
+    be its outer loop: ISO 10303-42); a face with two outer bounds keeps both (and fails ``normals_agree``
+    unless both turn the right way, which closed solids cannot have)."""
+    has = np.bincount(use_face, weights=flagged, minlength=n_faces) > 0
+    best = np.full(n_faces, -np.inf)
+    np.maximum.at(best, use_face, np.abs(along))
+    return np.where(has[use_face], flagged, np.abs(along) == best[use_face])
+
+
 class _Facts(dict):
-    """One solid's facts; its ``faces`` (list of ``(k, 3)`` loops) are cut from the file's loop
-    array when first asked for (most checks never ask)."""
+    """One solid's facts; its ``faces`` (list of ``(k, 3)`` outer loops, holes left out) are cut from
+    the file's loop array when first asked for (most checks never ask)."""
 
     def __init__(self, P, first, counts, faces, facts):
         super().__init__(facts)
