@@ -365,9 +365,10 @@ def read_step_text(path) -> tuple[dict[str, dict], dict]:
     line_err = per_solid(on_line[edge], el_solid, "max")
     volume = np.bincount(face_solid[face_solid >= 0], weights=vol_face[face_solid >= 0], minlength=n_s)
     out = {}
+    o_first, o_counts = first[outer_use], counts[outer_use]               # (F,) each face's outer loop
     for si, (sid, label) in enumerate(S):
         name = names.get(int(sid)) or label.decode("ascii", "replace")
-        out[name] = _Facts(P, first[outer_use], counts[outer_use], s_faces[s_first[si]:s_first[si + 1]], {
+        out[name] = _Facts(P, o_first, o_counts, s_faces[s_first[si]:s_first[si + 1]], {
             "volume_mm3": float(volume[si]), "closed": bool(closed[si]), "euler": int(euler[si]),
             "loops_closed": bool(lc[si]), "normals_agree": bool(ag[si]), "simple": bool(sm[si]),
             "on_plane_mm": float(plane_err[si]), "on_line_mm": float(line_err[si]),
