@@ -21,6 +21,7 @@ wrote it (BRepCheck, volumes, names).
 from __future__ import annotations
 
 import datetime as _dt
+import re
 import time
 from pathlib import Path
 
@@ -33,17 +34,22 @@ from ..cad.parts import COLOURS, KINDS
 from .brep import edge_table
 
 REAL = "%#.15G"
+PREFIX, NAME, INDEX = "\x00", "\x01", "\x02"  # stand-ins in a template: a part's id prefix, its name, its index
 CHUNK = 2000  # parts formatted per write
 
 
 class _Template:
-    """The Part 21 text of one solid, as a ``%`` template over a row of numbers.
+    """The Part 21 text of one solid, as a ``%`` template over its real numbers.
 
-    Entity ids are local (``0..count-1``) plus the part's base id; real
-    numbers come from the part's points, edge directions and face normals (a
-    face's plane has no reference direction, ``$``: readers take one
-    perpendicular to its normal).  ``fill`` gathers every field of every part in
-    one fancy-index operation.
+    The ids of a part are a prefix ``P`` followed by ``digits`` digits: entity ``k`` (``0 <= k <
+    count``, then the ``N_PRODUCT`` product entities) of the ``j``-th part of a prefix (``j <
+    per_prefix``, as many as fit in ``10**digits`` ids) is ``P * 10**digits + j * stride + k``.
+    :meth:`text` ``j`` writes every id as ``PREFIX`` and its last ``digits`` digits, so that one
+    ``str.replace`` per part writes all its ids (formatting each id as a number took more than
+    half of the writer's time), and the ids stay as dense as numbered one by one.  Real
+    numbers come from the part's points, edge directions and face normals (a face's plane has no
+    reference direction, ``$``: readers take one perpendicular to its normal).  ``fill`` gathers
+    them for every part in one fancy-index operation.
 
     faces : ``(nf,)`` loops of vertex indices, or, for a face with holes, a tuple of loops (the
     outer one counter-clockwise about the outward normal, each hole clockwise);
@@ -99,19 +105,45 @@ class _Template:
             face_ids.append(new("ADVANCED_FACE('',(" + ",".join(["#%d"] * len(bounds)) + "),#%d,.T.)", bounds + [pl]))
         self.shell = new("CLOSED_SHELL('',(" + ",".join(["#%d"] * len(face_ids)) + "))", face_ids)
         assert nid[0] == counts
-        self.text = "".join(lines)
-        self.fields = np.asarray(fields, dtype=np.int64)
+        self.stride = counts + N_PRODUCT
+        self.digits = len(str(self.stride - 1))
+        self.per_prefix = 10 ** self.digits // self.stride
+        pieces = re.split(r"(%d|%#\.15G)", "".join(lines))
+        self._pieces = pieces[0::2]
+        self._locals = [col if spec == "%d" else None for spec, col in zip(pieces[1::2], fields)]
+        self.fields = np.asarray([c - counts for c in fields if c >= counts], dtype=np.int64)
+        assert len(self.fields) == self._locals.count(None)
 
-    def fill(self, base: np.ndarray, V: np.ndarray, N: np.ndarray) -> np.ndarray:
-        """(p, nfields) float: every field of every part (ids as exact floats)."""
+    def _local(self, j: int, k: int) -> str:
+        return f"{PREFIX}{j * self.stride + k:0{self.digits}d}"
+
+    def text(self, j: int) -> str:
+        """The geometry of the ``j``-th part of a prefix: a ``%`` template over its reals (:meth:`fill`)."""
+        out = [self._pieces[0]]
+        for col, lit in zip(self._locals, self._pieces[1:]):
+            out.append(REAL if col is None else self._local(j, col))
+            out.append(lit)
+        return "".join(out)
+
+    def fill(self, V: np.ndarray, N: np.ndarray) -> np.ndarray:
+        """(p, nreals) float: the real numbers of every part, in text order."""
         p = len(V)
-        ids = base[:, None] + np.arange(self.count)[None, :]
         a, b = self.edges[:, 0], self.edges[:, 1]
         D = V[:, b] - V[:, a]
         D /= np.linalg.norm(D, axis=2, keepdims=True)
-        src = np.concatenate([ids.astype(float), V.reshape(p, -1), D.reshape(p, -1),
-                              N[:, self.normal_of].reshape(p, -1)], axis=1)
+        src = np.concatenate([V.reshape(p, -1), D.reshape(p, -1), N[:, self.normal_of].reshape(p, -1)], axis=1)
         return src[:, self.fields]
+
+    def product(self, j: int, style: int) -> str:
+        """The text of the ``N_PRODUCT`` product-structure entities of the ``j``-th part of a prefix (ids as
+        in :meth:`text`; the part's name ``NAME`` and its index in the assembly ``INDEX`` to be filled in)."""
+        return _product([self._local(j, self.count + k) for k in range(N_PRODUCT)], self._local(j, self.shell),
+                        NAME, INDEX, style)
+
+    def ids(self, first: int, n: int) -> np.ndarray:
+        """``(n,)`` the id of entity 0 of each of ``n`` parts from prefix ``first`` on."""
+        i = np.arange(n)
+        return (first + i // self.per_prefix) * 10 ** self.digits + (i % self.per_prefix) * self.stride
 
 
 SCHEMAS = {
@@ -157,24 +189,24 @@ STYLE = """#{0}=COLOUR_RGB('{kind}',{r:.6f},{g:.6f},{b:.6f});
 N_PRODUCT = 15  # entities per part after the geometry (see _product)
 
 
-def _product(b: int, shell: int, name: str, index: int, style: int) -> str:
-    """Text of the 15 product-structure entities of one part (ids ``b .. b + 14``)."""
-    return (f"#{b}=MANIFOLD_SOLID_BREP('{name}',#{shell});\n"
-            f"#{b + 1}=ADVANCED_BREP_SHAPE_REPRESENTATION('{name}',(#13,#{b}),#9);\n"
-            f"#{b + 2}=PRODUCT('{name}','{name}','',(#3));\n"
-            f"#{b + 3}=PRODUCT_DEFINITION_FORMATION('','',#{b + 2});\n"
-            f"#{b + 4}=PRODUCT_DEFINITION('design','',#{b + 3},#4);\n"
-            f"#{b + 5}=PRODUCT_DEFINITION_SHAPE('','',#{b + 4});\n"
-            f"#{b + 6}=SHAPE_DEFINITION_REPRESENTATION(#{b + 5},#{b + 1});\n"
-            f"#{b + 7}=PRODUCT_RELATED_PRODUCT_CATEGORY('part',$,(#{b + 2}));\n"
-            f"#{b + 8}=NEXT_ASSEMBLY_USAGE_OCCURRENCE('{index}','{name}','',#16,#{b + 4},$);\n"
-            f"#{b + 9}=PRODUCT_DEFINITION_SHAPE('Placement','Placement of an item',#{b + 8});\n"
-            f"#{b + 10}=AXIS2_PLACEMENT_3D('',#10,#11,#12);\n"
-            f"#{b + 11}=ITEM_DEFINED_TRANSFORMATION('','',#13,#{b + 10});\n"
-            f"#{b + 12}=(REPRESENTATION_RELATIONSHIP('','',#{b + 1},#19)"
-            f"REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION(#{b + 11})SHAPE_REPRESENTATION_RELATIONSHIP());\n"
-            f"#{b + 13}=CONTEXT_DEPENDENT_SHAPE_REPRESENTATION(#{b + 12},#{b + 9});\n"
-            f"#{b + 14}=STYLED_ITEM('color',(#{style}),#{b});\n")
+def _product(i: list[str], shell: str, name: str, index: str, style: int) -> str:
+    """Text of the 15 product-structure entities of one part (ids ``i[0] .. i[14]``, its shell ``shell``)."""
+    return (f"#{i[0]}=MANIFOLD_SOLID_BREP('{name}',#{shell});\n"
+            f"#{i[1]}=ADVANCED_BREP_SHAPE_REPRESENTATION('{name}',(#13,#{i[0]}),#9);\n"
+            f"#{i[2]}=PRODUCT('{name}','{name}','',(#3));\n"
+            f"#{i[3]}=PRODUCT_DEFINITION_FORMATION('','',#{i[2]});\n"
+            f"#{i[4]}=PRODUCT_DEFINITION('design','',#{i[3]},#4);\n"
+            f"#{i[5]}=PRODUCT_DEFINITION_SHAPE('','',#{i[4]});\n"
+            f"#{i[6]}=SHAPE_DEFINITION_REPRESENTATION(#{i[5]},#{i[1]});\n"
+            f"#{i[7]}=PRODUCT_RELATED_PRODUCT_CATEGORY('part',$,(#{i[2]}));\n"
+            f"#{i[8]}=NEXT_ASSEMBLY_USAGE_OCCURRENCE('{index}','{name}','',#16,#{i[4]},$);\n"
+            f"#{i[9]}=PRODUCT_DEFINITION_SHAPE('Placement','Placement of an item',#{i[8]});\n"
+            f"#{i[10]}=AXIS2_PLACEMENT_3D('',#10,#11,#12);\n"
+            f"#{i[11]}=ITEM_DEFINED_TRANSFORMATION('','',#13,#{i[10]});\n"
+            f"#{i[12]}=(REPRESENTATION_RELATIONSHIP('','',#{i[1]},#19)"
+            f"REPRESENTATION_RELATIONSHIP_WITH_TRANSFORMATION(#{i[11]})SHAPE_REPRESENTATION_RELATIONSHIP());\n"
+            f"#{i[13]}=CONTEXT_DEPENDENT_SHAPE_REPRESENTATION(#{i[12]},#{i[9]});\n"
+            f"#{i[14]}=STYLED_ITEM('color',(#{style}),#{i[0]});\n")
 
 
 def write_step(parts, path, *, engine: str = "direct", name: str = "model", pcurve_limit: int = 500,
@@ -211,10 +243,15 @@ def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
     templates = [_Template(step_faces(g)[0], g.vertices.shape[1], step_faces(g)[1]) for g in groups]
     style_base = {kind: N_GLOBAL + 1 + 7 * i for i, kind in enumerate(KINDS)}
     next_id = N_GLOBAL + 1 + 7 * len(KINDS)
-    bases = []
+    n_entities = next_id
+    prefixes, bases = [], []   # the ids of each group's parts follow the last group's, increasing through the file
     for g, t in zip(groups, templates):
-        bases.append(next_id + np.arange(len(g)) * (t.count + N_PRODUCT))
-        next_id += len(g) * (t.count + N_PRODUCT)
+        slot = 10 ** t.digits
+        first = -(-next_id // slot)
+        prefixes.append(first + np.arange(len(g)) // t.per_prefix)
+        bases.append(t.ids(first, len(g)))
+        next_id = (int(prefixes[-1][-1]) + 1) * slot
+        n_entities += len(g) * t.stride
     placements = np.concatenate([b + t.count + 10 for b, t in zip(bases, templates)]) if groups else []
     styled = np.concatenate([b + t.count + 14 for b, t in zip(bases, templates)]) if groups else []
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S")
@@ -232,23 +269,25 @@ def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
                 r, g_, b = COLOURS[kind]
                 fh.write(STYLE.format(*range(s, s + 7), kind=kind, r=r, g=g_, b=b))
             index = 0
-            for g, t, base in zip(groups, templates, bases):
-                style = style_base[g.kind] + 6
+            for g, t, pre in zip(groups, templates, prefixes):
+                m = t.per_prefix
+                texts = [t.text(j) for j in range(min(m, len(g)))]
+                products = [t.product(j, style_base[g.kind] + 6) for j in range(len(texts))]
                 for lo in range(0, len(g), CHUNK):  # chunks bound the memory of the text
                     hi = min(lo + CHUNK, len(g))
-                    vals = t.fill(base[lo:hi], g.vertices[lo:hi], g.normals[lo:hi])
+                    vals = t.fill(g.vertices[lo:hi], g.normals[lo:hi])
                     out = []
-                    for i, row in enumerate(vals.tolist()):
-                        b = int(base[lo + i])
+                    for i, row, p, pid in zip(range(lo, hi), vals.tolist(), pre[lo:hi].tolist(), g.ids[lo:hi]):
                         index += 1
-                        out.append(t.text % tuple(row))
-                        out.append(_product(b + t.count, b + t.shell, g.ids[lo + i], index, style))
+                        j = i % m
+                        out.append((texts[j] % tuple(row) + products[j].replace(NAME, pid).replace(INDEX, str(index)))
+                                   .replace(PREFIX, str(p)))
                     fh.write("".join(out))
             fh.write(f"#{next_id}=MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',("
                      + ",".join(f"#{int(i)}" for i in styled) + "),#9);\nENDSEC;\nEND-ISO-10303-21;\n")
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the STEP file ({exc.strerror or exc})") from None
-    return {"entities": int(next_id), "pcurves": False}
+    return {"entities": int(n_entities), "pcurves": False}
 
 
 def step_faces(group) -> tuple[tuple, tuple[int, ...] | None]:

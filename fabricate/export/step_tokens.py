@@ -198,20 +198,19 @@ class Records:
         x = self.u64[hpos + 1]                                        # (h,) the 8 bytes after each '#'
         hlen = _digits(x)
         val = _eight_digits(x, hlen)
-        long = np.flatnonzero((hlen == 0) | (hlen == 8))
-        if long.size:                                               # no digit, or eight and more
-            wide = _window(buf, MAX_DIGITS + 1)[hpos[long] + 1]
-            d = (wide >= 48) & (wide <= 57)
-            n = np.argmin(d, axis=1)
-            if (n == 0).any():
-                at = int(hpos[long[np.argmax(n == 0)]])
-                what = "more than 11 digits" if d[np.argmax(n == 0), 0] else "no digits"
-                raise ExportError(f"{self.path}: a '#' reference with {what} in "
-                                  f"{self.snippet(at)!r}; expected #<digits>")
-            v = np.zeros(len(long), np.int64)
-            for k in range(int(n.max())):
-                v = np.where(n > k, v * 10 + wide[:, k].astype(np.int64) - 48, v)
-            val[long], hlen[long] = v, n
+        long = np.flatnonzero(hlen == 8)
+        if long.size:                                               # eight digits and more: the next eight
+            x2 = self.u64[hpos[long] + 9]
+            n2 = _digits(x2)
+            v2 = _eight_digits(x2, n2)
+            val[long] = np.where(n2 > 0, val[long] * 10 ** n2 + v2, val[long])
+            hlen[long] += n2
+        bad = (hlen == 0) | (hlen > MAX_DIGITS)
+        if bad.any():
+            at = int(hpos[np.argmax(bad)])
+            what = "more than 11 digits" if hlen[np.argmax(bad)] else "no digits"
+            raise ExportError(f"{self.path}: a '#' reference with {what} in "
+                              f"{self.snippet(at)!r}; expected #<digits>")
         self.hpos, self.hval, self.hlen = hpos, val, hlen
         prev = buf[np.maximum(hpos - 1, 0)]
         rec = np.flatnonzero((prev == NL) | (prev == SEMI) | (hpos == self.a))  # a record's own '#'
