@@ -13,7 +13,10 @@ lookups per pair) and removes the chosen one by ``list.remove`` (a Python
 mirrored in a numpy array: the best fit is an ``argmin``, the sections a new
 one touches are found at once and only those go through the join rules, in
 list order, and the chosen section is removed by its index (equal sections
-never coexist: merging drops a section that another contains).
+never coexist: merging drops a section that another contains).  The mirror is
+kept only from ``NUMPY_FROM`` sections on (down to half that; rebuilt when the
+list grows again): a sheet of a few sections does not pay for it.  The split
+(short axis) is rectpack's ``_split``, inlined.
 
 Imported by :func:`fabricate.export.nesting.layout` only (rectpack stays a
 lazy import); ``tests/test_cutfiles.py`` compares its placements with
@@ -36,22 +39,48 @@ class GuillotineBssfSas(rectpack.GuillotineBssfSas):
     def reset(self):
         PackingAlgorithm.reset(self)
         self._xywh = np.zeros((64, 4))
+        self._synced = False
         self._sections = []
         self._add_section(Rectangle(0, 0, self.width, self.height))
 
-    def _push(self, s) -> None:
+    def _mirror(self) -> np.ndarray:
+        """``_xywh[:n]``, (n, 4) x, y, width, height of the n free sections; rebuilt from them when it was
+        not kept (below ``NUMPY_FROM // 2`` sections it is not: the plain loops do not read it)."""
         n = len(self._sections)
-        if n == len(self._xywh):
-            self._xywh = np.concatenate([self._xywh, np.zeros_like(self._xywh)])
-        self._xywh[n] = (s.x, s.y, s.width, s.height)
+        if not self._synced:
+            if n > len(self._xywh):
+                self._xywh = np.zeros((2 * n, 4))
+            self._xywh[:n] = [(s.x, s.y, s.width, s.height) for s in self._sections]
+            self._synced = True
+        return self._xywh[:n]
+
+    def free_sizes(self) -> np.ndarray:
+        """(n, 2) width and height of the n free sections, in list order."""
+        if self._synced:
+            return self._xywh[:len(self._sections), 2:]
+        return np.array([(s.width, s.height) for s in self._sections], dtype=float).reshape(-1, 2)
+
+    def _push(self, s) -> None:
+        if self._synced:
+            n = len(self._sections)
+            if n == len(self._xywh):
+                self._xywh = np.concatenate([self._xywh, np.zeros_like(self._xywh)])
+            self._xywh[n] = (s.x, s.y, s.width, s.height)
         self._sections.append(s)
 
     def _drop(self, idx: list[int]) -> None:
         """Remove the sections at the increasing indices ``idx``."""
-        n = len(self._sections)
-        keep = np.ones(n, bool)
-        keep[idx] = False
-        self._xywh[:n - len(idx)] = self._xywh[:n][keep]
+        if self._synced:
+            n = len(self._sections)
+            if n - len(idx) < NUMPY_FROM // 2:
+                self._synced = False
+            elif len(idx) == 1:
+                i = idx[0]
+                self._xywh[i:n - 1] = self._xywh[i + 1:n]
+            else:
+                keep = np.ones(n, bool)
+                keep[idx] = False
+                self._xywh[:n - len(idx)] = self._xywh[:n][keep]
         for i in reversed(idx):
             del self._sections[i]
 
@@ -75,7 +104,7 @@ class GuillotineBssfSas(rectpack.GuillotineBssfSas):
                         if best is None or f < best:
                             best, idx, rot = f, i, True
             return idx, rot
-        A = self._xywh[:len(secs)]
+        A = self._mirror()
         W, H = A[:, 2], A[:, 3]
         ok = (w <= W) & (h <= H)
         if ok.any():
@@ -104,7 +133,17 @@ class GuillotineBssfSas(rectpack.GuillotineBssfSas):
             width, height = height, width
         section = self._sections[idx]
         self._drop([idx])
-        self._split(section, width, height)
+        sx, sy, sw, sh = section.x, section.y, section.width, section.height
+        if sw < sh:                                        # rectpack's _split: short axis, horizontal
+            if height < sh:
+                self._add_section(Rectangle(sx, sy + height, sw, sh - height))
+            if width < sw:
+                self._add_section(Rectangle(sx + width, sy, sw - width, height))
+        else:                                              # vertical
+            if height < sh:
+                self._add_section(Rectangle(sx, sy + height, width, sh - height))
+            if width < sw:
+                self._add_section(Rectangle(sx + width, sy, sw - width, sh))
         rect = Rectangle(section.x, section.y, width, height, rid)
         self.rectangles.append(rect)
         return rect
@@ -120,14 +159,13 @@ class GuillotineBssfSas(rectpack.GuillotineBssfSas):
             before = -1
             while self._sections and before != len(self._sections):
                 before = len(self._sections)
-                A = self._xywh[:before]
                 drop: list[int] = []
                 pos = 0
                 while pos < before:
                     if before - pos < NUMPY_FROM:              # a few sections: every one through the rules
                         near = range(pos, before)
                     else:
-                        sub = A[pos:]
+                        sub = self._mirror()[pos:]
                         apart = ((y > sub[:, 1] + sub[:, 3]) | (y + h < sub[:, 1]) | (x > sub[:, 0] + sub[:, 2])
                                  | (x + w < sub[:, 0]))
                         near = (np.flatnonzero(~apart) + pos).tolist()

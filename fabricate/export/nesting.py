@@ -281,7 +281,7 @@ def _may_take(fit, sec, many, w: int, h: int, rotation: bool) -> list[int]:
 
 def _refresh(abin, b: int, fit, sec, many) -> None:
     """Row ``b`` of :func:`_may_take`'s arrays from the free sections of ``abin``."""
-    A = abin._xywh[:len(abin._sections), 2:]
+    A = abin.free_sizes()
     if not len(A):
         fit[b], sec[b], many[b] = 0, 0, False
         return
