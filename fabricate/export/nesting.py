@@ -207,10 +207,12 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
     The rectangles go in rectpack's order (area decreasing, equal areas in input order); each goes into
     the first open bin, in the order they were opened, whose ``add_rect`` takes it (BNF: only the last
     one), else into a new bin (none when it does not fit an empty bin: it stays unplaced).  A bin
-    whose free sections cannot hold it is not asked: per bin, ``_fit (bins, 5)`` holds the largest width,
+    whose free sections cannot hold it is not asked: per bin, ``fit (5, bins)`` holds the largest width,
     height, short side, long side and area of its free sections, refreshed for the bin that took a
     rectangle; the rectangle must fit within all five (turned when ``rotation``) for any section to hold
-    it.  A bin refusing a rectangle is left unchanged, so skipping it changes nothing.
+    it; then ``sec (bins, k, 2)``, the width and height of every free section of a bin with at most
+    k = :data:`SECTIONS_KEPT` of them, must show one that holds it (a bin with more is asked).  A bin
+    refusing a rectangle is left unchanged, so skipping it changes nothing.
 
     Returns ``sheet, x, y, width``: (n,) int, the bin of each rectangle, the lower-left corner on it and
     its width there (``!= w`` where it was turned); all four -1 for a rectangle not placed.
@@ -221,7 +223,7 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
     sheet = np.full(n, -1, dtype=np.int64)
     x, y, pw = np.full(n, -1, np.int64), np.full(n, -1, np.int64), np.full(n, -1, np.int64)
     bins: list = []
-    fit = np.zeros((16, 5))
+    fit = np.zeros((5, 16))
     sec = np.zeros((16, SECTIONS_KEPT, 2))
     many = np.zeros(16, bool)
     wl, hl = np.asarray(w, np.int64).tolist(), np.asarray(h, np.int64).tolist()
@@ -231,7 +233,7 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
         if next_fit:
             near = [len(bins) - 1] if bins else []
         elif bins:
-            near = _may_take(fit[:len(bins)], sec, many, wi, hi, rotation)
+            near = _may_take(fit[:, :len(bins)], sec, many, wi, hi, rotation)
         else:
             near = []
         for b in near:
@@ -244,8 +246,9 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
                 continue
             b = len(bins)
             bins.append(GuillotineBssfSas(bw, bh, rot=rotation))
-            if b == len(fit):
-                fit, sec, many = (np.concatenate([a, np.zeros_like(a)]) for a in (fit, sec, many))
+            if b == len(many):
+                fit = np.concatenate([fit, np.zeros_like(fit)], axis=1)
+                sec, many = (np.concatenate([a, np.zeros_like(a)]) for a in (sec, many))
             r = bins[b].add_rect(wi, hi, rid=i)
             if r is None:
                 raise ConfigError(f"nesting: a {wi} x {hi} rectangle fits no empty {bw} x {bh} bin")
@@ -261,14 +264,17 @@ SECTIONS_KEPT = 8
 
 def _may_take(fit, sec, many, w: int, h: int, rotation: bool) -> list[int]:
     """The bins, in order, that a ``w x h`` rectangle may fit: those passing the five largest sizes
-    ``fit (bins, 5)``, then among them those with a free section ``sec (bins, k, 2)`` (w, h) that holds
+    ``fit (5, bins)``, then among them those with a free section ``sec (bins, k, 2)`` (w, h) that holds
     it or with more than ``k`` sections (``many (bins,)``)."""
-    ok = fit[:, 0] >= w
-    ok &= fit[:, 1] >= h
+    mw, mh, ml, mu, ma = fit
+    ok = mw >= w
+    ok &= mh >= h
     if rotation:
-        ok |= (fit[:, 0] >= h) & (fit[:, 1] >= w)
+        ok |= (mw >= h) & (mh >= w)
     lo, up = (w, h) if w <= h else (h, w)
-    ok &= (fit[:, 2] >= lo) & (fit[:, 3] >= up) & (fit[:, 4] >= w * h)
+    ok &= ml >= lo
+    ok &= mu >= up
+    ok &= ma >= w * h
     near = np.flatnonzero(ok)
     if len(near):
         S = sec[near]
@@ -281,17 +287,22 @@ def _may_take(fit, sec, many, w: int, h: int, rotation: bool) -> list[int]:
 
 def _refresh(abin, b: int, fit, sec, many) -> None:
     """Row ``b`` of :func:`_may_take`'s arrays from the free sections of ``abin``."""
-    A = abin.free_sizes()
-    if not len(A):
-        fit[b], sec[b], many[b] = 0, 0, False
-        return
-    lo, up = A.min(axis=1), A.max(axis=1)
-    fit[b] = A[:, 0].max(), A[:, 1].max(), lo.max(), up.max(), (A[:, 0] * A[:, 1]).max()
     k = sec.shape[1]
-    many[b] = len(A) > k
+    secs = abin._sections
+    if len(secs) > k:
+        A = abin.free_sizes()
+        lo, up = A.min(axis=1), A.max(axis=1)
+        fit[:, b] = A[:, 0].max(), A[:, 1].max(), lo.max(), up.max(), (A[:, 0] * A[:, 1]).max()
+        many[b] = True
+        return
+    wh = [(s.width, s.height) for s in secs]
+    fit[:, b] = (max((w for w, _ in wh), default=0), max((h for _, h in wh), default=0),
+              max((min(p) for p in wh), default=0), max((max(p) for p in wh), default=0),
+              max((w * h for w, h in wh), default=0))
+    many[b] = False
     sec[b] = 0
-    if not many[b]:
-        sec[b, :len(A)] = A
+    if wh:
+        sec[b, :len(wh)] = wh
 
 
 def sheet_gap(layout: Layout) -> float:
