@@ -176,3 +176,38 @@ def test_layouts_of_the_parts_are_rectpacks(parts):
         assert ours.sheets == theirs.sheets and ours.size == theirs.size
         for name in ("sheet", "x", "y", "rotated", "utilisation"):
             assert np.array_equal(getattr(ours, name), getattr(theirs, name))
+
+
+@pytest.mark.parametrize("kept", [0, 8, 64])
+@pytest.mark.parametrize("next_fit", [False, True])
+@pytest.mark.parametrize("rotation", [True, False])
+def test_fast_bin_first_fit_places_every_rectangle_where_rectpack_does(rotation, next_fit, kept, monkeypatch):
+    """Seeded random rectangles of several size ranges (ties of equal areas, squares, strips) on bins
+    that take a few, dozens or one of them (hundreds of open bins), and on a strip: :func:`nesting.pack`
+    (bins skipped by their free sections, ``kept`` of them per bin) puts every rectangle on the bin and
+    at the place rectpack's own packer and guillotine class do; a rectangle larger than the bin stays
+    unplaced as in rectpack."""
+    import rectpack
+
+    from fabricate.export import nesting
+
+    monkeypatch.setattr(nesting, "SECTIONS_KEPT", kept)
+    rng = np.random.default_rng(11)
+    cases = [(rng.integers(5, 400, (400, 2)), 1000, 600),
+             (np.concatenate([rng.integers(200, 700, (300, 2)), np.repeat([[300, 500], [500, 300]], 30, 0)]),
+              1000, 800),                                                  # one to four per bin
+             (rng.integers(1, 60, (600, 2)) * [1, 8], 900, 500),          # strips, turned or not
+             (rng.integers(20, 90, (500, 2)), 3000, 200000),              # one tall strip
+             (np.concatenate([rng.integers(50, 300, (100, 2)), [[1200, 90], [90, 1200]]]), 1000, 700)]
+    bins = []
+    for sizes, bw, bh in cases:
+        w, h = sizes[:, 0].astype(np.int64), sizes[:, 1].astype(np.int64)
+        ours = nesting.pack(w, h, bw, bh, rotation, next_fit=next_fit)
+        theirs = nesting._rectpack(w, h, bw, bh, rotation, next_fit, rectpack.GuillotineBssfSas)
+        for a, b in zip(ours, theirs):
+            assert np.array_equal(a, b)
+        placed = ours[0] >= 0
+        assert np.array_equal(placed, ((w <= bw) & (h <= bh)) | (rotation & (h <= bw) & (w <= bh)))
+        assert ours[0].max() + 1 >= (w * h)[placed].sum() / (bw * bh)   # no two rectangles overlap
+        bins.append(ours[0].max() + 1)
+    assert bins[1] > 100 and bins[3] == 1                                 # many open bins; the strip

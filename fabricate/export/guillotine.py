@@ -10,12 +10,16 @@ each section twice in generator expressions, merges a new section with every
 section through ``Rectangle.join`` (three method calls and six property
 lookups per pair) and removes the chosen one by ``list.remove`` (a Python
 ``__eq__`` per section before it).  Here the coordinates of the sections are
-mirrored in a numpy array: the best fit is an ``argmin``, the sections a new
-one touches are found at once and only those go through the join rules, in
+mirrored in a numpy array: the best fit is one ``argmin`` over the fitness of
+every section unturned, then turned (the first least: rectpack's tie rule), the
+sections a new one touches are found at once and only those go through the join rules, in
 list order, and the chosen section is removed by its index (equal sections
-never coexist: merging drops a section that another contains).
+never coexist: merging drops a section that another contains).  The mirror is
+kept only from ``NUMPY_FROM`` sections on (down to half that; rebuilt when the
+list grows again): a sheet of a few sections does not pay for it.  The split
+(short axis) is rectpack's ``_split``, inlined.
 
-Imported by :func:`fabricate.export.nesting.layout` only (rectpack stays a
+Imported by :func:`fabricate.export.nesting.pack` only (rectpack stays a
 lazy import); ``tests/test_cutfiles.py`` compares its placements with
 rectpack's own class.
 """
@@ -30,34 +34,69 @@ NUMPY_FROM = 48
 """From this many free sections on, the loops run in numpy (below, plain loops are faster)."""
 
 
+def _column(s) -> tuple:
+    """A free section's column of :meth:`GuillotineBssfSas._mirror`."""
+    return s.y + s.height, -s.y, s.x + s.width, -s.x, s.width, s.height, s.width, s.height
+
+
 class GuillotineBssfSas(rectpack.GuillotineBssfSas):
-    """``rectpack.GuillotineBssfSas`` over a numpy mirror ``_xywh (n, 4)`` of its free sections (same placements)."""
+    """``rectpack.GuillotineBssfSas`` over a numpy mirror ``_xywh (8, n)`` of its free sections (same placements)."""
 
     def reset(self):
         PackingAlgorithm.reset(self)
-        self._xywh = np.zeros((64, 4))
+        self._xywh = np.zeros((8, 64))
+        self._synced = False
         self._sections = []
         self._add_section(Rectangle(0, 0, self.width, self.height))
 
-    def _push(self, s) -> None:
+    def _mirror(self) -> np.ndarray:
+        """``_xywh[:, :n]``, (8, n) of the n free sections: top y, -y, right x, -x (a box touches the
+        sections whose four are >= its y, -top, x, -right), width, height, width, height (those a
+        rectangle fits, unturned and turned); rebuilt from them when it was not kept (below
+        ``NUMPY_FROM // 2`` sections it is not: the plain loops do not read it)."""
         n = len(self._sections)
-        if n == len(self._xywh):
-            self._xywh = np.concatenate([self._xywh, np.zeros_like(self._xywh)])
-        self._xywh[n] = (s.x, s.y, s.width, s.height)
+        if not self._synced:
+            if n > self._xywh.shape[1]:
+                self._xywh = np.zeros((8, 2 * n))
+            if n:
+                self._xywh[:, :n] = np.array([_column(s) for s in self._sections]).T
+            self._synced = True
+        return self._xywh[:, :n]
+
+    def free_sizes(self) -> np.ndarray:
+        """(n, 2) width and height of the n free sections, in list order."""
+        if self._synced:
+            return self._xywh[4:6, :len(self._sections)].T
+        return np.array([(s.width, s.height) for s in self._sections], dtype=float).reshape(-1, 2)
+
+    def _push(self, s) -> None:
+        if self._synced:
+            n = len(self._sections)
+            if n == self._xywh.shape[1]:
+                self._xywh = np.concatenate([self._xywh, np.zeros_like(self._xywh)], axis=1)
+            self._xywh[:, n] = _column(s)
         self._sections.append(s)
 
     def _drop(self, idx: list[int]) -> None:
         """Remove the sections at the increasing indices ``idx``."""
-        n = len(self._sections)
-        keep = np.ones(n, bool)
-        keep[idx] = False
-        self._xywh[:n - len(idx)] = self._xywh[:n][keep]
+        if self._synced:
+            n = len(self._sections)
+            if n - len(idx) < NUMPY_FROM // 2:
+                self._synced = False
+            elif len(idx) == 1:
+                i = idx[0]
+                self._xywh[:, i:n - 1] = self._xywh[:, i + 1:n]
+            else:
+                keep = np.ones(n, bool)
+                keep[idx] = False
+                self._xywh[:, :n - len(idx)] = self._xywh[:, :n][:, keep]
         for i in reversed(idx):
             del self._sections[i]
 
     def _fittest(self, w, h) -> tuple[int | None, bool]:
         """Index of the free section of least fitness ``min(section w - w, section h - h)``, the first such
-        in list order, unrotated fits before rotated ones (rectpack's ``min`` over the chained fits)."""
+        in list order, unrotated fits before rotated ones (rectpack's ``min`` over the chained fits).
+        A section holds the rectangle exactly where that fitness is >= 0."""
         secs = self._sections
         best, idx, rot = None, None, False
         if len(secs) < NUMPY_FROM:                       # a few sections: a plain loop is faster
@@ -75,21 +114,15 @@ class GuillotineBssfSas(rectpack.GuillotineBssfSas):
                         if best is None or f < best:
                             best, idx, rot = f, i, True
             return idx, rot
-        A = self._xywh[:len(secs)]
-        W, H = A[:, 2], A[:, 3]
-        ok = (w <= W) & (h <= H)
-        if ok.any():
-            f = np.where(ok, np.minimum(W - w, H - h), np.inf)
-            idx = int(np.argmin(f))
-            best = f[idx]
-        if self.rot:
-            ok = (h <= W) & (w <= H)
-            if ok.any():
-                f = np.where(ok, np.minimum(W - h, H - w), np.inf)
-                j = int(np.argmin(f))
-                if best is None or f[j] < best:
-                    idx, rot = j, True
-        return idx, rot
+        n = len(secs)
+        turns = 2 if self.rot else 1                      # rows: fitness unturned, turned
+        D = self._mirror()[4:4 + 2 * turns] - np.array([w, h, h, w][:2 * turns], dtype=float)[:, None]
+        F = np.minimum(D[0::2], D[1::2])                  # (turns, n): the first least is rectpack's
+        F[F < 0] = np.inf
+        j = int(F.argmin())
+        if F.flat[j] == np.inf:
+            return None, False
+        return j % n, j >= n
 
     def _select_fittest_section(self, w, h):
         idx, rot = self._fittest(w, h)
@@ -104,7 +137,17 @@ class GuillotineBssfSas(rectpack.GuillotineBssfSas):
             width, height = height, width
         section = self._sections[idx]
         self._drop([idx])
-        self._split(section, width, height)
+        sx, sy, sw, sh = section.x, section.y, section.width, section.height
+        if sw < sh:                                        # rectpack's _split: short axis, horizontal
+            if height < sh:
+                self._add_section(Rectangle(sx, sy + height, sw, sh - height))
+            if width < sw:
+                self._add_section(Rectangle(sx + width, sy, sw - width, height))
+        else:                                              # vertical
+            if height < sh:
+                self._add_section(Rectangle(sx, sy + height, width, sh - height))
+            if width < sw:
+                self._add_section(Rectangle(sx + width, sy, sw - width, sh))
         rect = Rectangle(section.x, section.y, width, height, rid)
         self.rectangles.append(rect)
         return rect
@@ -120,17 +163,15 @@ class GuillotineBssfSas(rectpack.GuillotineBssfSas):
             before = -1
             while self._sections and before != len(self._sections):
                 before = len(self._sections)
-                A = self._xywh[:before]
                 drop: list[int] = []
                 pos = 0
                 while pos < before:
                     if before - pos < NUMPY_FROM:              # a few sections: every one through the rules
                         near = range(pos, before)
                     else:
-                        sub = A[pos:]
-                        apart = ((y > sub[:, 1] + sub[:, 3]) | (y + h < sub[:, 1]) | (x > sub[:, 0] + sub[:, 2])
-                                 | (x + w < sub[:, 0]))
-                        near = (np.flatnonzero(~apart) + pos).tolist()
+                        box = np.array([y, -(y + h), x, -(x + w)], dtype=float)[:, None]
+                        touch = (self._mirror()[:4, pos:] >= box).all(axis=0)
+                        near = (touch.nonzero()[0] + pos).tolist()
                     grown = False
                     for t in near:
                         s = self._sections[t]
