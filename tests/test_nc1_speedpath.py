@@ -1,0 +1,123 @@
+"""The NC1 writer's group-at-once path against its one-part functions (the same text, byte for byte),
+and the atomic files it writes with few system calls (mode, temporary names, failure)."""
+import os
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from cad_fixtures import dome_structure
+
+from fabricate.cad import PartSpec, build_parts
+from fabricate.export import nc1
+from fabricate.export.schedules import beam_angles
+from optimize.errors import ExportError
+
+TUBE = {"connection": "hub", "hub": "tube", "radius_mm": 90.0, "wall_mm": 8.0, "cap_mm": 12.0}
+RHS = {"section": "rhs", "web_mm": 6, "flange_mm": 8, "flange_width_mm": 120}
+KW = {"order": "dome", "grade": "S355"}
+
+
+@pytest.fixture(scope="module")
+def rhs_parts():
+    return build_parts(dome_structure(n_around=6, k=3), PartSpec(node=TUBE, beam=RHS))
+
+
+def _plates(rng, p, k):
+    """A beam-like group of ``p`` random plates of ``k`` corners, some taller than long (turned), with
+    end bevels that tie in magnitude, differ in sign and hold NaN."""
+    flat = rng.uniform(-500.0, 3000.0, (p, k, 2)) * rng.uniform(0.01, 1.0, (p, 1, 2))
+    bevel = np.round(rng.uniform(-30.0, 30.0, (p, 2, 2)), 1)
+    bevel[::4, :, 1] = -bevel[::4, :, 0]                        # |a| == |b|: the first wins
+    bevel[1::7, 0, 1] = np.nan
+    bevel[2::7, 1, 0] = np.nan
+    group = SimpleNamespace(flat=flat, thickness_mm=rng.uniform(4.0, 20.0, p), volume_mm3=rng.uniform(1e5, 1e7, p),
+                            area_mm2=rng.uniform(1e4, 1e6, p), ids=tuple(f"B{i:04d}.1" for i in range(p)),
+                            element=rng.integers(0, 10000, p), member="web +" if k % 2 else "", kind="beam",
+                            neighbours=tuple(tuple(f"P{j:04d}" for j in range(i % 30)) for i in range(p)))
+    return group, {"mitre": rng.uniform(-60.0, 60.0, (p, 2)), "end_bevel": bevel}
+
+
+@pytest.mark.parametrize("k", [3, 4, 5, 8, 9, 13])
+def test_group_texts_are_the_one_part_texts_of_random_plates(k):
+    rng = np.random.default_rng(k)
+    group, angles = _plates(rng, 60, k)
+    assert (np.ptp(group.flat[:, :, 1], axis=1) > np.ptp(group.flat[:, :, 0], axis=1)).any()   # some turned
+    texts = nc1.nc1_texts(group, density=7850.0, angles=angles, **KW)
+    assert len(texts) == 60
+    for i, text in enumerate(texts):
+        assert text == nc1.nc1_text(group, i, density=7850.0, angles=angles, **KW), group.ids[i]
+
+
+@pytest.mark.parametrize("k", [8, 24, 31])
+def test_group_texts_are_the_one_part_texts_of_random_tubes(k):
+    rng = np.random.default_rng(k)
+    p = 40
+    a = np.linspace(0.0, 2 * np.pi, k, endpoint=False)
+    r = rng.uniform(30.0, 200.0, (p, 1))
+    ring = np.stack([r * np.cos(a), r * np.sin(a), np.zeros((p, k))], axis=2) + rng.uniform(-1e4, 1e4, (p, 1, 3))
+    V = np.concatenate([ring + rng.normal(0, 1e-3, ring.shape), rng.uniform(-1e4, 1e4, (p, 3 * k, 3))], axis=1)
+    group = SimpleNamespace(vertices=V, thickness_mm=rng.uniform(3.0, 12.0, p), length_mm=rng.uniform(50, 400, p),
+                            volume_mm3=rng.uniform(1e5, 1e7, p), ids=tuple(f"N{i:04d}.1" for i in range(p)),
+                            element=np.arange(p), neighbours=tuple((f"B{i:04d}",) * (i % 12) for i in range(p)))
+    texts = nc1.nc1_tube_texts(group, density=7850.0, **KW)
+    assert texts == [nc1.nc1_tube_text(group, i, density=7850.0, **KW) for i in range(p)]
+
+
+def test_group_texts_are_the_one_part_texts_of_a_rhs_dome_with_tube_hubs(rhs_parts):
+    beams = list(rhs_parts.of_kind("beam"))
+    tubes = [g for g in rhs_parts.of_kind("node") if g.member == "tube"]
+    assert len(beams) == 6 and len(tubes) == 1
+    for g in beams:
+        angles = beam_angles(g)
+        texts = nc1.nc1_texts(g, density=7850.0, angles=angles, **KW)
+        assert texts == [nc1.nc1_text(g, i, density=7850.0, angles=angles, **KW) for i in range(len(g))]
+    g = tubes[0]
+    assert nc1.nc1_tube_texts(g, density=7850.0, **KW) == [nc1.nc1_tube_text(g, i, density=7850.0, **KW)
+                                                           for i in range(len(g))]
+
+
+def test_files_have_the_umask_mode_and_no_temporary_is_left(rhs_parts, tmp_path):
+    old = os.umask(0o027)
+    try:
+        facts = nc1.write_nc1(rhs_parts, tmp_path / "nc1")
+    finally:
+        os.umask(old)
+    names = os.listdir(tmp_path / "nc1")
+    assert len(names) == facts["files"] and all(n.endswith(".nc1") and not n.startswith(".") for n in names)
+    assert {os.stat(tmp_path / "nc1" / n).st_mode & 0o7777 for n in names} == {0o640}
+    first = rhs_parts.of_kind("beam")[0]
+    data = (tmp_path / "nc1" / f"{first.ids[0]}.nc1").read_bytes()
+    angles = beam_angles(first)
+    text = nc1.nc1_text(first, 0, order="roof", grade=rhs_parts.spec.steel_grade,
+                        density=rhs_parts.spec.density("beam"), angles=angles)
+    assert data == text.replace("\n", "\r\n").encode("ascii") and b"\r\n" in data
+
+
+def test_a_file_of_the_temporary_name_is_left_alone(rhs_parts, tmp_path, monkeypatch):
+    tokens = iter(["aaaa", "bbbb"])
+    monkeypatch.setattr(nc1.secrets, "token_hex", lambda n: next(tokens))
+    folder = tmp_path / "nc1"
+    folder.mkdir()
+    pid = rhs_parts.of_kind("beam")[0].ids[0]
+    foreign = folder / f".{pid}.nc1.aaaa.part"
+    foreign.write_bytes(b"another writer's")
+    facts = nc1.write_nc1(rhs_parts, folder)
+    assert foreign.read_bytes() == b"another writer's"
+    assert (folder / f"{pid}.nc1").read_bytes().startswith(b"ST\r\n")
+    assert sorted(os.listdir(folder)) == sorted([foreign.name] + [f"{p}.nc1" for p in _ids(rhs_parts)])
+    assert facts["files"] == len(_ids(rhs_parts))
+
+
+def _ids(parts):
+    ids = [pid for g in parts.of_kind("beam") for pid in g.ids]
+    return ids + [pid for g in parts.of_kind("node") if g.member == "tube" for pid in g.ids]
+
+
+def test_a_failed_file_raises_export_error_and_leaves_no_temporary(rhs_parts, tmp_path):
+    folder = tmp_path / "nc1"
+    pid = rhs_parts.of_kind("beam")[1].ids[3]
+    (folder / f"{pid}.nc1").mkdir(parents=True)                       # a folder where the file goes
+    (folder / f"{pid}.nc1" / "x").write_text("x")
+    with pytest.raises(ExportError, match="nc1.*cannot write the NC1 files"):
+        nc1.write_nc1(rhs_parts, folder)
+    assert not [n for n in os.listdir(folder) if n.startswith(".")]
