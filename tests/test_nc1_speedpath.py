@@ -121,3 +121,70 @@ def test_a_failed_file_raises_export_error_and_leaves_no_temporary(rhs_parts, tm
     with pytest.raises(ExportError, match="nc1.*cannot write the NC1 files"):
         nc1.write_nc1(rhs_parts, folder)
     assert not [n for n in os.listdir(folder) if n.startswith(".")]
+
+
+def _dumps(value):
+    import json
+
+    return json.dumps(value, separators=(",", ":"))
+
+
+@pytest.mark.parametrize("shape", [(), (1,), (7,), (5, 3), (4, 6, 2), (3, 4, 4), (0,), (3, 0, 2), (2, 1, 1, 3)])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.int64, np.uint8, np.bool_])
+def test_json_array_is_the_text_json_writes(shape, dtype):
+    from fabricate.export.flatdata import json_array
+
+    rng = np.random.default_rng(len(shape))
+    values = np.array([0.0, -0.0, 1.0, -2.5, 1e16, 1e-5, 1e-4, 0.1, 123456.789, 5e-324, 1.7976931348623157e308])
+    size = int(np.prod(shape))                          # the special values first, each at least once
+    pool = np.concatenate([values, rng.normal(0, 1e3, 64)])
+    a = pool[np.arange(size) % 75][rng.permutation(size)].reshape(shape) if shape else np.float64(-0.0)
+    if np.dtype(dtype).kind != "f":                     # repeated ints and bools
+        a = rng.integers(0, 200, shape) % 7 == 0 if dtype is np.bool_ else rng.integers(-99, 99, shape) % 200
+    if dtype is np.float32:
+        a = np.clip(a, -3e38, 3e38)                     # finite in float32
+    a = np.asarray(a).astype(dtype)
+    assert json_array(a) == _dumps(a.tolist())
+    if a.dtype.kind == "f" and a.size:
+        b = a.copy()
+        b.flat[-1] = np.nan
+        assert json_array(b) == _dumps(b.tolist()) and "NaN" in json_array(b)
+        b.flat[0] = -np.inf
+        assert json_array(b) == _dumps(b.tolist()) and "-Infinity" in json_array(b)
+
+
+def test_json_array_tells_minus_zero_from_zero_and_repeats_values():
+    from fabricate.export.flatdata import json_array
+
+    a = np.array([[0.0, -0.0, 0.1], [-0.0, 0.1, 0.0]])
+    assert json_array(a) == "[[0.0,-0.0,0.1],[-0.0,0.1,0.0]]" == _dumps(a.tolist())
+
+
+def test_json_array_of_a_transposed_view_keeps_its_order():
+    from fabricate.export.flatdata import json_array
+
+    a = np.arange(24.0).reshape(2, 3, 4) * 0.1
+    for b in (a.transpose(2, 0, 1), a[:, ::-1], a[..., ::2]):
+        assert json_array(b) == _dumps(b.tolist())
+
+
+def test_flat_json_is_the_text_json_writes_of_what_it_holds(rhs_parts, tmp_path):
+    """The file is the canonical ``json.dumps`` text of its own content (floats as ``repr``, the keys in
+    the writer's order), and the content is the parts' arrays."""
+    import json
+
+    from fabricate.cad.parts import cut_from_sheet
+    from fabricate.export.flatdata import read_flat, write_flat
+
+    facts = write_flat(rhs_parts, tmp_path / "flat.json")
+    text = (tmp_path / "flat.json").read_text(encoding="utf-8")
+    doc = json.loads(text)
+    assert _dumps(doc) == text and facts["bytes"] == len(text)
+    groups = [g for g in rhs_parts.groups if cut_from_sheet(g.kind, g.member) and len(g)]
+    assert len(groups) == len(doc["groups"]) > 5 and facts["parts"] == sum(len(g) for g in groups)
+    for g, read in zip(groups, read_flat(tmp_path / "flat.json")):
+        assert read["ids"] == list(g.ids) and read["faces"] == g.faces
+        for key, a in (("outline", g.flat), ("transform", g.transform), ("bevel_deg", g.bevel_deg),
+                       ("bevel_reference_z_mm", g.bevel_ref_z), ("thickness_mm", g.thickness_mm), ("cuts", g.cuts)):
+            assert np.array_equal(read[key], a) and read[key].shape == a.shape, key
+    assert not [n for n in os.listdir(tmp_path) if n.startswith(".")]
