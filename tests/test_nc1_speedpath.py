@@ -188,3 +188,90 @@ def test_flat_json_is_the_text_json_writes_of_what_it_holds(rhs_parts, tmp_path)
                        ("bevel_reference_z_mm", g.bevel_ref_z), ("thickness_mm", g.thickness_mm), ("cuts", g.cuts)):
             assert np.array_equal(read[key], a) and read[key].shape == a.shape, key
     assert not [n for n in os.listdir(tmp_path) if n.startswith(".")]
+
+
+def _reference_read_nc1(path) -> dict:
+    """The NC1 reader as it was before it read the lines by regular expressions (line by line): the
+    fast one must read every file the same, and refuse every file it refused with the same message."""
+    from fabricate.export.nc1_read import FACES, HEADER, NUMERIC
+
+    blocks = []
+    with open(path, encoding="ascii", newline="") as fh:
+        text = fh.read()
+    for raw in text.splitlines():
+        if raw.startswith("**"):
+            continue
+        if len(raw) >= 2 and raw[:2].isalpha() and raw[:2].isupper() and raw[2:].strip() == "":
+            blocks.append((raw[:2], []))
+        elif blocks:
+            blocks[-1][1].append(raw)
+        elif raw.strip():
+            raise ValueError(f"{path}: data before the first block: {raw!r}")
+    names = [b for b, _ in blocks]
+    if names[:1] != ["ST"] or names[-1:] != ["EN"]:
+        raise ValueError(f"{path}: expected ST ... EN, found {names}")
+    st = blocks[0][1]
+    if len(st) < len(HEADER):
+        raise ValueError(f"{path}: ST has {len(st)} lines, expected {len(HEADER)}")
+    header = {k: v.strip() for k, v in zip(HEADER, st)}
+    for k in NUMERIC:
+        header[k] = float(header[k])
+    header["quantity"] = int(header["quantity"])
+    contours = []
+    for name, lines in blocks:
+        if name != "AK":
+            continue
+        face, pts = None, []
+        for line in lines:
+            tokens = line.split()
+            if not tokens:
+                continue
+            if tokens[0] in FACES:
+                face, tokens = tokens[0], tokens[1:]
+            pts.append([float(tokens[0].rstrip("uosr")), float(tokens[1])])
+        contours.append((face, np.array(pts)))
+    return {"header": header, "contours": contours, "blocks": names}
+
+
+def _outcome(read, path):
+    try:
+        nc = read(path)
+    except (ValueError, IndexError) as exc:
+        return type(exc).__name__, str(exc)
+    return nc["header"], nc["blocks"], [(f, P.tolist(), P.shape) for f, P in nc["contours"]]
+
+
+def test_the_reader_reads_mangled_files_as_the_line_by_line_reader(rhs_parts, tmp_path):
+    """Written files, their line ends changed ("\\r\\n", "\\n", "\\r", "\\x0b", "\\x1e", mixed), comments,
+    blank lines, white space after a keyword, lower-case or foreign keywords, a second contour with
+    another face, lines lost or added: the same header, blocks and contours, or the same refusal."""
+    from fabricate.export.nc1_read import read_nc1
+
+    nc1.write_nc1(rhs_parts, tmp_path / "nc1")
+    files = sorted((tmp_path / "nc1").glob("*.nc1"))
+    rng = np.random.default_rng(7)
+    extra = ["** a comment", "", "   ", "AK  ", "BO", "SI \t", "st", "A1", "XYZ", "  o 1.0 2.0 0.0", "  3.5s 4 0",
+             "  u 7 8", "EN", "ST", "**", "x", "  v", "  1e3 -0 0", "AK\x1f"]
+    seen = set()
+    for n in range(400):
+        lines = files[n % len(files)].read_bytes().decode("ascii").split("\r\n")
+        for _ in range(rng.integers(0, 4)):
+            op = rng.integers(0, 3)
+            j = int(rng.integers(0, len(lines) + 1))
+            if op == 0:
+                lines.insert(j, extra[rng.integers(0, len(extra))])
+            elif op == 1 and j < len(lines):
+                del lines[j]
+            elif j < len(lines):
+                lines[j] = lines[j] + " " * int(rng.integers(1, 3))
+        ends = ["\r\n", "\n", "\r", "\x0b", "\x1e"]
+        text = "".join(line + (ends[n % 5] if n % 7 else ends[rng.integers(0, 5)]) for line in lines)
+        path = tmp_path / f"m{n}.nc1"
+        path.write_bytes(text.encode("ascii"))
+        new, old = _outcome(read_nc1, path), _outcome(_reference_read_nc1, path)
+        if old[0] == "IndexError":                     # a contour line with no x y: now a ValueError
+            assert new[0] == "ValueError" and "expected x y" in new[1], new
+        else:
+            assert new == old, (n, text)
+        seen.add(old[0] if isinstance(old[0], str) else "read")
+    assert {"read", "ValueError"} <= seen                                   # both outcomes were met
