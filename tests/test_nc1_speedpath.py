@@ -93,6 +93,18 @@ def test_files_have_the_umask_mode_and_no_temporary_is_left(rhs_parts, tmp_path)
     assert data == text.replace("\n", "\r\n").encode("ascii") and b"\r\n" in data
 
 
+def test_the_mode_is_set_where_the_created_one_differs(rhs_parts, tmp_path, monkeypatch):
+    """Where the mode ``open`` gives is not 0666 less the umask read (a folder's default ACL; here the
+    umask the writer reads made to differ from the process's), every file is given that mode."""
+    old = os.umask(0o022)
+    try:
+        monkeypatch.setattr(nc1, "umask", lambda: 0o077)
+        nc1.write_nc1(rhs_parts, tmp_path / "nc1")
+    finally:
+        os.umask(old)
+    assert {os.stat(p).st_mode & 0o7777 for p in (tmp_path / "nc1").iterdir()} == {0o600}
+
+
 def test_a_file_of_the_temporary_name_is_left_alone(rhs_parts, tmp_path, monkeypatch):
     tokens = iter(["aaaa", "bbbb"])
     monkeypatch.setattr(nc1.secrets, "token_hex", lambda n: next(tokens))
