@@ -41,8 +41,9 @@ separately from this writer, from the same description.
 from __future__ import annotations
 
 import contextlib
+import itertools
 import os
-import tempfile
+import secrets
 import time
 from pathlib import Path
 
@@ -117,18 +118,110 @@ def nc1_tube_text(group, i: int, *, order: str, grade: str, density: float) -> s
     return "\n".join(lines)
 
 
-def _write_atomic(target: Path, data: bytes, mode: int) -> None:
-    """``data`` to a temporary file beside ``target``, then renamed to it (removed on failure)."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            os.fchmod(fh.fileno(), mode)
-        os.replace(tmp, target)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+def _bevel_max(pair: np.ndarray) -> np.ndarray:
+    """(p,) :func:`_signed_max` of every row of ``pair (p, 2)``: the first on a tie, a NaN as argmax finds it."""
+    a, b = pair[:, 0], pair[:, 1]
+    second = (np.abs(b) > np.abs(a)) | (np.isnan(b) & ~np.isnan(a))
+    return np.where(second, b, a)
+
+
+def _template(k: int | None) -> str:
+    """The ``%`` template of one file (LF line ends): a plate with a contour of ``k`` corners
+    (``k + 1`` lines, closed), or a tube (``k`` None: no contour)."""
+    st = ["ST", "** %s.nc1 written by conical-fab", "  %s", "  conical-fab", "  1", "  %s", "  %s", "  1"]
+    if k is None:
+        st += ["  RO%gx%g", "  RO"] + ["  %.3f"] * 12 + ["  %s", "  hub tube", "  mesh vertex %d", "  %s"]
+    else:
+        st += ["  PL%g", "  B"] + ["  %.3f"] * 12 + ["  %s", "  %s", "  mesh edge %d", "  %s", "AK"]
+        st += ["  v %10.3f %10.3f      0.000"] + ["    %10.3f %10.3f      0.000"] * k
+    return "\n".join(st + ["SI", "  v %10.3f %10.3f      0.000 10 %s", "EN", ""])
+
+
+def _neighbours(group) -> list[str]:
+    return [" ".join(n)[:60] for n in group.neighbours]
+
+
+def nc1_texts(group, *, order: str, grade: str, density: float, angles: dict) -> list[str]:
+    """:func:`nc1_text` of every plate of ``group`` (the same text): the numbers of the whole group at
+    once, ``flat (p, k, 2)`` turned and moved as :func:`contour` does each part."""
+    F = np.asarray(group.flat, dtype=float)                                  # (p, k, 2)
+    turn = np.ptp(F[:, :, 1], axis=1) > np.ptp(F[:, :, 0], axis=1)
+    F = np.where(turn[:, None, None], np.stack([F[:, :, 1], -F[:, :, 0]], axis=2), F)
+    Q = F - F.min(axis=1, keepdims=True)
+    length, height = Q[:, :, 0].max(axis=1), Q[:, :, 1].max(axis=1)
+    t = np.asarray(group.thickness_mm, dtype=float)
+    weight = np.asarray(group.volume_mm3, dtype=float) * density * 1e-9
+    perimeter = np.linalg.norm(np.roll(Q, -1, axis=1) - Q, axis=2).sum(axis=1)
+    paint = (2.0 * np.asarray(group.area_mm2, dtype=float) + perimeter * t) * 1e-6 / (length * 1e-3)
+    web = np.asarray(angles["mitre"], dtype=float)
+    bevel = np.asarray(angles["end_bevel"], dtype=float)
+    zero = np.zeros(len(t))
+    numbers = np.stack([length, height, zero, zero, t, zero, weight / (length * 1e-3), paint, web[:, 0], web[:, 1],
+                        _bevel_max(bevel[:, 0]), _bevel_max(bevel[:, 1])], axis=1).tolist()
+    closed = np.concatenate([Q, Q[:, :1]], axis=1).reshape(len(t), -1).tolist()   # (p, 2 (k + 1))
+    centre = Q.mean(axis=1).tolist()
+    template, member = _template(Q.shape[1]), group.member or group.kind
+    return [template % (pid, order, pid, grade, th, *num, order, member, int(el), nb, *xy, *c, pid)
+            for pid, th, num, el, nb, xy, c in zip(group.ids, t.tolist(), numbers, group.element.tolist(),
+                                                   _neighbours(group), closed, centre)]
+
+
+def nc1_tube_texts(group, *, order: str, grade: str, density: float) -> list[str]:
+    """:func:`nc1_tube_text` of every tube of ``group`` (the same text), the numbers of the group at once."""
+    V = np.asarray(group.vertices, dtype=float)                               # (p, nv, 3)
+    ring = V[:, :V.shape[1] // 4]
+    diameter = 2.0 * np.linalg.norm(ring - ring.mean(axis=1, keepdims=True), axis=2).mean(axis=1)
+    wall = np.asarray(group.thickness_mm, dtype=float)
+    length = np.asarray(group.length_mm, dtype=float)
+    weight = np.asarray(group.volume_mm3, dtype=float) * density * 1e-9
+    zero = np.zeros(len(wall))
+    numbers = np.stack([length, diameter, zero, wall, wall, zero, weight / (length * 1e-3), np.pi * diameter * 1e-3,
+                        zero, zero, zero, zero], axis=1).tolist()
+    mark = np.stack([0.5 * length, 0.5 * diameter], axis=1).tolist()
+    template = _template(None)
+    return [template % (pid, order, pid, grade, d, w, *num, order, int(el), nb, *m, pid)
+            for pid, d, w, num, el, nb, m in zip(group.ids, diameter.tolist(), wall.tolist(), numbers,
+                                                 group.element.tolist(), _neighbours(group), mark)]
+
+
+class _Files:
+    """Atomic files in one folder with few system calls: each written under a temporary name of its own
+    beside it (``.<name>.<token>.part``, created exclusively, so no other file is touched), then renamed
+    to its name; removed on failure.  The mode: 0666 less the umask, as ``open`` creates it (checked
+    on the first file; set on every file where the folder's ACL makes it differ)."""
+
+    FLAGS = (os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_NOFOLLOW", 0)
+             | getattr(os, "O_BINARY", 0))
+
+    def __init__(self, folder: Path, mode: int):
+        self.folder, self.mode, self.chmod = os.fspath(folder), mode, None
+        self.token = secrets.token_hex(6)
+
+    def write(self, name: str, data: bytes) -> None:
+        target = os.path.join(self.folder, name)
+        while True:
+            tmp = os.path.join(self.folder, f".{name}.{self.token}.part")
+            try:
+                fd = os.open(tmp, self.FLAGS, 0o666)
+                break
+            except FileExistsError:        # a leftover of another run with the same token: a new one
+                self.token = secrets.token_hex(6)
+        try:
+            try:
+                if self.chmod is None:
+                    self.chmod = os.fstat(fd).st_mode & 0o7777 != self.mode
+                if self.chmod:
+                    os.fchmod(fd, self.mode)
+                view = memoryview(data)
+                while view:
+                    view = view[os.write(fd, view):]
+            finally:
+                os.close(fd)
+            os.replace(tmp, target)
+        except BaseException:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+            raise
 
 
 def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -> dict:
@@ -143,23 +236,19 @@ def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -
 
     def texts():
         for g in parts.of_kind("beam"):
-            density = parts.spec.density(g.kind)
-            angles = beam_angles(g)
-            for i, pid in enumerate(g.ids):
-                yield pid, nc1_text(g, i, order=order, grade=grade, density=density, angles=angles), False
+            texts = nc1_texts(g, order=order, grade=grade, density=parts.spec.density(g.kind), angles=beam_angles(g))
+            yield from zip(g.ids, texts, itertools.repeat(False))
         for g in parts.of_kind("node"):
-            if g.member != "tube":
-                continue
-            density = parts.spec.group_density(g)
-            for i, pid in enumerate(g.ids):
-                yield pid, nc1_tube_text(g, i, order=order, grade=grade, density=density), True
+            if g.member == "tube":
+                texts = nc1_tube_texts(g, order=order, grade=grade, density=parts.spec.group_density(g))
+                yield from zip(g.ids, texts, itertools.repeat(True))
 
     try:
         folder.mkdir(parents=True, exist_ok=True)
-        mode = 0o666 & ~umask()                 # read once: thousands of small files
+        out = _Files(folder, 0o666 & ~umask())      # the umask read once: thousands of small files
         for pid, text, tube in texts():
             data = text.replace("\n", "\r\n").encode("ascii")
-            _write_atomic(folder / f"{pid}.nc1", data, mode)
+            out.write(f"{pid}.nc1", data)
             files += 1
             tubes += tube
             size += len(data)
