@@ -54,13 +54,17 @@ class _Template:
     faces : ``(nf,)`` loops of vertex indices, or, for a face with holes, a tuple of loops (the
     outer one counter-clockwise about the outward normal, each hole clockwise);
     normal_of : ``(nf,)`` the row of the group's normals that holds each face's normal (default
-    ``0..nf-1``).
+    ``0..nf-1``).  V : ``(p, nv, 3)`` the group's vertices: edges parallel in every part (a tube's
+    rings and its sides) share one ``DIRECTION`` and ``VECTOR`` (:func:`parallel_edges`).
     """
 
-    def __init__(self, faces: tuple, nv: int, normal_of: tuple[int, ...] | None = None):
+    def __init__(self, faces: tuple, nv: int, normal_of: tuple[int, ...] | None = None,
+                 V: np.ndarray | None = None):
         faces = tuple(f if isinstance(f[0], tuple) else (f,) for f in faces)   # every face: its loops
         loops = [loop for f in faces for loop in f]
         E, per_loop = edge_table(tuple(loops))
+        same = np.arange(len(E)) if V is None else parallel_edges(E, V)
+        owners = int(np.count_nonzero(same == np.arange(len(E))))
         self.edges = E
         self.faces = faces
         self.normal_of = np.arange(len(faces)) if normal_of is None else np.asarray(normal_of, dtype=np.int64)
@@ -69,7 +73,7 @@ class _Template:
         fields: list[int] = []          # column of the source matrix for every field
         nid = [0]
         # source columns: [local ids (count)] [points 3 nv] [dirs 3 ne] [normals 3 nf]
-        counts = 2 * nv + 4 * self.ne + sum(len(f) for f in loops) + 2 * len(loops) + 4 * self.nf + 1
+        counts = 2 * nv + 2 * self.ne + 2 * owners + sum(len(f) for f in loops) + 2 * len(loops) + 4 * self.nf + 1
         self.count = counts
         c_pt, c_dir = counts, counts + 3 * nv
         c_nrm = c_dir + 3 * self.ne
@@ -85,11 +89,12 @@ class _Template:
             return [c, c + 1, c + 2]
         pt = [new(f"CARTESIAN_POINT('',({REAL},{REAL},{REAL}))", xyz(c_pt + 3 * v)) for v in range(nv)]
         vp = [new("VERTEX_POINT('',#%d)", [pt[v]]) for v in range(nv)]
-        ec = []
+        ec, vecs = [], {}
         for j, (a, b) in enumerate(E.tolist()):
-            d = new(f"DIRECTION('',({REAL},{REAL},{REAL}))", xyz(c_dir + 3 * j))
-            vec = new("VECTOR('',#%d,1.)", [d])
-            line = new("LINE('',#%d,#%d)", [pt[a], vec])
+            if same[j] == j:
+                d = new(f"DIRECTION('',({REAL},{REAL},{REAL}))", xyz(c_dir + 3 * j))
+                vecs[j] = new("VECTOR('',#%d,1.)", [d])
+            line = new("LINE('',#%d,#%d)", [pt[a], vecs[int(same[j])]])
             ec.append(new("EDGE_CURVE('',#%d,#%d,#%d,.T.)", [vp[a], vp[b], line]))
         face_ids = []
         rows = iter(per_loop)
@@ -240,7 +245,7 @@ def write_step(parts, path, *, engine: str = "direct", name: str = "model", pcur
 
 def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
     groups = [g for g in parts.groups if len(g)]
-    templates = [_Template(step_faces(g)[0], g.vertices.shape[1], step_faces(g)[1]) for g in groups]
+    templates = [_Template(step_faces(g)[0], g.vertices.shape[1], step_faces(g)[1], g.vertices) for g in groups]
     style_base = {kind: N_GLOBAL + 1 + 7 * i for i, kind in enumerate(KINDS)}
     next_id = N_GLOBAL + 1 + 7 * len(KINDS)
     n_entities = next_id
@@ -288,6 +293,23 @@ def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the STEP file ({exc.strerror or exc})") from None
     return {"entities": int(n_entities), "pcurves": False}
+
+
+PARALLEL = 1e-12
+"""Edges whose unit directions differ by at most this (every coordinate, in every part of a group) share one."""
+
+
+def parallel_edges(E: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """``(ne,)`` for each edge ``E (ne, 2)`` the first edge parallel to it (same direction within
+    :data:`PARALLEL`) in every part ``V (p, nv, 3)``, itself when there is none."""
+    D = V[:, E[:, 1]] - V[:, E[:, 0]]
+    D /= np.maximum(np.linalg.norm(D, axis=2, keepdims=True), 1e-300)
+    close = np.abs(D[0][:, None, :] - D[0][None, :, :]).max(axis=2) <= PARALLEL     # in the first part
+    same = np.argmax(close, axis=1)
+    while not np.array_equal(same[same], same):
+        same = same[same]
+    ok = np.abs(D - D[:, same]).max(axis=(0, 2)) <= PARALLEL                        # in every part
+    return np.where(ok, same, np.arange(len(E)))
 
 
 def step_faces(group) -> tuple[tuple, tuple[int, ...] | None]:
