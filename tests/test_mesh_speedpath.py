@@ -65,3 +65,52 @@ def _open_group(g):
     import dataclasses
 
     return dataclasses.replace(g, faces=g.faces[1:])
+
+
+def _plain_stl_records(parts, origin):
+    """The STL records as the plain code makes them: one float64 soup, ``np.cross``, ``np.linalg.norm``."""
+    from fabricate.export.stl import RECORD
+
+    P = meshes.soup(parts, origin)
+    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    rec = np.zeros(len(P), dtype=RECORD)
+    rec["normal"], rec["v"] = n, P
+    return rec
+
+
+@pytest.mark.parametrize("far", [False, True])
+def test_stl_records_are_the_bytes_of_the_plain_code(far, tmp_path):
+    from fabricate.cad.parts import Parts
+    from fabricate.export.stl import read_stl, records
+
+    parts = rhs_parts()
+    if far:  # far from the origin: a local origin, vertices relative to it
+        import dataclasses
+
+        groups = tuple(dataclasses.replace(g, vertices=g.vertices + [3.0e6, -1.7e6, 2.5e5]) for g in parts.groups)
+        parts = Parts(groups=groups, spec=parts.spec, edge_mode=parts.edge_mode)
+    origin = parts.local_origin()
+    assert np.any(origin) == far
+    plain = _plain_stl_records(parts, origin)
+    assert records(parts, origin).tobytes() == plain.tobytes()
+    write_stl(parts, tmp_path / "m.stl")
+    data = (tmp_path / "m.stl").read_bytes()
+    assert data[84:] == plain.tobytes() and len(read_stl(tmp_path / "m.stl")[0]) == len(plain)
+
+
+def test_one_stl_per_part_holds_that_part_of_model_stl(tmp_path):
+    from fabricate.export.stl import write_stl_parts
+
+    parts = rhs_parts()
+    write_stl(parts, tmp_path / "model.stl")
+    facts = write_stl_parts(parts, tmp_path / "stl")
+    body = (tmp_path / "model.stl").read_bytes()[84:]
+    lo = 0
+    for g in parts.groups:
+        t = sum(len(f) - 2 for f in g.faces)
+        for pid in g.ids:
+            data = (tmp_path / "stl" / f"{pid}.stl").read_bytes()
+            assert int(np.frombuffer(data, "<u4", 1, 80)[0]) == t and data[84:] == body[lo:lo + 50 * t]
+            lo += 50 * t
+    assert lo == len(body) and facts["files"] == len(parts) and facts["triangles"] == len(body) // 50

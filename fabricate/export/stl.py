@@ -13,7 +13,7 @@ import numpy as np
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
-from .meshes import soup, validate_manifold
+from .meshes import group_triangles, validate_manifold
 
 RECORD = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 
@@ -38,6 +38,36 @@ def parse_header(header: bytes) -> dict:
     return out
 
 
+def unit_normals(X: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit normals ``(n_x, n_y, n_z)``, each ``(p, t)`` float64, of the triangles ``T (t, 3)`` of the
+    solids ``X (p, nv, 3)``: ``cross(b - a, c - a) / max(|.|, 1e-300)`` with the operations of
+    ``np.cross`` and ``np.linalg.norm`` (the same bits), on one coordinate array at a time."""
+    C = np.moveaxis(X, 2, 0)                                          # (3, p, nv)
+    a = C[:, :, T[:, 0]]                                              # (3, p, t)
+    u, v = C[:, :, T[:, 1]] - a, C[:, :, T[:, 2]] - a
+    n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
+    length = np.maximum(np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1e-300)
+    return n[0] / length, n[1] / length, n[2] / length
+
+
+def group_records(group, origin: np.ndarray) -> np.ndarray:
+    """``(p, t)`` :data:`RECORD` of the group's triangles (fan triangles): vertices relative to
+    ``origin``, float32 of the float64 values, unit normals from the float64 vertices."""
+    X, T = group_triangles(group, origin)
+    rec = np.empty((len(X), len(T)), dtype=RECORD)
+    rec["attr"] = 0
+    rec["v"] = X.astype(np.float32)[:, T]                             # float32 of each vertex: the same values
+    for k, n in enumerate(unit_normals(X, T)):
+        rec["normal"][..., k] = n
+    return rec
+
+
+def records(parts, origin: np.ndarray) -> np.ndarray:
+    """``(t,)`` :data:`RECORD`: every triangle of every part, part order (:func:`group_records`)."""
+    out = [group_records(g, origin).reshape(-1) for g in parts.groups]
+    return np.concatenate(out) if out else np.zeros(0, dtype=RECORD)
+
+
 def write_stl(parts, path, *, origin: np.ndarray | None = None) -> dict:
     """Write a binary STL (atomic) after checking every part with manifold3d.
 
@@ -49,20 +79,15 @@ def write_stl(parts, path, *, origin: np.ndarray | None = None) -> dict:
     path = Path(path)
     origin = parts.local_origin() if origin is None else np.asarray(origin, dtype=float)
     facts = validate_manifold(parts, origin)
-    P = soup(parts, origin)
-    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    rec = np.zeros(len(P), dtype=RECORD)
-    rec["normal"] = n
-    rec["v"] = P
+    rec = records(parts, origin)
     try:
         with atomic_open(path, "wb") as fh:
             fh.write(header_text(origin, len(parts)))
-            fh.write(np.uint32(len(P)).tobytes())
+            fh.write(np.uint32(len(rec)).tobytes())
             rec.tofile(fh)
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the STL file ({exc.strerror or exc})") from None
-    return {"file": path.name, "bytes": path.stat().st_size, "triangles": int(len(P)), "parts": len(parts),
+    return {"file": path.name, "bytes": path.stat().st_size, "triangles": len(rec), "parts": len(parts),
             "origin_mm": origin.tolist(), "manifold": facts, "seconds": time.perf_counter() - t0}
 
 
@@ -87,29 +112,23 @@ def write_stl_parts(parts, folder, *, origin: np.ndarray | None = None) -> dict:
     fuses them into fewer pieces; one file per part keeps every solid on its own (for a slicer, a
     viewer that welds, or a CAM set-up per part).  Returns facts: ``folder, files, triangles, seconds``.
     """
-    from fabricate.cad.geometry import fan_triangles
-
     t0 = time.perf_counter()
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     origin = parts.local_origin() if origin is None else np.asarray(origin, dtype=float)
     files = tris = 0
     for g in parts.groups:
-        T = fan_triangles(g.faces)
-        P = (g.vertices - origin)[:, T]                               # (p, t, 3, 3)
-        n = np.cross(P[..., 1, :] - P[..., 0, :], P[..., 2, :] - P[..., 0, :])
-        n /= np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-300)
-        rec = np.zeros(P.shape[:2], dtype=RECORD)
-        rec["normal"], rec["v"] = n, P
+        rec = group_records(g, origin)                                # (p, t)
+        t = rec.shape[1]
         for i, pid in enumerate(g.ids):  # one file per part
             try:
                 with atomic_open(folder / f"{pid}.stl", "wb") as fh:
                     fh.write(header_text(origin, 1))
-                    fh.write(np.uint32(len(T)).tobytes())
+                    fh.write(np.uint32(t).tobytes())
                     rec[i].tofile(fh)
             except OSError as exc:
                 raise ExportError(f"{folder / pid}.stl: cannot write the STL file ({exc.strerror or exc})") from None
             files += 1
-            tris += len(T)
+            tris += t
     return {"folder": folder.name, "files": files, "triangles": tris, "origin_mm": origin.tolist(),
             "seconds": time.perf_counter() - t0}
