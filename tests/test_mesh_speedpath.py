@@ -132,12 +132,16 @@ def test_g12_words_are_percent_12g_of_hostile_numbers():
                9.9999999999995, 0.000099999999999995, 0.0001, 0.00001, 0.001234, 123456789012.5, 1e-300, 5e-324,
                1e300, np.inf, -np.inf, np.nan, 1 / 3, 2 / 3, 1000.0, 12345.5, -12345.5, 0.1, 0.2, 0.3, 2.0 ** 40]
     powers = 10.0 ** np.arange(-7, 15)
+    n = rng.integers(10 ** 11, 10 ** 12, 4000) + 0.5                      # 12-digit mantissas and a half ...
+    d = rng.choice([-3e-4, -2e-4, -1.5e-4, -1e-4, -5e-5, 5e-5, 1e-4, 1.5e-4, 2e-4, 3e-4], 4000)  # ... or near it
+    near_half = (n + d) * 10.0 ** rng.integers(-15, 1, 4000).astype(float)
     x = np.concatenate([
         special, powers, -powers, np.nextafter(powers, 0), np.nextafter(powers, np.inf),
         rng.uniform(-40000, 40000, 20000),                                    # model coordinates (mm)
         rng.standard_normal(20000) * 10.0 ** rng.integers(-9, 17, 20000),       # every exponent
         np.round(rng.uniform(-1e5, 1e5, 5000), 7) + 5e-8,                      # near halves at the 12th digit
-        rng.integers(-10 ** 6, 10 ** 6, 5000) + 0.5, rng.uniform(-1, 1, 5000), rng.uniform(-1e-3, 1e-3, 2000)])
+        rng.integers(-10 ** 6, 10 ** 6, 5000) + 0.5, rng.uniform(-1, 1, 5000), rng.uniform(-1e-3, 1e-3, 2000),
+        near_half])
     assert _g12_texts(x) == [b"%.12g" % v for v in x.tolist()]
     X = rng.uniform(-9000, 9000, (4, 5, 3))
     sign, text = g12_words(X)

@@ -42,30 +42,49 @@ def unit_normals(X: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     """Unit normals ``(n_x, n_y, n_z)``, each ``(p, t)`` float64, of the triangles ``T (t, 3)`` of the
     solids ``X (p, nv, 3)``: ``cross(b - a, c - a) / max(|.|, 1e-300)`` with the operations of
     ``np.cross`` and ``np.linalg.norm`` (the same bits), on one coordinate array at a time."""
-    C = np.moveaxis(X, 2, 0)                                          # (3, p, nv)
+    C = np.ascontiguousarray(np.moveaxis(X, 2, 0))                    # (3, p, nv)
     a = C[:, :, T[:, 0]]                                              # (3, p, t)
-    u, v = C[:, :, T[:, 1]] - a, C[:, :, T[:, 2]] - a
-    n = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]]
-    length = np.maximum(np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]), 1e-300)
-    return n[0] / length, n[1] / length, n[2] / length
+    u, v = C[:, :, T[:, 1]], C[:, :, T[:, 2]]
+    u -= a
+    v -= a
+    n0, n1, n2 = u[1] * v[2], u[2] * v[0], u[0] * v[1]
+    n0 -= u[2] * v[1]
+    n1 -= u[0] * v[2]
+    n2 -= u[1] * v[0]
+    length = n0 * n0
+    length += n1 * n1
+    length += n2 * n2
+    np.sqrt(length, out=length)
+    np.maximum(length, 1e-300, out=length)
+    n0 /= length
+    n1 /= length
+    n2 /= length
+    return n0, n1, n2
 
 
-def group_records(group, origin: np.ndarray) -> np.ndarray:
-    """``(p, t)`` :data:`RECORD` of the group's triangles (fan triangles): vertices relative to
-    ``origin``, float32 of the float64 values, unit normals from the float64 vertices."""
+def group_records(group, origin: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``(p, t)`` :data:`RECORD` of the group's triangles (fan triangles), into ``out`` if given:
+    vertices relative to ``origin``, float32 of the float64 values, unit normals from the float64
+    vertices (:func:`unit_normals`)."""
     X, T = group_triangles(group, origin)
-    rec = np.empty((len(X), len(T)), dtype=RECORD)
+    rec = np.empty((len(X), len(T)), dtype=RECORD) if out is None else out
     rec["attr"] = 0
     rec["v"] = X.astype(np.float32)[:, T]                             # float32 of each vertex: the same values
+    normal = rec["normal"]
     for k, n in enumerate(unit_normals(X, T)):
-        rec["normal"][..., k] = n
+        normal[..., k] = n
     return rec
 
 
 def records(parts, origin: np.ndarray) -> np.ndarray:
     """``(t,)`` :data:`RECORD`: every triangle of every part, part order (:func:`group_records`)."""
-    out = [group_records(g, origin).reshape(-1) for g in parts.groups]
-    return np.concatenate(out) if out else np.zeros(0, dtype=RECORD)
+    sizes = [len(g) * sum(len(f) - 2 for f in g.faces) for g in parts.groups]
+    rec = np.empty(sum(sizes), dtype=RECORD)
+    lo = 0
+    for g, size in zip(parts.groups, sizes):
+        group_records(g, origin, rec[lo:lo + size].reshape(len(g), -1))
+        lo += size
+    return rec
 
 
 def write_stl(parts, path, *, origin: np.ndarray | None = None) -> dict:

@@ -55,8 +55,9 @@ def g12_words(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ``text (..., 3) uint64``, the other characters as 24 bytes (little-endian) padded with NUL.
 
     A number ``d.dddddddddddd x 10^e`` with ``-4 <= e <= 11`` is written from its 12 digits
-    (the correctly rounded ``rint(|v| 10^(11 - e))``, exact but for a product near a half, which
-    is left to Python), without trailing zeros, with ``0.`` and ``-e - 1`` zeros before them when
+    (``rint(|v| 10^(11 - e))``: the product has one rounding, below 6.1e-5 under 1e12, so its
+    rint is the correctly rounded one unless it is within 2e-4 of a half, which is left to
+    Python), without trailing zeros, with ``0.`` and ``-e - 1`` zeros before them when
     ``e < 0``; every other value (exponent notation, inf, nan, a near-half) is formatted by Python.
     """
     shape, x = np.shape(x), np.asarray(x, dtype=np.float64).reshape(-1)
@@ -69,7 +70,7 @@ def g12_words(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     np.clip(e, -4, 13, out=e)
     y = safe * _POW10[13 - e]                               # 1e11 <= y < 1e12, one rounding
     m = np.rint(y)
-    python = ok & ((np.abs(y - np.floor(y) - 0.5) < 1e-3) | (y < 1e11) | (y >= 1e12))
+    python = ok & ((np.abs(y - np.floor(y) - 0.5) < 2e-4) | (y < 1e11) | (y >= 1e12))
     up = m >= 1e12                                          # 999999999999.5 -> 1e+12
     m[up] = 1e11
     e += up
