@@ -103,7 +103,7 @@ def g12_words(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     text[:, 2] = a1 >> _U(56)
     sign = np.signbit(x).view(np.uint8) * np.uint8(45)
     for i in np.flatnonzero(python):
-        sign[i], text[i] = 0, np.frombuffer(b"%.12g" % x[i] + bytes(24 - len(b"%.12g" % x[i])), dtype="<u8")
+        sign[i], text[i] = 0, np.frombuffer((b"%.12g" % x[i]).ljust(24, b"\0"), dtype="<u8")
     return sign.reshape(shape), text.reshape(shape + (3,))
 
 
