@@ -6,9 +6,12 @@ parts (double precision, ``Mesh64``) and must report status ``NoError``,
 one component per part, genus 0 each (``genus = 1 - parts`` for the
 group), and the analytic volume.  Coordinates are taken relative to
 ``Parts.local_origin()`` (zero unless the model is far from the origin),
-because STL stores float32.
+because STL stores float32.  The check is made once per parts object and origin
+(:data:`_CHECKED`): the STL and the 3MF writer check the same triangles.
 """
 from __future__ import annotations
+
+import weakref
 
 import numpy as np
 
@@ -39,11 +42,15 @@ def manifold_of(X: np.ndarray, T: np.ndarray):
     return manifold3d.Manifold(mesh)
 
 
-from fabricate.cad.parts import GENUS  # noqa: E402
+from fabricate.cad.parts import GENUS
+
+_CHECKED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""``{parts: {origin bytes: facts}}``: the manifold3d checks passed by each (immutable) parts object, while it lives."""
 
 
 def validate_manifold(parts, origin: np.ndarray | None = None) -> dict:
-    """Check every group with manifold3d; return facts; raise ExportError naming a bad part.
+    """Check every group with manifold3d (once per parts object and origin); return facts (a copy);
+    raise ExportError naming a bad part (a failed check is not remembered).
 
     Each part is one connected closed surface by construction (its faces share
     edges), so the group's genus ``1 - p`` means every part has genus 0.
@@ -51,6 +58,18 @@ def validate_manifold(parts, origin: np.ndarray | None = None) -> dict:
     ``volume_mm3`` (manifold3d) and ``volume_rel_error`` against the analytic sum.
     """
     origin = parts.local_origin() if origin is None else origin
+    key = np.asarray(origin, dtype=np.float64).tobytes()
+    try:
+        known = _CHECKED.setdefault(parts, {})
+    except TypeError:  # not weak-referenceable: no cache
+        known = {}
+    if key not in known:
+        known[key] = _validate(parts, origin)
+    return dict(known[key])
+
+
+def _validate(parts, origin: np.ndarray) -> dict:
+    """:func:`validate_manifold` without the cache."""
     total, analytic, comps, genus = 0.0, 0.0, 0, 0
     for g in parts.groups:
         X, T = group_triangles(g, origin)

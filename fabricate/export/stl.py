@@ -13,7 +13,7 @@ import numpy as np
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
-from .meshes import soup, validate_manifold
+from .meshes import group_triangles, validate_manifold
 
 RECORD = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
 
@@ -38,6 +38,55 @@ def parse_header(header: bytes) -> dict:
     return out
 
 
+def unit_normals(X: np.ndarray, T: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit normals ``(n_x, n_y, n_z)``, each ``(p, t)`` float64, of the triangles ``T (t, 3)`` of the
+    solids ``X (p, nv, 3)``: ``cross(b - a, c - a) / max(|.|, 1e-300)`` with the operations of
+    ``np.cross`` and ``np.linalg.norm`` (the same bits), on one coordinate array at a time."""
+    C = np.ascontiguousarray(np.moveaxis(X, 2, 0))                    # (3, p, nv)
+    a = C[:, :, T[:, 0]]                                              # (3, p, t)
+    u, v = C[:, :, T[:, 1]], C[:, :, T[:, 2]]
+    u -= a
+    v -= a
+    n0, n1, n2 = u[1] * v[2], u[2] * v[0], u[0] * v[1]
+    n0 -= u[2] * v[1]
+    n1 -= u[0] * v[2]
+    n2 -= u[1] * v[0]
+    length = n0 * n0
+    length += n1 * n1
+    length += n2 * n2
+    np.sqrt(length, out=length)
+    np.maximum(length, 1e-300, out=length)
+    n0 /= length
+    n1 /= length
+    n2 /= length
+    return n0, n1, n2
+
+
+def group_records(group, origin: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``(p, t)`` :data:`RECORD` of the group's triangles (fan triangles), into ``out`` if given:
+    vertices relative to ``origin``, float32 of the float64 values, unit normals from the float64
+    vertices (:func:`unit_normals`)."""
+    X, T = group_triangles(group, origin)
+    rec = np.empty((len(X), len(T)), dtype=RECORD) if out is None else out
+    rec["attr"] = 0
+    rec["v"] = X.astype(np.float32)[:, T]                             # float32 of each vertex: the same values
+    normal = rec["normal"]
+    for k, n in enumerate(unit_normals(X, T)):
+        normal[..., k] = n
+    return rec
+
+
+def records(parts, origin: np.ndarray) -> np.ndarray:
+    """``(t,)`` :data:`RECORD`: every triangle of every part, part order (:func:`group_records`)."""
+    sizes = [len(g) * sum(len(f) - 2 for f in g.faces) for g in parts.groups]
+    rec = np.empty(sum(sizes), dtype=RECORD)
+    lo = 0
+    for g, size in zip(parts.groups, sizes):
+        group_records(g, origin, rec[lo:lo + size].reshape(len(g), -1))
+        lo += size
+    return rec
+
+
 def write_stl(parts, path, *, origin: np.ndarray | None = None) -> dict:
     """Write a binary STL (atomic) after checking every part with manifold3d.
 
@@ -49,20 +98,15 @@ def write_stl(parts, path, *, origin: np.ndarray | None = None) -> dict:
     path = Path(path)
     origin = parts.local_origin() if origin is None else np.asarray(origin, dtype=float)
     facts = validate_manifold(parts, origin)
-    P = soup(parts, origin)
-    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    rec = np.zeros(len(P), dtype=RECORD)
-    rec["normal"] = n
-    rec["v"] = P
+    rec = records(parts, origin)
     try:
         with atomic_open(path, "wb") as fh:
             fh.write(header_text(origin, len(parts)))
-            fh.write(np.uint32(len(P)).tobytes())
+            fh.write(np.uint32(len(rec)).tobytes())
             rec.tofile(fh)
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the STL file ({exc.strerror or exc})") from None
-    return {"file": path.name, "bytes": path.stat().st_size, "triangles": int(len(P)), "parts": len(parts),
+    return {"file": path.name, "bytes": path.stat().st_size, "triangles": len(rec), "parts": len(parts),
             "origin_mm": origin.tolist(), "manifold": facts, "seconds": time.perf_counter() - t0}
 
 
@@ -87,29 +131,23 @@ def write_stl_parts(parts, folder, *, origin: np.ndarray | None = None) -> dict:
     fuses them into fewer pieces; one file per part keeps every solid on its own (for a slicer, a
     viewer that welds, or a CAM set-up per part).  Returns facts: ``folder, files, triangles, seconds``.
     """
-    from fabricate.cad.geometry import fan_triangles
-
     t0 = time.perf_counter()
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     origin = parts.local_origin() if origin is None else np.asarray(origin, dtype=float)
     files = tris = 0
     for g in parts.groups:
-        T = fan_triangles(g.faces)
-        P = (g.vertices - origin)[:, T]                               # (p, t, 3, 3)
-        n = np.cross(P[..., 1, :] - P[..., 0, :], P[..., 2, :] - P[..., 0, :])
-        n /= np.maximum(np.linalg.norm(n, axis=-1, keepdims=True), 1e-300)
-        rec = np.zeros(P.shape[:2], dtype=RECORD)
-        rec["normal"], rec["v"] = n, P
+        rec = group_records(g, origin)                                # (p, t)
+        t = rec.shape[1]
         for i, pid in enumerate(g.ids):  # one file per part
             try:
                 with atomic_open(folder / f"{pid}.stl", "wb") as fh:
                     fh.write(header_text(origin, 1))
-                    fh.write(np.uint32(len(T)).tobytes())
+                    fh.write(np.uint32(t).tobytes())
                     rec[i].tofile(fh)
             except OSError as exc:
                 raise ExportError(f"{folder / pid}.stl: cannot write the STL file ({exc.strerror or exc})") from None
             files += 1
-            tris += len(T)
+            tris += t
     return {"folder": folder.name, "files": files, "triangles": tris, "origin_mm": origin.tolist(),
             "seconds": time.perf_counter() - t0}
