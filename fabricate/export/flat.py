@@ -62,14 +62,40 @@ def flat_group(group) -> FlatGroup:
     arrow = np.stack([tail, tip, tip - barb * (u + 0.5 * perp), tip, tip - barb * (u - 0.5 * perp)], axis=1)
     bevels = []
     for line in (group.bevel_ref,) + tuple(group.flat_faces):  # drop lines on the cut line (square edges)
-        d = np.linalg.norm(line[:, :, None, :] - Q[:, None, :, :], axis=3).min(axis=2).max()
-        if d > 1e-6 and not any(line.shape == b.shape and np.abs(line - b).max() < 1e-6 for b in bevels):
+        if _off_outline(line, Q) and not any(line.shape == b.shape and np.abs(line - b).max() < 1e-6
+                                             for b in bevels):
             bevels.append(line)
-    mids = 0.5 * (Q + np.roll(Q, -1, axis=1))
+    mids = 0.5 * (Q + np.concatenate([Q[:, 1:], Q[:, :1]], axis=1))
     angle_at = mids + 0.25 * (centre[:, None, :] - mids)
-    angle_text = np.vectorize(_angles)(group.bevel_deg[..., 0], group.bevel_deg[..., 1])
+    angle_text = angle_labels(group.bevel_deg[..., 0], group.bevel_deg[..., 1])
     return FlatGroup(outline=Q, bevels=tuple(bevels), arrow=arrow, text_at=centre, text_height=h,
                      angle_at=angle_at, angle_text=angle_text)
+
+
+def _off_outline(line: np.ndarray, Q: np.ndarray) -> bool:
+    """Whether some point of ``line (p, m, 2)`` is more than 1e-6 mm from every corner of ``Q (p, k, 2)``.
+
+    The first part decides most groups (a line off the outline there is off it for the group); the
+    squared distances' sqrt taken once, after the min and max (the same figure as the norm of each)."""
+    for part in (slice(0, 1), slice(None)):
+        D = line[part, :, None, :] - Q[part, None, :, :]
+        d2 = D[..., 0] * D[..., 0] + D[..., 1] * D[..., 1]
+        if d2.size and np.sqrt(d2.min(axis=2).max()) > 1e-6:
+            return True
+    return False
+
+
+def angle_labels(top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
+    """Bevel labels ``(p, k) str`` of edges with angles ``top, bottom (p, k)``: :func:`_angles` of each,
+    the square edges (most) found at once, only the others formatted."""
+    top, bottom = np.asarray(top, dtype=float), np.asarray(bottom, dtype=float)
+    square = (np.abs(top) < 0.05) & (np.abs(bottom) < 0.05)
+    one = ~square & (np.abs(top + bottom) < 0.05)
+    two = ~square & ~one
+    out = np.full(top.shape, "0", dtype=object)
+    out[one] = [f"{t:+.1f}" for t in top[one].tolist()]
+    out[two] = [f"{t:+.1f}/{b:+.1f}" for t, b in zip(top[two].tolist(), bottom[two].tolist())]
+    return out.astype(str) if out.size else np.zeros(top.shape, dtype="<U1")
 
 
 def _angles(top: float, bottom: float) -> str:
