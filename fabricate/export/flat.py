@@ -75,14 +75,27 @@ def flat_group(group) -> FlatGroup:
 def _off_outline(line: np.ndarray, Q: np.ndarray) -> bool:
     """Whether some point of ``line (p, m, 2)`` is more than 1e-6 mm from every corner of ``Q (p, k, 2)``.
 
-    The first part decides most groups (a line off the outline there is off it for the group); the
-    squared distances' sqrt taken once, after the min and max (the same figure as the norm of each)."""
-    for part in (slice(0, 1), slice(None)):
-        D = line[part, :, None, :] - Q[part, None, :, :]
-        d2 = D[..., 0] * D[..., 0] + D[..., 1] * D[..., 1]
-        if d2.size and np.sqrt(d2.min(axis=2).max()) > 1e-6:
-            return True
-    return False
+    Decided on the squared distances (their sqrt taken once, after the min and max: the same figure
+    as the norm of each).  The first part decides most groups; else each point's distance from the
+    corner nearest it on the first part bounds its distance from the nearest corner, and only the
+    parts that bound leaves open are measured in full."""
+    if not line.size or not Q.size:
+        return False
+
+    def d2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        D = a - b
+        return D[..., 0] * D[..., 0] + D[..., 1] * D[..., 1]
+
+    first = d2(line[:1, :, None, :], Q[:1, None, :, :])[0]                    # (m, k)
+    if np.sqrt(first.min(axis=1).max()) > 1e-6:
+        return True
+    near = Q[:, first.argmin(axis=1)]                                          # (p, m, 2)
+    bound = d2(line, near).max(axis=1)                                         # (p,)
+    open_ = np.sqrt(bound) > 1e-6
+    if not open_.any():
+        return False
+    full = d2(line[open_][:, :, None, :], Q[open_][:, None, :, :])
+    return bool(np.sqrt(full.min(axis=2).max()) > 1e-6)
 
 
 def angle_labels(top: np.ndarray, bottom: np.ndarray) -> np.ndarray:
