@@ -6,9 +6,12 @@ writers.  The arrow points from the id toward the outline edge shared with
 the part's face 2: for a panel, the side over the mesh face's first edge
 (corner 0 -> 1); for a beam, the glass-side (first layer) edge.  Together
 with the counter-clockwise outline it fixes which way up the part goes.
+The data of a group is made once per group object (weakly cached, like the layouts
+of :mod:`fabricate.export.nesting`).
 """
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,8 +48,23 @@ def mark_edge(faces: tuple[tuple[int, ...], ...], outline_face: int) -> int:
     return 0
 
 
+_FLAT: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+"""Drawing data per group, made once: the outline DXF and SVG and each nested cut file draw the same groups."""
+
+
 def flat_group(group) -> FlatGroup:
-    """The drawing data of every part of ``group`` (vectorized over parts)."""
+    """The drawing data of every part of ``group`` (vectorized over parts; made once per group object)."""
+    try:
+        return _FLAT[group]
+    except KeyError:
+        pass
+    except TypeError:  # not weak-referenceable: no cache
+        return _flat_group(group)
+    fg = _FLAT[group] = _flat_group(group)
+    return fg
+
+
+def _flat_group(group) -> FlatGroup:
     Q = group.flat
     j = mark_edge(group.faces, group.outline_face)
     k = Q.shape[1]
