@@ -11,11 +11,14 @@ the part id as XDATA (application ``CONICAL_FAB``, group 1000), so CAM
 software and ``fabricate check`` can pair it with the STEP solid.
 
 ezdxf builds the document (header with ``$INSUNITS = 4`` mm, tables,
-layers, linetype, application id, sheets); the per-part entities, tens of
-thousands of them, are written as DXF text from one template per entity
-kind (ezdxf takes about 1 ms per part to create them) and inserted into the
-ENTITIES section with fresh handles.  Before writing, the skeleton with the
-first parts inserted is read back and audited by ezdxf; ``fabricate check``
+layers, linetype, application id, the first sheet); the other sheets and the
+per-part entities, tens of thousands of them, are written as DXF text from
+templates (ezdxf takes about 1 ms per part to create them; a group's parts
+in one ``%``) and inserted into the ENTITIES section with the handles ezdxf
+would have given them.  The sheet template is checked against ezdxf's first
+sheet (ezdxf writes every sheet when they differ).  Before writing, the
+skeleton with the first sheets and parts inserted is read back and audited
+by ezdxf, so that work does not grow with the drawing; ``fabricate check``
 audits the whole file.
 """
 from __future__ import annotations
