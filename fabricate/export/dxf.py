@@ -114,10 +114,16 @@ def _polyline(layer: str, k: int, closed: bool, xdata: bool, owner: str = "%s") 
     return head + " 10\n%.17g\n 20\n%.17g\n" * k + tail
 
 
-TEXT_TEMPLATE = ("  0\nTEXT\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\n{layer}\n100\nAcDbText\n 10\n%.17g\n"
-                 " 20\n%.17g\n 30\n0.0\n 40\n%.6g\n  1\n%s\n 72\n1\n 11\n%.17g\n 21\n%.17g\n 31\n0.0\n100\nAcDbText\n"
+TEXT_TEMPLATE = ("  0\nTEXT\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\n{layer}\n100\nAcDbText\n 10\n%s\n"
+                 " 20\n%s\n 30\n0.0\n 40\n%.6g\n  1\n%s\n 72\n1\n 11\n%s\n 21\n%s\n 31\n0.0\n100\nAcDbText\n"
                  " 73\n2\n")
-"""Fields: handle (int), x, y, height, text, x, y; ``{owner}`` and ``{layer}`` filled in per file."""
+"""Fields: handle (int), x, y (:func:`_g17` str), height, text, x, y; ``{owner}`` and ``{layer}`` filled in per file."""
+
+
+def _g17(a: np.ndarray) -> np.ndarray:
+    """``"%.17g"`` of every figure of ``a`` as an object array of str of its shape (printed once, used twice)."""
+    flat = a.ravel().tolist()
+    return np.array((("%.17g\x1f" * len(flat)) % tuple(flat)).split("\x1f")[:-1], dtype=object).reshape(a.shape)
 
 
 def _placed(lay: Layout, rows: np.ndarray, rect_h: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -150,14 +156,15 @@ def _group_text(g, fg, lay: Layout, rows: np.ndarray, owner: str, handle: int) -
     angle = text.replace("{layer}", "BEVEL")
     blocks = [_placed(lay, rows, h, fg.outline[:q]).reshape(q, -1), np.array(g.ids[:q], dtype=object)[:, None],
               _placed(lay, rows, h, fg.arrow[:q]).reshape(q, -1)]
-    xy = _placed(lay, rows, h, fg.text_at[:q, None, :])[:, 0]
+    xy = _g17(_placed(lay, rows, h, fg.text_at[:q, None, :])[:, 0])
     th = fg.text_height[:q]
     blocks.append(np.column_stack([xy, th, blocks[1][:, 0], xy]))
     first = handle + np.concatenate([[0], np.cumsum(3 + len(fg.bevels) + n_lab)[:-1]])   # (q,) first handle
     cols = [first[:, None], blocks[0], blocks[1], first[:, None] + 1, blocks[2], first[:, None] + 2, blocks[3]]
     for j, b in enumerate(fg.bevels):
         cols += [first[:, None] + 3 + j, _placed(lay, rows, h, b[:q]).reshape(q, -1)]
-    at = _placed(lay, rows, h, fg.angle_at[:q])                                # (q, k, 2)
+    at = np.empty((q, k, 2), dtype=object)                                   # the labels drawn printed
+    at[keep] = _g17(_placed(lay, rows, h, fg.angle_at[:q])[keep])
     lab = np.empty((q, k, 7), dtype=object)
     lab[..., 0] = first[:, None] + 3 + len(fg.bevels) + np.cumsum(keep, axis=1) - 1
     lab[..., 1:3] = at
