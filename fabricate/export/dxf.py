@@ -11,11 +11,14 @@ the part id as XDATA (application ``CONICAL_FAB``, group 1000), so CAM
 software and ``fabricate check`` can pair it with the STEP solid.
 
 ezdxf builds the document (header with ``$INSUNITS = 4`` mm, tables,
-layers, linetype, application id, sheets); the per-part entities, tens of
-thousands of them, are written as DXF text from one template per entity
-kind (ezdxf takes about 1 ms per part to create them) and inserted into the
-ENTITIES section with fresh handles.  Before writing, the skeleton with the
-first parts inserted is read back and audited by ezdxf; ``fabricate check``
+layers, linetype, application id, the first sheet); the other sheets and the
+per-part entities, tens of thousands of them, are written as DXF text from
+templates (ezdxf takes about 1 ms per part to create them; a group's parts
+in one ``%``) and inserted into the ENTITIES section with the handles ezdxf
+would have given them.  The sheet template is checked against ezdxf's first
+sheet (ezdxf writes every sheet when they differ).  Before writing, the
+skeleton with the first sheets and parts inserted is read back and audited
+by ezdxf, so that work does not grow with the drawing; ``fabricate check``
 audits the whole file.
 """
 from __future__ import annotations
@@ -32,7 +35,8 @@ from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
 from .flat import flat_group
-from .nesting import Layout, layout as make_layout, sheet_gap
+from .nesting import Layout, sheet_gap
+from .nesting import layout as make_layout
 
 LAYERS = {"CUT": 1, "INNER": 2, "BEVEL": 3, "ETCH": 5, "SHEET": 8}
 """INNER holds inner contours (holes); the parts built today have none, the layer is there for CAM set-ups."""
@@ -40,8 +44,12 @@ APPID = "CONICAL_FAB"
 AUDIT_SAMPLE = 24
 
 
-def _skeleton(lay: Layout):
-    """The ezdxf document without parts: header, layers, linetype, appid, sheets."""
+def _skeleton(lay: Layout, every_sheet: bool = False):
+    """The ezdxf document without parts: header, layers, linetype, appid, sheets.
+
+    Only the first sheet is made by ezdxf unless ``every_sheet``; the handles of the others are kept
+    free (two each, in sheet order) for :func:`_sheets_text`, so the file is the same either way.
+    Returns the document and the handle of the first sheet's outline (None: no sheet)."""
     import ezdxf
 
     doc = ezdxf.new("R2010", units=ezdxf.units.MM)
@@ -51,31 +59,71 @@ def _skeleton(lay: Layout):
     for name, colour in LAYERS.items():
         doc.layers.add(name, color=colour, linetype="DASHED" if name == "BEVEL" else "Continuous")
     msp = doc.modelspace()
-    if lay.nested:
+    first = None
+    if lay.nested and lay.sheets:
         W, H = lay.size
         step = W + sheet_gap(lay)
-        for s in range(lay.sheets):
+        count = np.bincount(np.asarray(lay.sheet, dtype=np.int64), minlength=lay.sheets)
+        for s in range(lay.sheets if every_sheet else 1):
             x0 = s * step
-            msp.add_lwpolyline([(x0, 0), (x0 + W, 0), (x0 + W, H), (x0, H)], close=True,
-                               dxfattribs={"layer": "SHEET"})
-            msp.add_text(f"{lay.sheet_id(s)}: {W:g} x {H:g} mm, margin {lay.margin:g} mm, kerf {lay.kerf:g} mm, "
-                         f"{int((lay.sheet == s).sum())} parts, yield {100 * lay.utilisation[s]:.1f} %",
-                         height=0.01 * W, dxfattribs={"layer": "SHEET", "insert": (x0, H + 0.01 * W)})
-    return doc
+            e = msp.add_lwpolyline([(x0, 0), (x0 + W, 0), (x0 + W, H), (x0, H)], close=True,
+                                   dxfattribs={"layer": "SHEET"})
+            msp.add_text(_sheet_label(lay, s, int(count[s])), height=0.01 * W,
+                         dxfattribs={"layer": "SHEET", "insert": (x0, H + 0.01 * W)})
+            first = int(e.dxf.handle, 16) if first is None else first
+        if not every_sheet:
+            handles = doc.entitydb.handles
+            handles.reset(f"{int(str(handles), 16) + 2 * (lay.sheets - 1):X}")
+    return doc, first
 
 
-def _polyline(layer: str, k: int, closed: bool, xdata: bool) -> str:
-    """``%`` template of an LWPOLYLINE: fields handle, owner, k (x, y) pairs[, id]."""
-    head = ("  0\nLWPOLYLINE\n  5\n%s\n330\n%s\n100\nAcDbEntity\n"
+def _sheet_label(lay: Layout, s: int, parts: int) -> str:
+    W, H = lay.size
+    return (f"{lay.sheet_id(s)}: {W:g} x {H:g} mm, margin {lay.margin:g} mm, kerf {lay.kerf:g} mm, "
+            f"{parts} parts, yield {100 * lay.utilisation[s]:.1f} %")
+
+
+SHEET_TEMPLATE = ("  0\nLWPOLYLINE\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\nSHEET\n100\nAcDbPolyline\n 90\n4\n"
+                  " 70\n1\n" + " 10\n%r\n 20\n%r\n" * 4
+                  + "  0\nTEXT\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\nSHEET\n100\nAcDbText\n 10\n%r\n"
+                  " 20\n%r\n 30\n0.0\n 40\n%r\n  1\n%s\n100\nAcDbText\n")
+"""A sheet as ezdxf writes it: outline (handle, 4 corners), label (handle, insert x, y, height, text)."""
+
+
+def _sheets_text(lay: Layout, owner: str, first: int, sheets: range) -> str:
+    """DXF text of the ``sheets`` (outline and label each, handles from ``first`` for sheet 0)."""
+    W, H = lay.size
+    step = W + sheet_gap(lay)
+    count = np.bincount(np.asarray(lay.sheet, dtype=np.int64), minlength=lay.sheets)
+    t = SHEET_TEMPLATE.replace("{owner}", owner)
+    out = []
+    for s in sheets:  # a few fields per sheet
+        x0 = s * step
+        x, w, y, ht = float(x0), float(x0 + W), float(H), float(0.01 * W)
+        out.append(t % (first + 2 * s, x, 0.0, w, 0.0, w, y, x, y, first + 2 * s + 1, x, float(H + 0.01 * W), ht,
+                        _sheet_label(lay, s, int(count[s]))))
+    return "".join(out)
+
+
+def _polyline(layer: str, k: int, closed: bool, xdata: bool, owner: str = "%s") -> str:
+    """``%`` template of an LWPOLYLINE: fields handle (``%X`` int), k (x, y) pairs[, id]; ``owner`` written in
+    (the default ``%s`` makes it a field after the handle)."""
+    head = ("  0\nLWPOLYLINE\n  5\n%X\n330\n" f"{owner}\n100\nAcDbEntity\n"
             f"  8\n{layer}\n100\nAcDbPolyline\n 90\n{k}\n 70\n{int(closed)}\n")
     tail = f"1001\n{APPID}\n1000\n%s\n" if xdata else ""
     return head + " 10\n%.17g\n 20\n%.17g\n" * k + tail
 
 
-TEXT_TEMPLATE = ("  0\nTEXT\n  5\n%s\n330\n%s\n100\nAcDbEntity\n  8\n{layer}\n100\nAcDbText\n 10\n%.17g\n 20\n%.17g\n 30\n0.0\n"
-        " 40\n%.6g\n  1\n%s\n 72\n1\n 11\n%.17g\n 21\n%.17g\n 31\n0.0\n100\nAcDbText\n 73\n2\n")
-TEXT = TEXT_TEMPLATE.replace("{layer}", "ETCH")
-ANGLE_TEXT = TEXT_TEMPLATE.replace("{layer}", "BEVEL")
+TEXT_TEMPLATE = ("  0\nTEXT\n  5\n%X\n330\n{owner}\n100\nAcDbEntity\n  8\n{layer}\n100\nAcDbText\n 10\n%s\n"
+                 " 20\n%s\n 30\n0.0\n 40\n%.6g\n  1\n%s\n 72\n1\n 11\n%s\n 21\n%s\n 31\n0.0\n100\nAcDbText\n"
+                 " 73\n2\n")
+"""Fields: handle (int), x, y (:func:`_g17` str), height, text, x, y; ``{owner}`` and ``{layer}`` filled in per file."""
+
+
+def _g17(a: np.ndarray) -> np.ndarray:
+    """``"%.17g"`` of every figure of ``a`` as an object array of str of its shape (printed once, used twice)."""
+    flat = a.ravel().tolist()
+    return np.array((("%.17g\x1f" * len(flat)) % tuple(flat)).split("\x1f")[:-1], dtype=object).reshape(a.shape)
 
 
 def _placed(lay: Layout, rows: np.ndarray, rect_h: np.ndarray, P: np.ndarray) -> np.ndarray:
@@ -87,51 +135,95 @@ def _placed(lay: Layout, rows: np.ndarray, rect_h: np.ndarray, P: np.ndarray) ->
     return np.stack([X + x0[:, None], Y + lay.y[rows][:, None]], axis=2)
 
 
-def _entities(parts, lay: Layout, owner: str, seed: int, limit: int | None = None) -> tuple[str, int, int]:
-    """DXF text of every part's entities, the next free handle and the number of parts written."""
+def _group_text(g, fg, lay: Layout, rows: np.ndarray, owner: str, handle: int) -> tuple[str, int]:
+    """DXF text of the first ``q = len(rows)`` parts of group ``g`` (drawing data ``fg``, layout rows
+    ``rows (q,)``) with handles from ``handle`` on, and the next free handle.
+
+    Per part: the CUT outline (id as XDATA), the arrow, the id, the bevel lines, the labels of the
+    edges that are not square.  One ``%`` over the group: the parts' templates joined (a part's
+    template depends only on its number of labels) and their fields, row by row, out of a
+    ``(q, fields)`` object table with the unused label slots masked."""
+    q = len(rows)
+    h = g.rect[:q, 1]
+    k = fg.outline.shape[1]
+    label = fg.angle_text[:q]
+    keep = label != "0"                                                       # (q, k) labels drawn
+    n_lab = keep.sum(axis=1)
+    text = TEXT_TEMPLATE.replace("{owner}", owner)
+    base = (_polyline("CUT", k, True, True, owner) + _polyline("ETCH", 5, False, False, owner)
+            + text.replace("{layer}", "ETCH")
+            + "".join(_polyline("BEVEL", b.shape[1], True, False, owner) for b in fg.bevels))
+    angle = text.replace("{layer}", "BEVEL")
+    blocks = [_placed(lay, rows, h, fg.outline[:q]).reshape(q, -1), np.array(g.ids[:q], dtype=object)[:, None],
+              _placed(lay, rows, h, fg.arrow[:q]).reshape(q, -1)]
+    xy = _g17(_placed(lay, rows, h, fg.text_at[:q, None, :])[:, 0])
+    th = fg.text_height[:q]
+    blocks.append(np.column_stack([xy, th, blocks[1][:, 0], xy]))
+    first = handle + np.concatenate([[0], np.cumsum(3 + len(fg.bevels) + n_lab)[:-1]])   # (q,) first handle
+    cols = [first[:, None], blocks[0], blocks[1], first[:, None] + 1, blocks[2], first[:, None] + 2, blocks[3]]
+    for j, b in enumerate(fg.bevels):
+        cols += [first[:, None] + 3 + j, _placed(lay, rows, h, b[:q]).reshape(q, -1)]
+    at = np.empty((q, k, 2), dtype=object)                                   # the labels drawn printed
+    at[keep] = _g17(_placed(lay, rows, h, fg.angle_at[:q])[keep])
+    lab = np.empty((q, k, 7), dtype=object)
+    lab[..., 0] = first[:, None] + 3 + len(fg.bevels) + np.cumsum(keep, axis=1) - 1
+    lab[..., 1:3] = at
+    lab[..., 3] = 0.5 * th[:, None]
+    lab[..., 4] = label
+    lab[..., 5:7] = at
+    widths = [c.shape[1] for c in cols]
+    V = np.empty((q, sum(widths) + 7 * k), dtype=object)
+    c0 = 0
+    for c, w in zip(cols, widths):
+        V[:, c0:c0 + w] = c
+        c0 += w
+    V[:, c0:] = lab.reshape(q, -1)
+    used = np.ones(V.shape, dtype=bool)
+    used[:, c0:] = np.repeat(keep, 7, axis=1)
+    templates = np.array([base + angle * n for n in range(k + 1)], dtype=object)
+    out = "".join(templates[n_lab].tolist()) % tuple(V[used].tolist())
+    return out, handle + int(np.sum(3 + len(fg.bevels) + n_lab))
+
+
+def _drawn(parts, lay: Layout) -> list[tuple]:
+    """``[(group, drawing data, layout rows (p,))]`` of the groups laid out in ``lay``."""
     row_of = {pid: k for k, pid in enumerate(lay.ids)}
-    out, handle, n = [], seed, 0
+    out = []
     for g in parts.groups:
         if not cut_from_sheet(g.kind, g.member) or not len(g) or g.ids[0] not in row_of:
             continue
-        fg = flat_group(g)
+        out.append((g, flat_group(g), np.array([row_of[i] for i in g.ids])))
+    return out
+
+
+def _entities(drawn: list[tuple], lay: Layout, owner: str, seed: int, limit: int | None = None) -> tuple[str, int, int]:
+    """DXF text of the parts' entities (the first ``limit`` parts; None: all), the next free handle and the
+    number of parts written.  drawn : :func:`_drawn`."""
+    out, handle, n = [], seed, 0
+    for g, fg, rows in drawn:
         take = len(g) if limit is None else max(0, min(len(g), limit - n))
         if take == 0:
             break
-        rows = np.array([row_of[i] for i in g.ids[:take]])
-        h = g.rect[:take, 1]
-        cut = _placed(lay, rows, h, fg.outline[:take]).reshape(take, -1).tolist()
-        bevels = [_placed(lay, rows, h, b[:take]).reshape(take, -1).tolist() for b in fg.bevels]
-        arrow = _placed(lay, rows, h, fg.arrow[:take]).reshape(take, -1).tolist()
-        text_at = _placed(lay, rows, h, fg.text_at[:take, None, :])[:, 0].tolist()
-        angle_at = _placed(lay, rows, h, fg.angle_at[:take]).tolist()
-        t_cut = _polyline("CUT", fg.outline.shape[1], True, True)
-        t_bevels = [_polyline("BEVEL", b.shape[1], True, False) for b in fg.bevels]
-        t_arrow = _polyline("ETCH", 5, False, False)
-        for i in range(take):  # a few small templates per part
-            pid = g.ids[i]
-            out.append(t_cut % ((f"{handle:X}", owner) + tuple(cut[i]) + (pid,)))
-            out.append(t_arrow % ((f"{handle + 1:X}", owner) + tuple(arrow[i])))
-            (x, y), th = text_at[i], fg.text_height[i]
-            out.append(TEXT % (f"{handle + 2:X}", owner, x, y, th, pid, x, y))
-            handle += 3
-            for t_b, b in zip(t_bevels, bevels):
-                out.append(t_b % ((f"{handle:X}", owner) + tuple(b[i])))
-                handle += 1
-            for (x, y), label in zip(angle_at[i], fg.angle_text[i]):
-                if label != "0":
-                    out.append(ANGLE_TEXT % (f"{handle:X}", owner, x, y, 0.5 * th, label, x, y))
-                    handle += 1
+        text, handle = _group_text(g, fg, lay, rows[:take], owner, handle)
+        out.append(text)
         n += take
     return "".join(out), handle, n
 
 
-def _assemble(skeleton: str, entities: str, next_handle: int) -> str:
-    """Insert ``entities`` at the end of the ENTITIES section and move ``$HANDSEED`` past them."""
+def _assemble(skeleton: str, next_handle: int) -> tuple[str, str]:
+    """The skeleton split at the end of its ENTITIES section (the text before, with ``$HANDSEED`` moved to
+    ``next_handle``, and the text after): the entities go between."""
     start = skeleton.index("  2\nENTITIES\n")
     end = skeleton.index("  0\nENDSEC\n", start)
-    text = skeleton[:end] + entities + skeleton[end:]
-    return re.sub(r"(\$HANDSEED\n  5\n)([0-9A-Fa-f]+)", lambda m: m.group(1) + f"{next_handle:X}", text, count=1)
+    head = re.sub(r"(\$HANDSEED\n  5\n)([0-9A-Fa-f]+)", lambda m: m.group(1) + f"{next_handle:X}", skeleton[:end],
+                  count=1)
+    return head, skeleton[end:]
+
+
+def _written(doc) -> str:
+    buf = io.StringIO()
+    doc.write(buf)
+    return buf.getvalue()
 
 
 def write_dxf(parts, path, *, sheet: tuple[float, float] | None = None, spacing: float = 10.0,
@@ -148,24 +240,34 @@ def write_dxf(parts, path, *, sheet: tuple[float, float] | None = None, spacing:
     t0 = time.perf_counter()
     path = Path(path)
     lay = lay or make_layout(parts, sheet, spacing)
-    doc = _skeleton(lay)
+    doc, first = _skeleton(lay)
     owner = doc.modelspace().block_record_handle
-    buf = io.StringIO()
-    doc.write(buf)
-    skeleton = buf.getvalue()
+    skeleton = _written(doc)
+    sheets = sample_sheets = ""
+    if first is not None:  # ezdxf wrote the first sheet: the template must write it the same, or ezdxf writes all
+        start = skeleton.index("  2\nENTITIES\n") + len("  2\nENTITIES\n")
+        if skeleton[start:skeleton.index("  0\nENDSEC\n", start)] == _sheets_text(lay, owner, first, range(1)):
+            sheets = _sheets_text(lay, owner, first, range(1, lay.sheets))
+            sample_sheets = _sheets_text(lay, owner, first, range(1, min(lay.sheets, AUDIT_SAMPLE)))
+        else:
+            skeleton = _written(_skeleton(lay, every_sheet=True)[0])
     seed = int(re.search(r"\$HANDSEED\n  5\n([0-9A-Fa-f]+)", skeleton).group(1), 16)
-    sample, sample_next, n_sample = _entities(parts, lay, owner, seed, limit=AUDIT_SAMPLE)
+    drawn = _drawn(parts, lay)
+    sample, sample_next, n_sample = _entities(drawn, lay, owner, seed, limit=AUDIT_SAMPLE)
+    head, tail = _assemble(skeleton, sample_next)
     try:
-        auditor = ezdxf.read(io.StringIO(_assemble(skeleton, sample, sample_next))).audit()
+        auditor = ezdxf.read(io.StringIO(head + sample_sheets + sample + tail)).audit()
     except ezdxf.DXFError as exc:
         raise ExportError(f"{path}: the DXF template does not read back ({exc})") from None
     if auditor.has_errors:
         raise ExportError(f"{path}: ezdxf audit of the first {n_sample} parts found {len(auditor.errors)} "
                           f"error(s), first: {auditor.errors[0].message}")
-    entities, next_handle, n = _entities(parts, lay, owner, seed)
+    entities, next_handle, n = _entities(drawn, lay, owner, seed)
+    head, tail = _assemble(skeleton, next_handle)
     try:
         with atomic_open(path, "w", encoding="utf-8", newline="\n") as fh:
-            fh.write(_assemble(skeleton, entities, next_handle))
+            for text in (head, sheets, entities, tail):
+                fh.write(text)
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the DXF file ({exc.strerror or exc})") from None
     return {"file": path.name, "bytes": path.stat().st_size, "outlines": n, "entities": next_handle - seed,

@@ -11,18 +11,50 @@ import time
 from pathlib import Path
 from xml.sax.saxutils import escape
 
+import numpy as np
+
 from fabricate.cad.parts import cut_from_sheet
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
 from .flat import flat_group
-from .nesting import Layout, layout as make_layout, sheet_gap
+from .nesting import Layout, sheet_gap
+from .nesting import layout as make_layout
 
 STYLE = (".cut{fill:none;stroke:#d00000;stroke-width:0.5}"
          ".bevel{fill:none;stroke:#008000;stroke-width:0.3;stroke-dasharray:6 4}"
          ".etch{fill:none;stroke:#0000c0;stroke-width:0.3}"
          ".sheet{fill:none;stroke:#808080;stroke-width:0.5}"
          "text{fill:#0000c0;font-family:sans-serif;text-anchor:middle;dominant-baseline:central}")
+
+
+def _group_svg(g, fg, lay: Layout, rows: np.ndarray, step: float) -> str:
+    """SVG text of every part of group ``g`` (drawing data ``fg``, layout rows ``rows (p,)``, sheets ``step``
+    mm apart): one ``%`` over the group, the parts' templates (turned or not) joined."""
+    p = len(g)
+
+    def points(m: int) -> str:
+        return " ".join(["%.4f,%.4f"] * m)
+
+    tail = ('<polyline class="etch" points="' + points(5) + '"/><text transform="translate(%.4f %.4f) scale(1 -1)" '
+            'font-size="%.3f">%s</text></g>\n')
+    shapes = ('<polygon class="cut" points="' + points(fg.outline.shape[1]) + '"/>'
+              + "".join('<polygon class="bevel" points="' + points(b.shape[1]) + '"/>' for b in fg.bevels) + tail)
+    templates = np.array(['<g id="%s" transform="translate(%.4f %.4f)">' + shapes,
+                          '<g id="%s" transform="translate(%.4f %.4f) rotate(90)">' + shapes], dtype=object)
+    rot = lay.rotated[rows]
+    x0, y0 = lay.x[rows] + lay.sheet[rows] * step, lay.y[rows]
+    ids = np.array(g.ids, dtype=object)[:, None]
+    cols = [ids, np.where(rot, x0 + g.rect[:, 1], x0)[:, None], y0[:, None], fg.outline.reshape(p, -1)]
+    cols += [b.reshape(p, -1) for b in fg.bevels]
+    cols += [fg.arrow.reshape(p, -1), fg.text_at, fg.text_height[:, None],
+             np.array([escape(pid) for pid in g.ids], dtype=object)[:, None]]
+    V = np.empty((p, sum(c.shape[1] for c in cols)), dtype=object)
+    c0 = 0
+    for c in cols:
+        V[:, c0:c0 + c.shape[1]] = c
+        c0 += c.shape[1]
+    return "".join(templates[rot.astype(np.int64)].tolist()) % tuple(V.ravel().tolist())
 
 
 def write_svg(parts, path, *, sheet: tuple[float, float] | None = None, spacing: float = 10.0,
@@ -39,29 +71,10 @@ def write_svg(parts, path, *, sheet: tuple[float, float] | None = None, spacing:
     total_w = max(lay.sheets, 1) * step - sheet_gap(lay)
     where = {pid: k for k, pid in enumerate(lay.ids)}
     body = []
-    for gi, g in enumerate(parts.groups):
+    for g in parts.groups:
         if not cut_from_sheet(g.kind, g.member) or not len(g) or g.ids[0] not in where:
             continue  # a layout of some groups only (one material and thickness)
-        fg = flat_group(g)
-        k_out = fg.outline.shape[1]
-        pts = " ".join(["%.4f,%.4f"] * k_out)
-        bpts = [" ".join(["%.4f,%.4f"] * b.shape[1]) for b in fg.bevels]
-        apts = " ".join(["%.4f,%.4f"] * 5)
-        for i, pid in enumerate(g.ids):  # text per part
-            k = where[pid]
-            x0, y0 = lay.x[k] + lay.sheet[k] * step, lay.y[k]
-            h = g.rect[i, 1]
-            place = (f"translate({x0 + h:.4f} {y0:.4f}) rotate(90)" if lay.rotated[k]
-                     else f"translate({x0:.4f} {y0:.4f})")
-            tx, ty = fg.text_at[i]
-            parts_svg = [f'<g id="{pid}" transform="{place}">',
-                         f'<polygon class="cut" points="{pts % tuple(fg.outline[i].ravel())}"/>']
-            for b, fmt in zip(fg.bevels, bpts):
-                parts_svg.append(f'<polygon class="bevel" points="{fmt % tuple(b[i].ravel())}"/>')
-            parts_svg.append(f'<polyline class="etch" points="{apts % tuple(fg.arrow[i].ravel())}"/>')
-            parts_svg.append(f'<text transform="translate({tx:.4f} {ty:.4f}) scale(1 -1)" '
-                             f'font-size="{fg.text_height[i]:.3f}">{escape(pid)}</text></g>\n')
-            body.append("".join(parts_svg))
+        body.append(_group_svg(g, flat_group(g), lay, np.array([where[pid] for pid in g.ids]), step))
     if lay.nested:
         for s in range(lay.sheets):
             body.append(f'<rect class="sheet" x="{s * step:.4f}" y="0" width="{W:.4f}" height="{H:.4f}"/>\n')
