@@ -55,25 +55,31 @@ class _Template:
     outer one counter-clockwise about the outward normal, each hole clockwise);
     normal_of : ``(nf,)`` the row of the group's normals that holds each face's normal (default
     ``0..nf-1``).  V : ``(p, nv, 3)`` the group's vertices: edges parallel in every part (a tube's
-    rings and its sides) share one ``DIRECTION`` and ``VECTOR`` (:func:`parallel_edges`).
+    rings and its sides) share one ``DIRECTION`` and ``VECTOR`` (:func:`parallel_edges`); N : ``(p, nf', 3)``
+    its face normals: faces with the same or the opposite normal in every part (a plate's two faces)
+    share one ``DIRECTION``, an opposite face with ``same_sense`` ``.F.``.
     """
 
     def __init__(self, faces: tuple, nv: int, normal_of: tuple[int, ...] | None = None,
-                 V: np.ndarray | None = None):
+                 V: np.ndarray | None = None, N: np.ndarray | None = None):
         faces = tuple(f if isinstance(f[0], tuple) else (f,) for f in faces)   # every face: its loops
         loops = [loop for f in faces for loop in f]
         E, per_loop = edge_table(tuple(loops))
         same = np.arange(len(E)) if V is None else parallel_edges(E, V)
         owners = int(np.count_nonzero(same == np.arange(len(E))))
+        self.normal_of = np.arange(len(faces)) if normal_of is None else np.asarray(normal_of, dtype=np.int64)
+        f_same, f_sign = np.arange(len(faces)), np.ones(len(faces))
+        if N is not None:                    # faces parallel in every part share their plane's normal
+            f_same, f_sign = parallel_rows(N[:, self.normal_of], opposite=True)
+        n_owners = int(np.count_nonzero(f_same == np.arange(len(faces))))
         self.edges = E
         self.faces = faces
-        self.normal_of = np.arange(len(faces)) if normal_of is None else np.asarray(normal_of, dtype=np.int64)
         self.nv, self.ne, self.nf = nv, len(E), len(faces)
         lines: list[str] = []
         fields: list[int] = []          # column of the source matrix for every field
         nid = [0]
         # source columns: [local ids (count)] [points 3 nv] [dirs 3 ne] [normals 3 nf]
-        counts = 2 * nv + 2 * self.ne + 2 * owners + sum(len(f) for f in loops) + 2 * len(loops) + 4 * self.nf + 1
+        counts = 2 * nv + 2 * self.ne + 2 * owners + sum(len(f) for f in loops) + 2 * len(loops) + 3 * self.nf + n_owners + 1
         self.count = counts
         c_pt, c_dir = counts, counts + 3 * nv
         c_nrm = c_dir + 3 * self.ne
@@ -96,7 +102,7 @@ class _Template:
                 vecs[j] = new("VECTOR('',#%d,1.)", [d])
             line = new("LINE('',#%d,#%d)", [pt[a], vecs[int(same[j])]])
             ec.append(new("EDGE_CURVE('',#%d,#%d,#%d,.T.)", [vp[a], vp[b], line]))
-        face_ids = []
+        face_ids, nrms = [], {}
         rows = iter(per_loop)
         for fi, face in enumerate(faces):
             bounds = []
@@ -104,10 +110,13 @@ class _Template:
                 oe = [new("ORIENTED_EDGE('',*,*,#%d," + (".T.)" if fwd else ".F.)"), [ec[e]]) for e, fwd in next(rows)]
                 loop = new("EDGE_LOOP('',(" + ",".join(["#%d"] * len(oe)) + "))", oe)
                 bounds.append(new(("FACE_BOUND" if li else "FACE_OUTER_BOUND") + "('',#%d,.T.)", [loop]))
-            nrm = new(f"DIRECTION('',({REAL},{REAL},{REAL}))", xyz(c_nrm + 3 * fi))
-            ax = new("AXIS2_PLACEMENT_3D('',#%d,#%d,$)", [pt[face[0][0]], nrm])
+            if f_same[fi] == fi:
+                nrms[fi] = new(f"DIRECTION('',({REAL},{REAL},{REAL}))", xyz(c_nrm + 3 * fi))
+            ax = new("AXIS2_PLACEMENT_3D('',#%d,#%d,$)", [pt[face[0][0]], nrms[int(f_same[fi])]])
             pl = new("PLANE('',#%d)", [ax])
-            face_ids.append(new("ADVANCED_FACE('',(" + ",".join(["#%d"] * len(bounds)) + "),#%d,.T.)", bounds + [pl]))
+            sense = ".T." if f_sign[fi] > 0 else ".F."              # .F.: the face's normal is the plane's reversed
+            face_ids.append(new("ADVANCED_FACE('',(" + ",".join(["#%d"] * len(bounds)) + "),#%d," + sense + ")",
+                                bounds + [pl]))
         self.shell = new("CLOSED_SHELL('',(" + ",".join(["#%d"] * len(face_ids)) + "))", face_ids)
         assert nid[0] == counts
         self.stride = counts + N_PRODUCT
@@ -245,7 +254,8 @@ def write_step(parts, path, *, engine: str = "direct", name: str = "model", pcur
 
 def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
     groups = [g for g in parts.groups if len(g)]
-    templates = [_Template(step_faces(g)[0], g.vertices.shape[1], step_faces(g)[1], g.vertices) for g in groups]
+    templates = [_Template(step_faces(g)[0], g.vertices.shape[1], step_faces(g)[1], g.vertices, g.normals)
+                 for g in groups]
     style_base = {kind: N_GLOBAL + 1 + 7 * i for i, kind in enumerate(KINDS)}
     next_id = N_GLOBAL + 1 + 7 * len(KINDS)
     n_entities = next_id
@@ -304,12 +314,25 @@ def parallel_edges(E: np.ndarray, V: np.ndarray) -> np.ndarray:
     :data:`PARALLEL`) in every part ``V (p, nv, 3)``, itself when there is none."""
     D = V[:, E[:, 1]] - V[:, E[:, 0]]
     D /= np.maximum(np.linalg.norm(D, axis=2, keepdims=True), 1e-300)
-    close = np.abs(D[0][:, None, :] - D[0][None, :, :]).max(axis=2) <= PARALLEL     # in the first part
-    same = np.argmax(close, axis=1)
-    while not np.array_equal(same[same], same):
-        same = same[same]
-    ok = np.abs(D - D[:, same]).max(axis=(0, 2)) <= PARALLEL                        # in every part
-    return np.where(ok, same, np.arange(len(E)))
+    return parallel_rows(D)[0]
+
+
+def parallel_rows(D: np.ndarray, opposite: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """``(same (n,), sign (n,))``: for each unit vector ``D[:, i]`` (``D (p, n, 3)``) the first one equal
+    to it in every part within :data:`PARALLEL` (itself when there is none), or, with ``opposite``,
+    equal or opposite (``sign`` -1: opposite)."""
+    n = D.shape[1]
+    signs = (1.0, -1.0) if opposite else (1.0,)
+    close = np.zeros((len(signs), n, n), bool)
+    for k, sg in enumerate(signs):                                                    # in the first part
+        close[k] = np.abs(D[0][:, None, :] - sg * D[0][None, :, :]).max(axis=2) <= PARALLEL
+    any_close = close.any(axis=0)
+    same = np.argmax(any_close, axis=1)
+    sign = np.where(close[0][np.arange(n), same], 1.0, -1.0)
+    while not np.array_equal(same[same], same):                                       # to the first of each set
+        sign, same = sign * sign[same], same[same]
+    ok = np.abs(D - sign[None, :, None] * D[:, same]).max(axis=(0, 2)) <= PARALLEL    # in every part
+    return np.where(ok, same, np.arange(n)), np.where(ok, sign, 1.0)
 
 
 def step_faces(group) -> tuple[tuple, tuple[int, ...] | None]:

@@ -14,6 +14,7 @@ def face_polygons(shape) -> list[np.ndarray]:
     """Outer-wire corner loops ``(k, 3)`` of every face of an OCC solid, in wire order
     (counter-clockwise about the outward normal), for straight-edged planar faces."""
     from OCP.BRep import BRep_Tool
+    from OCP.BRepAdaptor import BRepAdaptor_Surface
     from OCP.BRepTools import BRepTools, BRepTools_WireExplorer
     from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
     from OCP.TopExp import TopExp_Explorer
@@ -30,7 +31,10 @@ def face_polygons(shape) -> list[np.ndarray]:
             pts.append((p.X(), p.Y(), p.Z()))
             wx.Next()
         P = np.array(pts, dtype=float)
-        out.append(P[::-1] if face.Orientation() == TopAbs_REVERSED else P)
+        axis = BRepAdaptor_Surface(face).Plane().Axis().Direction()     # the plane's normal; the face's
+        n = np.array([axis.X(), axis.Y(), axis.Z()]) * (-1.0 if face.Orientation() == TopAbs_REVERSED else 1.0)
+        newell = np.cross(P, np.roll(P, -1, axis=0)).sum(axis=0)
+        out.append(P if newell @ n > 0 else P[::-1])                  # counter-clockwise about it
         ex.Next()
     return out
 
