@@ -337,3 +337,36 @@ def test_ifc_face_set_volumes_agree_with_the_geometry_kernel(ifc_file):
     assert set(fast) == set(kernel)
     for pid, item in kernel.items():
         assert fast[pid] == pytest.approx(item["volume_mm3"], rel=1e-9)
+
+
+def test_ifc_check_validates_the_faces_it_leaves_out_of_ifcopenshell_validate(ifc_file, tmp_path):
+    """ifcopenshell.validate runs on every instance but the IfcIndexedPolygonalFace s; their rules are
+    checked by face_rule_errors: a face of two indices, an index past its points and a face no face set
+    uses each fail the full IFC check, and the file as written passes it."""
+    import re
+
+    from fabricate.export.exchange_check import _without_faces, check_ifc, face_rule_errors
+
+    path = ifc_file[0]
+    f = ifcopenshell.open(str(path))
+    faces = f.by_type("IfcIndexedPolygonalFace")
+    rest = list(_without_faces(f))
+    assert faces and len(rest) == len(list(f)) - len(faces) and not any(x.is_a("IfcIndexedPolygonalFace") for x in rest)
+    assert face_rule_errors(f) == []
+    bom = [{"id": x.Name, "volume_mm3": "1", "kind": "panel"} for x in f.by_type("IfcElement")
+           if not x.is_a("IfcCurtainWall")]
+    assert check_ifc(path, bom, full=True)["bad_schema"] == []
+    text = path.read_text()
+    first = re.search(r"IFCINDEXEDPOLYGONALFACE\(\(([\d,]+)\)\)", text)
+    two = ",".join(first.group(1).split(",")[:2])
+    edits = {"two indices": text.replace(first.group(0), f"IFCINDEXEDPOLYGONALFACE(({two}))", 1),
+             "past its points": text.replace(first.group(0), "IFCINDEXEDPOLYGONALFACE((1,2,99999))", 1),
+             "used by no": text.replace("ENDSEC;\nEND-ISO", "#999999=IFCINDEXEDPOLYGONALFACE((1,2,3));\nENDSEC;\nEND-ISO", 1)}
+    for what, broken in edits.items():
+        assert broken != text, what
+        bad = tmp_path / "bad.ifc"
+        bad.write_text(broken)
+        errors = check_ifc(bad, bom, full=True)["bad_schema"]
+        assert errors, what
+        if what != "two indices":   # ifcopenshell may refuse a too short list itself
+            assert any(("used by no" in e) == (what == "used by no") for e in errors), (what, errors)
