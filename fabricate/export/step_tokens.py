@@ -199,7 +199,9 @@ class Records:
         hlen = _digits(x)
         val = _eight_digits(x, hlen)
         long = np.flatnonzero(hlen == 8)
-        if long.size:                                               # eight digits and more: the next eight
+        nxt = buf[hpos[long] + 9]
+        long = long[(nxt >= 48) & (nxt <= 57)]                      # more than eight digits: the next eight
+        if long.size:
             x2 = self.u64[hpos[long] + 9]
             n2 = _digits(x2)
             v2 = _eight_digits(x2, n2)
