@@ -35,6 +35,7 @@ CHUNK = 1 << 22                # bytes scanned at a time (temporaries stay small
 MAX_DIGITS = 11                # a reference of more digits is refused (ids up to 10^11)
 NAME_WINDOW = 24               # entity names shorter than this are classified with numpy
 MAX_NAME = 200                 # a longer entity name is refused
+LONG_NAME = 48                 # names shorter than this are classified with numpy too, in a second pass
 MAX_REAL = 96                  # bytes of one list of reals (three coordinates) at most
 REAL_ROWS = 1 << 13            # records whose reals are read at once (about 800 kB of text)
 NUMBER_CHARS = np.zeros(256, dtype=bool)
@@ -267,7 +268,8 @@ class Records:
             self.names.append(name)
         code[s] = lookup[rep]
         paren = self.name_at + par
-        for i in np.flatnonzero(~short).tolist():                  # long names, complex records
+        self._long_names(np.flatnonzero(~short), code, paren, index)
+        for i in np.flatnonzero(code == -2).tolist():              # longer names, complex records
             at = int(self.name_at[i])
             if self.data[at] == LPAR:
                 code[i], paren[i] = -1, at
@@ -282,6 +284,39 @@ class Records:
                 self.names.append(name)
             code[i], paren[i] = index[name], p
         self.code, self.paren, self.index = code, paren, index
+
+    def _long_names(self, rows: np.ndarray, code: np.ndarray, paren: np.ndarray, index: dict) -> None:
+        """Names of :data:`NAME_WINDOW` to :data:`LONG_NAME` bytes (product structure entities: a few per
+        part) found at once: the bytes before the first '(' of each record's window, one Python step per
+        distinct name.  Complex records (``#1=(A()B())``) and longer names are left at ``-2``."""
+        rows = rows[self.name_at[rows] < len(self.buf) - LONG_NAME]            # the window inside the file
+        if not len(rows):
+            return
+        W = np.array(_window(self.buf, LONG_NAME)[self.name_at[rows]])       # (r, LONG_NAME) a copy
+        rows, W = rows[W[:, 0] != LPAR], W[W[:, 0] != LPAR]
+        is_par = W == LPAR
+        found = is_par.any(axis=1)
+        rows, W, at = rows[found], W[found], np.argmax(is_par[found], axis=1)
+        if not len(rows):
+            return
+        W[np.arange(LONG_NAME)[None, :] >= at[:, None]] = 0                     # the name's bytes only
+        words = W.view(np.uint64)                                               # (r, LONG_NAME / 8)
+        mix = np.uint64(0x9E3779B97F4A7C15) ** np.arange(1, words.shape[1] + 1, dtype=np.uint64)
+        h = np.bitwise_xor.reduce(words * mix[None, :], axis=1)
+        _, first, inv = np.unique(h, return_index=True, return_inverse=True)
+        inv = inv.ravel()
+        if not (words == words[first][inv]).all():                              # two names, one hash
+            _, first, inv = np.unique(words, axis=0, return_index=True, return_inverse=True)
+            inv = inv.ravel()
+        codes = []
+        for i in first.tolist():
+            name = bytes(W[i, :at[i]])
+            if name not in index:
+                index[name] = len(self.names)
+                self.names.append(name)
+            codes.append(index[name])
+        code[rows] = np.asarray(codes, np.int64)[inv]
+        paren[rows] = self.name_at[rows] + at
 
     def complex_text(self) -> list[bytes]:
         return [self.data[int(self.start[i]):int(self.end[i])] for i in np.flatnonzero(self.code == -1).tolist()]
