@@ -42,13 +42,23 @@ def _without_faces(f):
 
     view = _Rest.__new__(_Rest)
     view.__dict__.update(f.__dict__)
-    view.skip = {x.id() for x in f.by_type("IfcIndexedPolygonalFace") if x.is_a() == "IfcIndexedPolygonalFace"}
+    view.skip = {x.id() for x in f.by_type("IfcIndexedPolygonalFace") if x.is_a() in FACES}
     return view
 
 
+FACES = ("IfcIndexedPolygonalFace", "IfcIndexedPolygonalFaceWithVoids")
+"""The face entities :func:`face_rule_errors` checks in place of ``ifcopenshell.validate``."""
+
+
+def _bad_index(idx, n: int) -> bool:
+    return (not isinstance(idx, tuple) or len(idx) < 3 or not all(isinstance(i, int) for i in idx)
+            or min(idx) < 1 or max(idx) > n)
+
+
 def face_rule_errors(f) -> list[str]:
-    """The IFC4 rules of every ``IfcIndexedPolygonalFace`` (what ``ifcopenshell.validate`` checks on one):
-    ``CoordIndex`` a list of 3 or more positive integers, the face used by a face set (inverse
+    """The IFC4 rules of every ``IfcIndexedPolygonalFace`` and ``...WithVoids`` (what
+    ``ifcopenshell.validate`` checks on one): ``CoordIndex`` (and each of ``InnerCoordIndices``, a list
+    of one or more) a list of 3 or more positive integers, the face used by a face set (inverse
     ``ToFaceSet [1:?]``); and each index within its face set's points."""
     out = []
     used: set[int] = set()
@@ -56,15 +66,26 @@ def face_rule_errors(f) -> list[str]:
         n = len(s.Coordinates.CoordList)
         for face in s.Faces:
             used.add(face.id())
-            idx = face.CoordIndex
-            if (not isinstance(idx, tuple) or len(idx) < 3 or not all(isinstance(i, int) for i in idx)
-                    or min(idx) < 1 or max(idx) > n):
-                out.append(f"#{face.id()} IfcIndexedPolygonalFace.CoordIndex {idx!r}: expected 3 or more "
-                           f"indices 1..{n} of its face set #{s.id()}'s points")
+            loops = [face.CoordIndex]
+            if face.is_a() == "IfcIndexedPolygonalFaceWithVoids":
+                inner = face.InnerCoordIndices
+                loops += list(inner) if isinstance(inner, tuple) and inner else [None]
+            for idx in loops:
+                if _bad_index(idx, n):
+                    out.append(f"#{face.id()} {face.is_a()} indices {idx!r}: expected 3 or more indices 1..{n} "
+                               f"of its face set #{s.id()}'s points")
     for face in f.by_type("IfcIndexedPolygonalFace"):
         if face.id() not in used:
             out.append(f"#{face.id()} IfcIndexedPolygonalFace: used by no IfcPolygonalFaceSet (ToFaceSet [1:?])")
     return out
+
+
+def _loops(face) -> list:
+    """A face's index loops: its outer one and, for a face with voids, each hole (which turns the
+    other way, so that its fan triangles take the hole's share off the face's)."""
+    if face.is_a() == "IfcIndexedPolygonalFaceWithVoids":
+        return [face.CoordIndex, *face.InnerCoordIndices]
+    return [face.CoordIndex]
 
 
 def face_set_volumes(f) -> dict[str, float]:
@@ -81,8 +102,8 @@ def face_set_volumes(f) -> dict[str, float]:
                 if not item.is_a("IfcPolygonalFaceSet"):
                     continue
                 P = np.asarray(item.Coordinates.CoordList, dtype=float)
-                tri = [(f_[0], f_[j], f_[j + 1]) for face in item.Faces
-                       for f_ in [[i - 1 for i in face.CoordIndex]] for j in range(1, len(f_) - 1)]
+                tri = [(f_[0], f_[j], f_[j + 1]) for face in item.Faces for loop in _loops(face)
+                       for f_ in [[i - 1 for i in loop]] for j in range(1, len(f_) - 1)]
                 T = np.asarray(tri, dtype=np.int64).reshape(-1, 3)
                 if len(T) == 0 or T.min() < 0 or T.max() >= len(P):   # no shape: a NaN volume fails the check
                     total = float("nan")

@@ -15,7 +15,8 @@ Structure of the file::
 the bill of materials.  Geometry is exact: every part is a planar-faced
 polyhedron, written as a closed ``IfcPolygonalFaceSet`` (IFC4's faceted
 solid: the part's own vertices in millimetres, one indexed planar polygon per
-face; a quarter of the entities of an ``IfcFacetedBrep``); a glass unit of several solids
+face, a hub tube's annular ends ``IfcIndexedPolygonalFaceWithVoids``; a quarter of the entities
+of an ``IfcFacetedBrep``); a glass unit of several solids
 (laminated, insulated) has one face set per ply and interlayer in its one body.  Materials:
 the glass as an ``IfcMaterialLayerSet`` listing the build-up from the outside in (every
 glass ply, interlayer (PVB, SGP) and the cavity's gas, ``IsVentilated`` false), the steel
@@ -76,10 +77,15 @@ class _Writer:
 
     def solid(self, V: np.ndarray, faces) -> object:
         """A closed ``IfcPolygonalFaceSet`` of one polyhedron: V (nv, 3) mm, faces outward vertex-index
-        tuples (0-based; IFC counts from 1).  Every face is a planar polygon, so the set is the solid."""
+        tuples (0-based; IFC counts from 1), or, for a face with holes, its loops (the outer one, then
+        each hole: an ``IfcIndexedPolygonalFaceWithVoids``).  Every face is a planar polygon, so the set
+        is the solid."""
         f = self.f
         points = f.createIfcCartesianPointList3D(V.tolist())
-        polys = [f.createIfcIndexedPolygonalFace([i + 1 for i in face]) for face in faces]
+        polys = [f.createIfcIndexedPolygonalFace([i + 1 for i in face]) if not isinstance(face[0], tuple)
+                 else f.createIfcIndexedPolygonalFaceWithVoids([i + 1 for i in face[0]],
+                                                             [[i + 1 for i in hole] for hole in face[1:]])
+                 for face in faces]
         return f.createIfcPolygonalFaceSet(points, True, polys, None)
 
     def shape(self, item) -> object:
@@ -180,7 +186,7 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
     for (kind, uid), items in solids_of.items():  # one element per unit, one face set per solid
         cls, predefined, object_type = CLASS[kind]
         rep = f.createIfcShapeRepresentation(w.body, "Body", "Tessellation",
-                                             [w.solid(g.vertices[i], g.faces) for g, i in items])
+                                             [w.solid(g.vertices[i], _faces(g)) for g, i in items])
         el = f.create_entity(cls, GlobalId=w.guid(), Name=uid, Description=kind,
                              ObjectType=object_type, ObjectPlacement=w.placement(wall_place),
                              Representation=f.createIfcProductDefinitionShape(None, None, [rep]), Tag=uid,
@@ -273,6 +279,14 @@ def _describe(w: _Writer, el, g, i: int, density: float, unit=None, spec=None) -
             "NetWeight": ("weight", weight)})
         fab["Twist_mm" if g.kind == "beam" else "Planarity_mm"] = float(g.planarity_mm[i])
     w.props(el, PSET, fab)
+
+
+def _faces(group) -> tuple:
+    """The faces of a group's solids in IFC: a hub tube's ends are one annulus each, a face with a hole
+    (as in STEP: :func:`fabricate.export.step.step_faces`); every other part its polygons."""
+    from .step import step_faces
+
+    return step_faces(group)[0]
 
 
 def read_ifc(path) -> dict[str, dict]:
