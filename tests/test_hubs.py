@@ -138,6 +138,8 @@ def test_a_run_with_rhs_beams_and_tube_hubs_passes_its_checks(tmp_path):
     members = {e.Name: e for e in ifcopenshell.open(str(out / "model.ifc")).by_type("IfcMember")}
     assert len(members["B0001"].Representation.Representations[0].Items) == 6     # one member, six plates
     assert len(members["N0001"].Representation.Representations[0].Items) == 3     # tube and two caps
+    tube = members["N0001"].Representation.Representations[0].Items[0]             # annular ends: faces with a hole
+    assert [x.is_a() for x in tube.Faces].count("IfcIndexedPolygonalFaceWithVoids") == 2 and len(tube.Faces) == 2 * 24 + 2
     from fabricate.export.step_text import read_step_text
 
     solids, _ = read_step_text(out / "model.step")
