@@ -97,3 +97,16 @@ def test_broken_flat_json_and_dxf_still_fail(files, tmp_path):
     (tmp_path / "bad.json").write_text((files / "flat.json").read_text()[:-10])
     with pytest.raises(Exception, match="not a readable flat data file"):
         _check_flat(tmp_path / "bad.json", bom, read)
+
+
+def test_a_part_without_a_bom_row_is_reported_where_it_is(files):
+    solids, _ = read_step_text(files / "model.step")
+    bom = read_bom(files / "bom.csv")
+    g = read_flat(files / "flat.json")[1]
+    gone = g["ids"][3]
+    rest = [r for r in bom if r["id"] != gone]
+    res = _check_flat(files / "flat.json", rest, {"step": solids})
+    assert not res["pass"] and res["failures"] == [{"id": gone, "error": "no BOM row of that id"}]
+    assert res["parts"] == res["expected"] + 1 and res["worst"] != gone
+    res = _check_dxf(files / "outlines.dxf", rest, files / "flat.json", "text")
+    assert not res["pass"] and res["failures"] == [{"id": gone, "error": "no BOM row of that id"}]

@@ -162,20 +162,31 @@ def check_flat(path, bom: list[dict], step_solids: dict | None = None, meshes: d
         X = rebuild(g)
         vol = volumes(X, g["faces"])
         hd = _hausdorff_all(X, _corner_sets(g["ids"], expected, against, step_solids, meshes))
-        for i, pid in enumerate(g["ids"]):
-            seen.add(pid)
-            row = expected.get(pid)
-            if row is None:
-                failures.append({"id": pid, "error": "no BOM row of that id"})
-                continue
-            dv = abs(vol[i] - float(row["volume_mm3"]))
-            area = float(row["area_m2"]) * 1e6
-            h = hd[i]
-            if h is not None and h > worst_h:
-                worst_h, worst_id = h, pid
-            worst_v = max(worst_v, dv)
-            if dv > TOL_MM * area or (h is not None and h > TOL_MM) or (h is None and against):
-                failures.append({"id": pid, "volume_error_mm3": dv, "hausdorff_mm": h})
+        ids = g["ids"]
+        seen.update(ids)
+        rows = [expected.get(pid) for pid in ids]
+        known = np.array([r is not None for r in rows], dtype=bool)
+        ref = np.array([(float(r["volume_mm3"]), float(r["area_m2"])) if r is not None else (0.0, 0.0)
+                        for r in rows]).reshape(-1, 2)
+        dv = np.abs(vol - ref[:, 0])                                        # (p,)
+        has_h = np.array([h is not None for h in hd], dtype=bool)
+        H = np.array([np.nan if h is None else h for h in hd], dtype=float)
+        with np.errstate(invalid="ignore"):
+            bad = (dv > TOL_MM * (ref[:, 1] * 1e6)) | (has_h & (H > TOL_MM)) | (~has_h & bool(against))
+            hv = np.where(known & has_h & ~np.isnan(H), H, -np.inf)
+        if len(ids) and known.any():
+            j = int(np.argmax(hv))                                          # the first of the largest
+            if hv[j] > worst_h:
+                worst_h, worst_id = hd[j], ids[j]
+            dk = dv[known]
+            dk = dk[~np.isnan(dk)]
+            if len(dk) and dk.max() > worst_v:
+                worst_v = dk[int(np.argmax(dk))]
+        for i in np.flatnonzero(~known | bad).tolist():                    # the failures, in order
+            if rows[i] is None:
+                failures.append({"id": ids[i], "error": "no BOM row of that id"})
+            else:
+                failures.append({"id": ids[i], "volume_error_mm3": dv[i], "hausdorff_mm": hd[i]})
     missing = sorted(set(expected) - seen)
     ok = not missing and not failures
     return {"pass": ok, "parts": len(seen), "expected": len(expected), "missing": missing[:20],
@@ -214,16 +225,18 @@ def _corner_sets(ids, expected: dict, against, step_solids, meshes) -> list:
     rows = [i for i, p in enumerate(ids) if p in expected and p in step_solids]
     shapes = [step_solids[ids[i]] for i in rows]
     loops = [getattr(s, "_loops", None) for s in shapes]
-    shared = rows and all(lp is not None and all(lp[j] is loops[0][j] for j in range(3)) for lp in loops)
-    faces = [np.asarray(lp[3], dtype=np.int64).ravel() for lp in loops] if shared else []
+    P0, F0, C0 = loops[0][:3] if rows and loops[0] is not None else (None, None, None)
+    shared = P0 is not None and all(lp is not None and lp[0] is P0 and lp[1] is F0 and lp[2] is C0
+                                    for lp in loops)
+    faces = [lp[3] for lp in loops] if shared else []                     # (f_i,) loop indices
     nf = np.array([len(f) for f in faces], dtype=np.int64)
     if not shared or not nf.all():                  # other solids, or one without faces: one at a time
         out = [None] * n
         for i, s in zip(rows, shapes):
             out[i] = _step_points(s)
         return out
-    P, first, counts = loops[0][:3]
-    F = np.concatenate(faces)
+    P, first, counts = P0, F0, C0
+    F = np.concatenate(faces).astype(np.int64)
     cn = np.asarray(counts)[F].astype(np.int64)
     st = np.asarray(first)[F].astype(np.int64)
     ends = np.cumsum(cn)
@@ -263,12 +276,27 @@ def _hausdorff_all(X: np.ndarray, corners: list[np.ndarray | None]) -> list[floa
         chunk = max(1, HAUSDORFF_CHUNK * 8 * 24 // max(1, X.shape[1] * B.shape[1]))
         for lo in range(0, len(ix), chunk):
             part = ix[lo:lo + chunk]
-            d = X[part][:, :, None, :] - B[lo:lo + chunk, None, :, :]      # (c, nv, m, 3)
-            D = (d * d).sum(axis=3)
+            A, Bc = X[part], B[lo:lo + chunk]
+            D = _squared_distances(A, Bc)                                     # (c, nv, m)
             h = np.sqrt(np.maximum(D.min(axis=2).max(axis=1), D.min(axis=1).max(axis=1)))
             for i, v in zip(part.tolist(), h.tolist()):
                 out[i] = v
     return out
+
+
+def _squared_distances(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``(c, nv, m)`` squared distances of ``A (c, nv, 3)`` and ``B (c, m, 3)``, summed x, y, z in this
+    order (as ``((A - B) ** 2).sum(axis=-1)`` and ``np.linalg.norm`` sum them), a coordinate at a time."""
+    D = np.empty((A.shape[0], A.shape[1], B.shape[1]))
+    t = np.empty_like(D)
+    for j in range(3):
+        np.subtract(A[:, :, None, j], B[:, None, :, j], out=t)
+        np.multiply(t, t, out=t)
+        if j:
+            D += t
+        else:
+            D, t = t, D
+    return D
 
 
 def _distinct_columns(B: np.ndarray) -> np.ndarray:
