@@ -395,7 +395,7 @@ def _check_dxf(path, bom, flat_path=None, reader=None, tol: Tolerances = DEFAULT
     holds the solids' names to the same rows), so the DXF is read without waiting for the STEP.
 
     ``reader``: ``"text"`` (the independent DXF reader, linted) or None (ezdxf loads and audits)."""
-    from .export.verify import match_outline
+    from .export.verify import match_outlines
 
     if reader == "text":
         from .export.dxf_text import read_outlines_text as read_outlines
@@ -410,21 +410,30 @@ def _check_dxf(path, bom, flat_path=None, reader=None, tol: Tolerances = DEFAULT
 
     outline_of = {}
     for g in read_flat(flat_path):
-        for pid, Q in zip(g["ids"], g["outline"]):
+        O = g["outline"]                                                     # (p, k, 2): z = 0 added
+        if O.ndim == 3:
+            O = np.concatenate([O, np.zeros(O.shape[:-1] + (1,))], axis=-1)
+            outline_of.update((pid, [Q]) for pid, Q in zip(g["ids"], O))
+            continue
+        for pid, Q in zip(g["ids"], O):
             outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
     outlines, facts = read_outlines(path)
     flat = [r["id"] for r in bom if cut_from_sheet(r["kind"], r.get("member", ""))]
     rows = {r["id"] for r in bom}
     missing = sorted(set(flat) - set(outlines))
     worst_a, worst_e, worst_id, failures = 0.0, 0.0, None, []
-    for pid, Q in outlines.items():  # one outline per part
+    known = [pid for pid in outlines if pid in rows and pid in outline_of]
+    fis, rels, errs = match_outlines([outlines[pid] for pid in known], [outline_of[pid] for pid in known])
+    matched = {pid: (int(fi), float(rel), float(err))
+               for pid, fi, rel, err in zip(known, fis.tolist(), rels.tolist(), errs.tolist())}
+    for pid in outlines:  # one outline per part
         if pid not in rows:
             failures.append({"id": pid, "error": "no BOM row of that id"})
             continue
         if pid not in outline_of:
             failures.append({"id": pid, "error": "not in flat.json"})
             continue
-        fi, rel, err = match_outline(Q, outline_of[pid])
+        fi, rel, err = matched[pid]
         if err > worst_e:
             worst_e, worst_id = err, pid
         worst_a = max(worst_a, rel)

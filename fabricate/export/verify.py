@@ -108,6 +108,52 @@ def match_outline(outline: np.ndarray, faces: list[np.ndarray]) -> tuple[int, fl
     return idx[best % len(idx)], abs(a3 - a2) / max(a3, 1e-300), float(err[best])
 
 
+def match_outlines(outlines: list[np.ndarray], faces: list[list[np.ndarray]]) -> tuple[np.ndarray, np.ndarray,
+                                                                                   np.ndarray]:
+    """:func:`match_outline` of every ``outlines[i] (k_i, 2 or 3)`` against ``faces[i]``: ``(face
+    index (n,) int, area rel error (n,), max edge error mm (n,))``, the same figures to the last
+    digit.  The outlines matched against one face of their own corner count (a flat outline: the
+    usual case) are done ``k`` at a time, the rest one at a time."""
+    n = len(outlines)
+    fi, rel, err = np.full(n, -1, dtype=np.int64), np.full(n, np.inf), np.full(n, np.inf)
+    by_k: dict[tuple[int, int], list[int]] = {}
+    for i, (Q, F) in enumerate(zip(outlines, faces)):
+        if len(F) == 1 and len(F[0]) == len(Q) and len(Q) and Q.ndim == 2 and Q.shape[1] in (2, 3) \
+                and F[0].ndim == 2 and F[0].shape[1] == 3:
+            by_k.setdefault((len(Q), Q.shape[1]), []).append(i)
+        else:
+            fi[i], rel[i], err[i] = match_outline(Q, F)
+    for (k, d), ix in by_k.items():
+        O = np.stack([outlines[i] for i in ix]).astype(float)               # (c, k, d)
+        if d == 2:
+            O = np.concatenate([O, np.zeros(O.shape[:2] + (1,))], axis=2)
+        P = np.stack([faces[i][0] for i in ix]).astype(float)               # (c, k, 3)
+        nxt = _next(k)
+        a2, e2 = _measures(O, nxt)
+        a3, E = _measures(P, nxt)
+        shifts = e2[:, _SHIFTS[k]]                                           # (c, k, k): row s = roll(e2, s)
+        both = np.stack([E, E[:, ::-1]], axis=1)                             # (c, 2, k)
+        e = np.abs(both[:, :, None, :] - shifts[:, None, :, :]).max(axis=3).min(axis=2)   # (c, 2)
+        ix = np.asarray(ix)
+        fi[ix] = 0
+        rel[ix] = np.abs(a3 - a2) / np.maximum(a3, 1e-300)
+        err[ix] = e[np.arange(len(ix)), np.argmin(e, axis=1)]
+    return fi, rel, err
+
+
+def _measures(P: np.ndarray, nxt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`polygon_measures` of ``P (c, k, 3)``: areas ``(c,)`` and edge lengths ``(c, k)``, summed
+    in the same order (the cross products corner after corner, the squares of a vector's three)."""
+    Q = P - P[:, :1]
+    C = _cross(Q, Q[:, nxt])                                                 # (c, k, 3)
+    acc = C[:, 0].copy()
+    for j in range(1, C.shape[1]):                                          # sum over the corners, in order
+        acc += C[:, j]
+    area = 0.5 * np.sqrt((acc ** 2).sum(axis=1))
+    D = P[:, nxt] - P
+    return area, np.sqrt((D * D).sum(axis=2))
+
+
 class Solid:
     """A closed triangle mesh read back (one part): planes, convexity, manifold3d object on demand."""
 
