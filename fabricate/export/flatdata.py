@@ -172,7 +172,8 @@ def check_flat(path, bom: list[dict], step_solids: dict | None = None, meshes: d
         has_h = np.array([h is not None for h in hd], dtype=bool)
         H = np.array([np.nan if h is None else h for h in hd], dtype=float)
         with np.errstate(invalid="ignore"):
-            bad = (dv > TOL_MM * (ref[:, 1] * 1e6)) | (has_h & (H > TOL_MM)) | (~has_h & bool(against))
+            bad = (~(dv <= TOL_MM * (ref[:, 1] * 1e6)) | (has_h & ~(H <= TOL_MM))   # NaN: no figure, a failure
+                   | (~has_h & bool(against)))
             hv = np.where(known & has_h & ~np.isnan(H), H, -np.inf)
         if len(ids) and known.any():
             j = int(np.argmax(hv))                                          # the first of the largest
