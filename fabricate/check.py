@@ -437,7 +437,7 @@ def _check_dxf(path, bom, flat_path=None, reader=None, tol: Tolerances = DEFAULT
         if err > worst_e:
             worst_e, worst_id = err, pid
         worst_a = max(worst_a, rel)
-        if fi < 0 or rel > tol.file_area or err > tol.file_edge_mm:
+        if fi < 0 or not (rel <= tol.file_area and err <= tol.file_edge_mm):   # NaN fails
             failures.append({"id": pid, "face": fi, "area_rel_error": rel, "edge_error_mm": err})
     ok = (facts["audit_errors"] == 0 and facts["units"] == 4 and not missing and not failures
           and facts["texts"] >= len(flat))

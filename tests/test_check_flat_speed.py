@@ -110,3 +110,19 @@ def test_a_part_without_a_bom_row_is_reported_where_it_is(files):
     assert res["parts"] == res["expected"] + 1 and res["worst"] != gone
     res = _check_dxf(files / "outlines.dxf", rest, files / "flat.json", "text")
     assert not res["pass"] and res["failures"] == [{"id": gone, "error": "no BOM row of that id"}]
+
+
+def test_a_part_whose_figures_are_not_numbers_fails(files, tmp_path):
+    """A NaN in a part's flat data gives a NaN volume error or distance: that part fails (NaN > tol is
+    false, so a plain comparison would pass it)."""
+    solids, _ = read_step_text(files / "model.step")
+    bom = read_bom(files / "bom.csv")
+    doc = json.loads((files / "flat.json").read_text())
+    g = doc["groups"][0]
+    g["bevel_reference"][0][0][0] = float("nan")               # the solid rebuilt from it: NaN figures
+    g["outline"][1][0][0] = float("nan")                       # the outline the DXF's must match
+    (tmp_path / "flat.json").write_text(json.dumps(doc))
+    res = _check_flat(tmp_path / "flat.json", bom, {"step": solids})
+    assert not res["pass"] and g["ids"][0] in [f["id"] for f in res["failures"]]
+    res = _check_dxf(files / "outlines.dxf", bom, tmp_path / "flat.json", "text")
+    assert not res["pass"] and g["ids"][1] in [f["id"] for f in res["failures"]]
