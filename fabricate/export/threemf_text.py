@@ -42,6 +42,12 @@ def _numbers(text: bytes, count: int, dtype, what: str, path) -> np.ndarray:
     ``<vertices>`` or ``<triangles>`` blocks matched by :data:`VERTICES` / :data:`TRIANGLES`): the
     literal text of the element's tag and attribute names is blanked (replaced, then every byte a
     number cannot hold turned into a space) and numpy reads the numbers left, in order."""
+    if what == "triangle" and count:
+        T = _indices(text)
+        if T is not None:
+            if len(T) != 3 * count:
+                raise ExportError(f"{path}: a {what} of the 3MF model has a value that is not a number")
+            return T.reshape(-1, 3)
     for lit in LITERALS[what]:
         text = text.replace(lit, b" ")
     text = text.translate(BLANK[what])
@@ -54,6 +60,27 @@ def _numbers(text: bytes, count: int, dtype, what: str, path) -> np.ndarray:
     if x.size != 3 * count or not np.isfinite(x).all():
         raise ExportError(f"{path}: a {what} of the 3MF model has a value that is not a number")
     return x.reshape(-1, 3).astype(dtype)
+
+
+def _indices(text: bytes) -> np.ndarray | None:
+    """``(k,)`` int64 vertex indices written in ``text`` (the joined ``<triangles>`` blocks, made of
+    nothing but ``<triangle v1="i" v2="j" v3="k"/>``): every run of digits not right after a ``v``
+    (an attribute's name), read with numpy; None when one has more than 15 digits (then read as a
+    float, as numpy's parser does, exact up to there)."""
+    b = np.frombuffer(text, np.uint8)
+    digit = ((b >= 48) & (b <= 57)).view(np.int8)
+    edge = np.flatnonzero(np.diff(digit, prepend=np.int8(0), append=np.int8(0)))
+    start, end = edge[0::2], edge[1::2]                    # runs of digits: [start, end)
+    keep = b[np.maximum(start - 1, 0)] != ord("v")
+    keep[start == 0] = True
+    start, n = start[keep], (end - start)[keep]
+    if len(n) and n.max() > 15:
+        return None
+    out = np.zeros(len(start), np.int64)
+    for j in range(int(n.max(initial=0))):                 # digit j of every number that has one
+        m = np.flatnonzero(n > j)
+        out[m] = out[m] * 10 + (b[start[m] + j] - 48)
+    return out
 
 
 def _blocks(pattern, model: bytes, starts: np.ndarray) -> tuple[bytes, np.ndarray] | None:
