@@ -10,6 +10,9 @@ import numpy as np
 
 from optimize.tolerances import DEFAULT, Tolerances
 
+CHUNK = 1 << 15
+"""Triangles per chunk of the 3MF volumes (each row's figures are the same in any chunk)."""
+
 
 def _volumes(bom) -> dict[str, float]:
     return {r["id"]: float(r["volume_mm3"]) for r in bom}
@@ -52,12 +55,15 @@ def check_3mf(path, bom, tol: Tolerances = DEFAULT):
         split.sort()
         sizes = np.array([len(V) for V, _ in meshes])
         base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-        V = np.concatenate([V for V, _ in meshes]).astype(np.float64)
+        V = np.concatenate([V for V, _ in meshes]).astype(np.float64, copy=False)
         T = np.concatenate([t + b for (_, t), b in zip(meshes, base)])
         obj = np.repeat(np.arange(len(names)), [len(t) for _, t in meshes])
         first = np.repeat(base, sizes)                                 # relative to each object's first vertex
         X = V - V[first]
-        det = np.einsum("ij,ij->i", X[T[:, 0]], np.cross(X[T[:, 1]], X[T[:, 2]]))
+        det = np.empty(len(T))
+        for i in range(0, len(T), CHUNK):                              # cache-sized temporaries
+            t = T[i:i + CHUNK]
+            det[i:i + CHUNK] = np.einsum("ij,ij->i", X[t[:, 0]], np.cross(X[t[:, 1]], X[t[:, 2]]))
         vol = np.bincount(obj, weights=det, minlength=len(names)) / 6.0
         flawed_names = set(bad)
         for n, v in zip(names, vol.tolist()):
