@@ -2,16 +2,22 @@
 
 Split from :mod:`fabricate.check` (the same checks, all parts at once): ``check_3mf`` (one
 manifold3d mesh per topology, the objects' volumes by the divergence theorem) and ``check_stl`` (the
-corners of each part welded at once, one manifold3d mesh).
+corners of each part welded, runs of whole parts sorted at once, one manifold3d mesh).
 """
 from __future__ import annotations
+
+from itertools import pairwise
 
 import numpy as np
 
 from optimize.tolerances import DEFAULT, Tolerances
 
 CHUNK = 1 << 15
-"""Triangles per chunk of the 3MF volumes (each row's figures are the same in any chunk)."""
+"""Triangles per chunk of the 3MF volumes and the STL's areas (each row's figures are the same in any chunk)."""
+
+
+WELD = 1 << 16
+"""Corners per run of whole parts sorted at once when the STL's corners are welded."""
 
 
 def _volumes(bom) -> dict[str, float]:
@@ -104,9 +110,12 @@ def check_stl(path, bom, meshes):
     status = m.status().name
     comps = _components(V, T)
     analytic = sum(_volumes(bom).values())
-    A = P.astype(float)
-    area = 0.5 * float(np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1).sum())
-    bound = 4 * float(np.finfo(np.float32).eps) * float(np.abs(A).max()) * area
+    norms = np.empty(len(P))
+    for i in range(0, len(P), CHUNK):                                  # cache-sized temporaries
+        A = P[i:i + CHUNK].astype(float)
+        norms[i:i + CHUNK] = np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1)
+    area = 0.5 * float(norms.sum())
+    bound = 4 * float(np.finfo(np.float32).eps) * float(np.abs(P).max()) * area
     dv = abs(m.volume() - analytic)
     from .check import _holes
 
@@ -125,9 +134,14 @@ def _weld_parts(P: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarr
     bits = X.view(np.uint32).astype(np.uint64)
     k1 = (part << np.uint64(32)) | bits[:, 0]
     k2 = (bits[:, 1] << np.uint64(32)) | bits[:, 2]
-    order = np.lexsort((k2, k1))
+    order = np.empty(len(X), np.int64)
+    ends = 3 * np.cumsum(counts, dtype=np.int64)                       # the part is the first key: sorted
+    cut = np.concatenate([[0], ends[np.searchsorted(ends, np.arange(WELD, len(X), WELD))], [len(X)]])
+    for a, b in pairwise(np.unique(cut).tolist()):                     # a run of whole parts at a time
+        order[a:b] = a + np.lexsort((k2[a:b], k1[a:b]))
+    s1, s2 = k1[order], k2[order]
     new = np.ones(len(order), bool)
-    new[1:] = (k1[order][1:] != k1[order][:-1]) | (k2[order][1:] != k2[order][:-1])
+    new[1:] = (s1[1:] != s1[:-1]) | (s2[1:] != s2[:-1])
     idx = np.cumsum(new) - 1
     inv = np.empty(len(order), np.int64)
     inv[order] = idx
@@ -140,8 +154,8 @@ def _components(V: np.ndarray, T: np.ndarray, labels: bool = False):
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
 
-    a = np.concatenate([T[:, 0], T[:, 1], T[:, 2]])
-    b = np.concatenate([T[:, 1], T[:, 2], T[:, 0]])
-    G = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(len(V), len(V)))
+    a = np.concatenate([T[:, 0], T[:, 1]])                            # two edges join a triangle's corners
+    b = np.concatenate([T[:, 1], T[:, 2]])
+    G = sp.coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(len(V), len(V)))
     n, lab = connected_components(G, directed=False)
     return lab if labels else int(n)
