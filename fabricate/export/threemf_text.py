@@ -64,20 +64,16 @@ def _numbers(text: bytes, count: int, dtype, what: str, path) -> np.ndarray:
 
 def _indices(text: bytes) -> np.ndarray | None:
     """``(k,)`` int64 vertex indices written in ``text`` (the joined ``<triangles>`` blocks, made of
-    nothing but ``<triangle v1="i" v2="j" v3="k"/>``): every run of digits not right after a ``v``
-    (an attribute's name), read with numpy; None when one has more than 15 digits (then read as a
-    float, as numpy's parser does, exact up to there)."""
+    nothing but ``<triangle v1="i" v2="j" v3="k"/>``): the digits between each pair of quotes, read
+    with numpy; None when a number has more than 15 digits (then read as a float, as numpy's parser
+    does, exact up to there)."""
     b = np.frombuffer(text, np.uint8)
-    digit = ((b >= 48) & (b <= 57)).view(np.int8)
-    edge = np.flatnonzero(np.diff(digit, prepend=np.int8(0), append=np.int8(0)))
-    start, end = edge[0::2], edge[1::2]                    # runs of digits: [start, end)
-    keep = b[np.maximum(start - 1, 0)] != ord("v")
-    keep[start == 0] = True
-    start, n = start[keep], (end - start)[keep]
+    quote = np.flatnonzero(b == ord('"'))
+    start, n = quote[0::2] + 1, quote[1::2] - quote[0::2] - 1          # each value: [start, start + n)
     if len(n) and n.max() > 15:
         return None
-    out = np.zeros(len(start), np.int64)
-    for j in range(int(n.max(initial=0))):                 # digit j of every number that has one
+    out = (b[start] - 48).astype(np.int64)
+    for j in range(1, int(n.max(initial=0))):                          # digit j of every number that has one
         m = np.flatnonzero(n > j)
         out[m] = out[m] * 10 + (b[start[m] + j] - 48)
     return out
