@@ -1,14 +1,23 @@
 """The full check's mesh files: the 3MF objects and the STL, read back and held to the BOM.
 
 Split from :mod:`fabricate.check` (the same checks, all parts at once): ``check_3mf`` (one
-manifold3d mesh of every object, volumes by the divergence theorem) and ``check_stl`` (the
-corners of each part welded at once, one manifold3d mesh).
+manifold3d mesh per topology, the objects' volumes by the divergence theorem) and ``check_stl`` (the
+corners of each part welded, runs of whole parts sorted at once, one manifold3d mesh).
 """
 from __future__ import annotations
+
+from itertools import pairwise
 
 import numpy as np
 
 from optimize.tolerances import DEFAULT, Tolerances
+
+CHUNK = 1 << 15
+"""Triangles per chunk of the 3MF volumes and the STL's areas (each row's figures are the same in any chunk)."""
+
+
+WELD = 1 << 16
+"""Corners per run of whole parts sorted at once when the STL's corners are welded."""
 
 
 def _volumes(bom) -> dict[str, float]:
@@ -16,16 +25,18 @@ def _volumes(bom) -> dict[str, float]:
 
 
 def check_3mf(path, bom, tol: Tolerances = DEFAULT):
-    """One manifold3d mesh of all objects (indices apart, so each stays its own surface): status
-    NoError and genus ``1 - objects`` hold when every object is a closed 2-manifold of genus 0 (a
-    closed surface's genus is never negative); otherwise each object alone names the bad ones.
-    Volumes by the divergence theorem per object, each within ``tol.file_volume`` (relative) of the BOM's."""
+    """Every object a closed 2-manifold of its genus (0; 1 for a hub tube), one connected piece, and
+    its volume (divergence theorem) within ``tol.file_volume`` (relative) of the BOM's.
+
+    manifold3d's status and genus, and the connected pieces, depend on the triangles' vertex indices
+    only (they are the topology; the coordinates do not enter): they are found once per topology
+    (:func:`_topologies`: the objects with the same vertex count and triangle array; a design has
+    a few, one per kind of part), on the first object that has it, and hold for all its objects."""
     import manifold3d
 
+    from .check import _holes
     from .export.threemf_text import read_3mf_text
     from .export.verify import solids_of
-
-    from .check import _holes
 
     objects = read_3mf_text(path)
     expected = _volumes(bom)
@@ -34,47 +45,53 @@ def check_3mf(path, bom, tol: Tolerances = DEFAULT):
     extra = sorted(set(objects) - set(expected))
     solids = solids_of(objects)
     names = list(objects)
-    bad, worst, worst_id, errors = [], 0.0, None, []
+    meshes = list(objects.values())
+    bad, worst, worst_id, errors, split = [], 0.0, None, [], []
     if names:
-        sizes = np.array([len(objects[n][0]) for n in names])
+        flawed: list[int] = []
+        for group in _topologies(meshes):
+            V, T = meshes[group[0]]
+            m = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=np.ascontiguousarray(V, dtype=np.float64),
+                                                      tri_verts=np.ascontiguousarray(T, dtype=np.uint64)))
+            fine, genus = m.status().name == "NoError", m.genus()
+            flawed += [k for k in group if not fine or genus != holes.get(names[k], 0)]
+            if len(V) and np.ptp(_components(V, T, labels=True)) != 0:
+                split += group
+        bad = [names[k] for k in sorted(flawed)]
+        split.sort()
+        sizes = np.array([len(V) for V, _ in meshes])
         base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-        V = np.concatenate([objects[n][0] for n in names]).astype(np.float64)
-        T = np.concatenate([objects[n][1] + b for n, b in zip(names, base)])
-        whole = manifold3d.Manifold(manifold3d.Mesh64(vert_properties=V, tri_verts=T.astype(np.uint64)))
-        genera = sum(holes.get(n, 0) for n in names)
-        if whole.status().name != "NoError" or whole.genus() != 1 - len(names) + genera:
-            bad = [n for n in names if solids[n].manifold.status().name != "NoError"
-                   or solids[n].manifold.genus() != holes.get(n, 0)]
-        obj = np.repeat(np.arange(len(names)), [len(objects[n][1]) for n in names])
+        V = np.concatenate([V for V, _ in meshes]).astype(np.float64, copy=False)
+        T = np.concatenate([t + b for (_, t), b in zip(meshes, base)])
+        obj = np.repeat(np.arange(len(names)), [len(t) for _, t in meshes])
         first = np.repeat(base, sizes)                                 # relative to each object's first vertex
         X = V - V[first]
-        det = np.einsum("ij,ij->i", X[T[:, 0]], np.cross(X[T[:, 1]], X[T[:, 2]]))
+        det = np.empty(len(T))
+        for i in range(0, len(T), CHUNK):                              # cache-sized temporaries
+            t = T[i:i + CHUNK]
+            det[i:i + CHUNK] = np.einsum("ij,ij->i", X[t[:, 0]], np.cross(X[t[:, 1]], X[t[:, 2]]))
         vol = np.bincount(obj, weights=det, minlength=len(names)) / 6.0
+        flawed_names = set(bad)
         for n, v in zip(names, vol.tolist()):
-            if n in expected and n not in bad:
+            if n in expected and n not in flawed_names:
                 rel = abs(v - expected[n]) / expected[n]
                 if rel > worst:
                     worst, worst_id = rel, n
                 if rel > tol.file_volume:
                     errors.append(n)
-    split = _split_objects(list(objects.values()))
     ok = not missing and not extra and not bad and not errors and not split
     return ({"pass": ok, "objects": len(objects), "missing": missing[:20], "unexpected": extra[:20],
              "not_manifold": bad[:20], "not_one_piece": split[:20], "volume_rel_error_max": worst,
              "worst": worst_id, "volume_failures": errors[:20]}, solids)
 
 
-def _split_objects(objects: list[tuple[np.ndarray, np.ndarray]]) -> list[int]:
-    """Indices of the meshes ``[(V, T), ...]`` that are not one connected piece (one graph for all)."""
-    if not objects:
-        return []
-    sizes = np.array([len(V) for V, _ in objects])
-    base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    T = np.concatenate([t + b for (_, t), b in zip(objects, base)])
-    labels = _components(np.zeros((int(sizes.sum()), 3)), T, labels=True)
-    lo = np.minimum.reduceat(labels, base)
-    hi = np.maximum.reduceat(labels, base)
-    return np.nonzero(lo != hi)[0].tolist()
+def _topologies(meshes: list[tuple[np.ndarray, np.ndarray]]) -> list[list[int]]:
+    """Indices of the meshes ``[(V (nv, 3), T (t, 3)), ...]`` grouped by topology: the same vertex
+    count and the same triangle index array ``T``, in the order of their first mesh."""
+    groups: dict[tuple, list[int]] = {}
+    for k, (V, T) in enumerate(meshes):
+        groups.setdefault((len(V), T.shape, T.dtype.str, T.tobytes()), []).append(k)
+    return list(groups.values())
 
 
 def check_stl(path, bom, meshes):
@@ -93,9 +110,12 @@ def check_stl(path, bom, meshes):
     status = m.status().name
     comps = _components(V, T)
     analytic = sum(_volumes(bom).values())
-    A = P.astype(float)
-    area = 0.5 * float(np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1).sum())
-    bound = 4 * float(np.finfo(np.float32).eps) * float(np.abs(A).max()) * area
+    norms = np.empty(len(P))
+    for i in range(0, len(P), CHUNK):                                  # cache-sized temporaries
+        A = P[i:i + CHUNK].astype(float)
+        norms[i:i + CHUNK] = np.linalg.norm(np.cross(A[:, 1] - A[:, 0], A[:, 2] - A[:, 0]), axis=1)
+    area = 0.5 * float(norms.sum())
+    bound = 4 * float(np.finfo(np.float32).eps) * float(np.abs(P).max()) * area
     dv = abs(m.volume() - analytic)
     from .check import _holes
 
@@ -114,9 +134,14 @@ def _weld_parts(P: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarr
     bits = X.view(np.uint32).astype(np.uint64)
     k1 = (part << np.uint64(32)) | bits[:, 0]
     k2 = (bits[:, 1] << np.uint64(32)) | bits[:, 2]
-    order = np.lexsort((k2, k1))
+    order = np.empty(len(X), np.int64)
+    ends = 3 * np.cumsum(counts, dtype=np.int64)                       # the part is the first key: sorted
+    cut = np.concatenate([[0], ends[np.searchsorted(ends, np.arange(WELD, len(X), WELD))], [len(X)]])
+    for a, b in pairwise(np.unique(cut).tolist()):                     # a run of whole parts at a time
+        order[a:b] = a + np.lexsort((k2[a:b], k1[a:b]))
+    s1, s2 = k1[order], k2[order]
     new = np.ones(len(order), bool)
-    new[1:] = (k1[order][1:] != k1[order][:-1]) | (k2[order][1:] != k2[order][:-1])
+    new[1:] = (s1[1:] != s1[:-1]) | (s2[1:] != s2[:-1])
     idx = np.cumsum(new) - 1
     inv = np.empty(len(order), np.int64)
     inv[order] = idx
@@ -129,8 +154,8 @@ def _components(V: np.ndarray, T: np.ndarray, labels: bool = False):
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
 
-    a = np.concatenate([T[:, 0], T[:, 1], T[:, 2]])
-    b = np.concatenate([T[:, 1], T[:, 2], T[:, 0]])
-    G = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(len(V), len(V)))
+    a = np.concatenate([T[:, 0], T[:, 1]])                            # two edges join a triangle's corners
+    b = np.concatenate([T[:, 1], T[:, 2]])
+    G = sp.coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(len(V), len(V)))
     n, lab = connected_components(G, directed=False)
     return lab if labels else int(n)

@@ -220,6 +220,36 @@ def _by_shape(objects: list[tuple[np.ndarray, np.ndarray]]) -> list[tuple[np.nda
             for ix in shape.values()]
 
 
+PER_CHUNK = 1 << 16
+"""Triangle-vertex products per chunk of meshes in :func:`solids_of` (a chunk's temporaries stay in
+the processor's cache: about ten times faster than one pass over a group of big meshes)."""
+
+
+def _shape_figures(V: np.ndarray, T: np.ndarray):
+    """Areas ``(g,)``, unit normals ``(g, t, 3)``, plane offsets ``(g, t)``, tolerances ``(g,)`` and each
+    triangle plane's worst vertex ``(g, t)`` (largest signed distance outside it) of ``g`` meshes of one
+    shape ``V (g, nv, 3)``, ``T (g, t, 3)``, in chunks of :data:`PER_CHUNK` triangle-vertex products."""
+    g, t, nv = len(V), T.shape[1], V.shape[1]
+    area, tol = np.empty(g), np.empty(g)
+    N, off, worst = np.empty((g, t, 3)), np.empty((g, t)), np.empty((g, t))
+    step = max(1, PER_CHUNK // max(t * nv, 1))
+    for i in range(0, g, step):
+        X, Y = V[i:i + step], T[i:i + step]
+        r = np.arange(len(X))[:, None]
+        A, B, C = X[r, Y[:, :, 0]], X[r, Y[:, :, 1]], X[r, Y[:, :, 2]]             # (c, t, 3)
+        cr = _cross(B - A, C - A)
+        norm = np.sqrt((cr * cr).sum(axis=2))
+        area[i:i + step] = 0.5 * norm.sum(axis=1)
+        n = N[i:i + step]
+        np.divide(cr, np.maximum(norm, 1e-300)[:, :, None], out=n)
+        off[i:i + step] = (n * A).sum(axis=2)
+        size = np.sqrt(((X.max(axis=1) - X.min(axis=1)) ** 2).sum(axis=1))
+        tol[i:i + step] = 1e-9 * np.maximum(size, 1.0)
+        np.matmul(n, X.transpose(0, 2, 1)).max(axis=2, out=worst[i:i + step])
+    worst -= off                        # max(d - c) = max(d) - c exactly: rounding is monotone
+    return area, N, off, tol, worst
+
+
 def solids_of(objects: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, Solid]:
     """:class:`Solid` of every mesh ``{name: (V (nv, 3), T (t, 3))}``, their planes, areas and
     convexity computed for all meshes of one shape at once (the same figures as ``Solid(name, V, T)``)."""
@@ -228,26 +258,17 @@ def solids_of(objects: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, So
     if not names or any(len(V) == 0 or len(T) == 0 for V, T in meshes):
         return {n: Solid(n, *objects[n]) for n in names}
     out: list[Solid | None] = [None] * len(names)
+    new = Solid.__new__
     for ix, V, T in _by_shape(meshes):
-        g = np.arange(len(ix))[:, None]
-        A, B, C = V[g, T[:, :, 0]], V[g, T[:, :, 1]], V[g, T[:, :, 2]]             # (g, t, 3)
-        cr = _cross(B - A, C - A)
-        norm = np.sqrt((cr * cr).sum(axis=2))
-        area = 0.5 * norm.sum(axis=1)
-        N = cr / np.maximum(norm, 1e-300)[:, :, None]
-        off = (N * A).sum(axis=2)
-        size = np.sqrt(((V.max(axis=1) - V.min(axis=1)) ** 2).sum(axis=1))
-        tol = 1e-9 * np.maximum(size, 1.0)
-        per_tri = (np.matmul(N, V.transpose(0, 2, 1)) - off[:, :, None]).max(axis=2)   # (g, t) worst vertex
-        convex = per_tri.max(axis=1) <= tol
-        for r, k in enumerate(ix.tolist()):
-            s = Solid.__new__(Solid)
+        area, N, off, tol, per_tri = _shape_figures(V, T)
+        keep = per_tri <= tol[:, None]
+        convex = keep.all(axis=1)
+        for r, k, a, c, cv in zip(range(len(ix)), ix.tolist(), area.tolist(), tol.tolist(), convex.tolist()):
+            s = new(Solid)
             s.name, (s.V, s.T) = names[k], meshes[k]
-            s.area, s.normals, s.offsets = float(area[r]), N[r], off[r]
-            s.tol, s.convex = float(tol[r]), bool(convex[r])
+            s.area, s.normals, s.offsets, s.tol, s.convex = a, N[r], off[r], c, cv
             s._manifold = s._planes = None
-            keep = per_tri[r] <= tol[r]
-            s._face_support = (N[r][keep], off[r][keep])
+            s._face_support = (N[r], off[r]) if cv else (N[r][keep[r]], off[r][keep[r]])
             out[k] = s
     return dict(zip(names, out))
 
