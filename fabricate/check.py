@@ -268,7 +268,7 @@ def _volume_errors(volumes: dict[str, float], expected: dict[str, float], tol: T
             rel = abs(v - expected[name]) / expected[name]
             if rel > worst:
                 worst, worst_id = rel, name
-            if rel > tol.file_volume:
+            if not rel <= tol.file_volume:   # NaN (no shape) fails
                 errors.append(name)
     return worst, worst_id, errors
 

@@ -77,7 +77,7 @@ def check_3mf(path, bom, tol: Tolerances = DEFAULT):
                 rel = abs(v - expected[n]) / expected[n]
                 if rel > worst:
                     worst, worst_id = rel, n
-                if rel > tol.file_volume:
+                if not rel <= tol.file_volume:   # NaN (no shape) fails
                     errors.append(n)
     ok = not missing and not extra and not bad and not errors and not split
     return ({"pass": ok, "objects": len(objects), "missing": missing[:20], "unexpected": extra[:20],

@@ -126,3 +126,32 @@ def test_chunked_solids_equal_one_at_a_time(folder, monkeypatch):
         assert one.convex == b.convex and one.tol == b.tol
         assert np.allclose(one.normals, b.normals, atol=1e-12) and np.allclose(one.offsets, b.offsets)
         assert len(one.face_support[0]) == len(b.face_support[0])
+
+
+def test_a_3mf_object_with_a_nan_vertex_fails_its_volume(tmp_path):
+    """Objects of one topology share the manifold test (it depends on the triangles only); a NaN
+    coordinate makes that object's volume NaN, which fails it (NaN > tol is false)."""
+    import re
+
+    from cad_fixtures import dome_parts
+
+    from fabricate.check_mesh import check_3mf
+    from fabricate.export import write_3mf, write_bom
+    from fabricate.export.bom import read_bom
+
+    parts = dome_parts(4, 2)
+    write_3mf(parts, tmp_path / "model.3mf")
+    write_bom(parts, tmp_path / "bom.csv")
+    bom = read_bom(tmp_path / "bom.csv")
+    assert check_3mf(tmp_path / "model.3mf", bom)[0]["pass"]
+    import zipfile
+
+    with zipfile.ZipFile(tmp_path / "model.3mf") as z:
+        members = {n: z.read(n) for n in z.namelist()}
+    model = next(n for n in members if n.endswith(".model"))
+    members[model] = re.sub(rb'(<vertex x=")[^"]+', rb"\g<1>nan", members[model], count=1)
+    with zipfile.ZipFile(tmp_path / "bad.3mf", "w") as z:
+        for n, data in members.items():
+            z.writestr(n, data)
+    res = check_3mf(tmp_path / "bad.3mf", bom)[0]
+    assert not res["pass"]

@@ -155,7 +155,7 @@ def separated(planes: list[tuple[np.ndarray, np.ndarray]], corners: list[np.ndar
         Np, Cp = P[pc]
         Vp = Q[vc][0]
         ra, rb = prow[a[sel]], vrow[b[sel]]
-        step = max(1, 4_000_000 // (pc * vc))
+        step = max(1, 65_536 // (pc * vc))                  # temporaries that stay in cache
         for s in range(0, len(sel), step):                 # chunks of pairs: bounded memory
             sa, sb = ra[s:s + step], rb[s:s + step]
             d = np.matmul(Np[sa], Vp[sb].transpose(0, 2, 1)) - Cp[sa][:, :, None]
