@@ -45,3 +45,16 @@ def capped_dome_mesh(n_around: int = 7, k: int = 3):
     m = dome_mesh(n_around, k)
     faces = m.faces_list() + [[i * k + (k - 1) for i in range(n_around)]]
     return Mesh(m.V, faces, name="capped_dome")
+
+
+def rezip_3mf(src, dst, edit):
+    """A copy ``dst`` of the 3MF ``src`` with its model text passed through ``edit`` (bytes -> bytes)."""
+    import zipfile
+
+    with zipfile.ZipFile(src) as z:
+        items = {n: z.read(n) for n in z.namelist()}
+    items["3D/3dmodel.model"] = edit(items["3D/3dmodel.model"])
+    with zipfile.ZipFile(dst, "w") as z:
+        for n, b in items.items():
+            z.writestr(n, b)
+    return dst

@@ -1,11 +1,10 @@
 """The full check's batched readers and tests read what the per-part ones read, and still fail broken files."""
 import dataclasses
 import re
-import zipfile
 
 import numpy as np
 import pytest
-from cad_fixtures import dome_parts
+from cad_fixtures import dome_parts, rezip_3mf
 
 from fabricate.check import check_outputs
 from fabricate.check_mesh import _weld_parts
@@ -32,25 +31,15 @@ def test_3mf_text_reader_reads_what_elementtree_reads(folder):
     assert all(np.array_equal(mine[k][0], theirs[k][0]) and np.array_equal(mine[k][1], theirs[k][1]) for k in mine)
 
 
-def _rezip(src, dst, edit):
-    with zipfile.ZipFile(src) as z:
-        items = {n: z.read(n) for n in z.namelist()}
-    items["3D/3dmodel.model"] = edit(items["3D/3dmodel.model"])
-    with zipfile.ZipFile(dst, "w") as z:
-        for n, b in items.items():
-            z.writestr(n, b)
-    return dst
-
-
 def test_3mf_other_attribute_order_malformed_xml_and_bad_index(folder, tmp_path):
-    swapped = _rezip(folder / "model.3mf", tmp_path / "a.3mf",
+    swapped = rezip_3mf(folder / "model.3mf", tmp_path / "a.3mf",
                      lambda t: re.sub(rb'<vertex x="([^"]*)" y="([^"]*)"', rb'<vertex y="\2" x="\1"', t))
     mine, theirs = read_3mf_text(swapped), read_3mf(folder / "model.3mf")
     assert all(np.array_equal(mine[k][0], theirs[k][0]) for k in theirs)     # read by the tree reader
     with pytest.raises(ExportError, match="not well-formed XML"):
-        read_3mf_text(_rezip(folder / "model.3mf", tmp_path / "b.3mf", lambda t: t.replace(b"</mesh>", b"", 1)))
+        read_3mf_text(rezip_3mf(folder / "model.3mf", tmp_path / "b.3mf", lambda t: t.replace(b"</mesh>", b"", 1)))
     with pytest.raises(ExportError, match="triangle index beyond"):
-        read_3mf_text(_rezip(folder / "model.3mf", tmp_path / "c.3mf",
+        read_3mf_text(rezip_3mf(folder / "model.3mf", tmp_path / "c.3mf",
                              lambda t: re.sub(rb'v1="\d+"', b'v1="99"', t, count=1)))
 
 

@@ -1,11 +1,10 @@
 """The fast paths of the mesh file checks give what the plain ones give, on good and broken files."""
 import re
-import zipfile
 
 import manifold3d
 import numpy as np
 import pytest
-from cad_fixtures import dome_parts
+from cad_fixtures import dome_parts, rezip_3mf
 
 import fabricate.check_mesh as cm
 from fabricate.check_mesh import _weld_parts, check_3mf
@@ -26,28 +25,18 @@ def folder(tmp_path_factory):
     return out
 
 
-def _rezip(src, dst, edit):
-    with zipfile.ZipFile(src) as z:
-        items = {n: z.read(n) for n in z.namelist()}
-    items["3D/3dmodel.model"] = edit(items["3D/3dmodel.model"])
-    with zipfile.ZipFile(dst, "w") as z:
-        for n, b in items.items():
-            z.writestr(n, b)
-    return dst
-
-
 def _same(a, b):
     return list(a) == list(b) and all(np.array_equal(a[k][0], b[k][0]) and np.array_equal(a[k][1], b[k][1])
                                       for k in a)
 
 
 def test_blocks_with_line_breaks_and_long_indices(folder, tmp_path):
-    spaced = _rezip(folder / "model.3mf", tmp_path / "a.3mf",
+    spaced = rezip_3mf(folder / "model.3mf", tmp_path / "a.3mf",
                     lambda t: t.replace(b"/><vertex ", b"/>\n  <vertex ").replace(b"/><triangle ", b"/>\n<triangle "))
     assert _same(read_3mf_text(spaced), read_3mf(folder / "model.3mf"))
-    padded = _rezip(folder / "model.3mf", tmp_path / "b.3mf", lambda t: re.sub(rb'v2="(\d+)"', rb'v2="000\1"', t))
+    padded = rezip_3mf(folder / "model.3mf", tmp_path / "b.3mf", lambda t: re.sub(rb'v2="(\d+)"', rb'v2="000\1"', t))
     assert _same(read_3mf_text(padded), read_3mf(folder / "model.3mf"))          # leading zeros: same numbers
-    huge = _rezip(folder / "model.3mf", tmp_path / "c.3mf", lambda t: re.sub(rb'v3="\d+"', b'v3="1' + b"0" * 17 + b'"',
+    huge = rezip_3mf(folder / "model.3mf", tmp_path / "c.3mf", lambda t: re.sub(rb'v3="\d+"', b'v3="1' + b"0" * 17 + b'"',
                                                                                t, count=1))
     with pytest.raises(ExportError, match="triangle index beyond"):              # 18 digits: the float reader
         read_3mf_text(huge)
@@ -77,7 +66,7 @@ def test_manifold_once_per_topology_names_what_each_object_alone_names(folder, t
     bom = read_bom(folder / "bom.csv")
     good, _ = check_3mf(folder / "model.3mf", bom)
     assert good["pass"] and good["not_manifold"] == [] and good["not_one_piece"] == []
-    broken = _rezip(folder / "model.3mf", tmp_path / "d.3mf", lambda t: _flip_first_triangle(t, 2))
+    broken = rezip_3mf(folder / "model.3mf", tmp_path / "d.3mf", lambda t: _flip_first_triangle(t, 2))
     result, _ = check_3mf(broken, bom)
     objects = read_3mf_text(broken)
     expected = _per_object(objects, _holes(bom))
@@ -97,7 +86,7 @@ def test_an_object_in_two_pieces_is_named(folder, tmp_path):
         tris = re.sub(rb'"(\d+)"', lambda m: b'"%d"' % (int(m[1]) + n), t[t0:t1])
         return t[:v1] + copy + t[v1:t1] + tris + t[t1:]
 
-    result, _ = check_3mf(_rezip(folder / "model.3mf", tmp_path / "e.3mf", twice), bom)
+    result, _ = check_3mf(rezip_3mf(folder / "model.3mf", tmp_path / "e.3mf", twice), bom)
     assert not result["pass"] and result["not_one_piece"] == [1]
 
 
@@ -144,14 +133,7 @@ def test_a_3mf_object_with_a_nan_vertex_fails_its_volume(tmp_path):
     write_bom(parts, tmp_path / "bom.csv")
     bom = read_bom(tmp_path / "bom.csv")
     assert check_3mf(tmp_path / "model.3mf", bom)[0]["pass"]
-    import zipfile
-
-    with zipfile.ZipFile(tmp_path / "model.3mf") as z:
-        members = {n: z.read(n) for n in z.namelist()}
-    model = next(n for n in members if n.endswith(".model"))
-    members[model] = re.sub(rb'(<vertex x=")[^"]+', rb"\g<1>nan", members[model], count=1)
-    with zipfile.ZipFile(tmp_path / "bad.3mf", "w") as z:
-        for n, data in members.items():
-            z.writestr(n, data)
+    rezip_3mf(tmp_path / "model.3mf", tmp_path / "bad.3mf",
+              lambda m: re.sub(rb'(<vertex x=")[^"]+', rb"\g<1>nan", m, count=1))
     res = check_3mf(tmp_path / "bad.3mf", bom)[0]
     assert not res["pass"]
