@@ -254,8 +254,8 @@ def write_step(parts, path, *, engine: str = "direct", name: str = "model", pcur
 
 def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
     groups = [g for g in parts.groups if len(g)]
-    templates = [_Template(step_faces(g)[0], g.vertices.shape[1], step_faces(g)[1], g.vertices, g.normals)
-                 for g in groups]
+    templates = [_Template(faces, g.vertices.shape[1], normal_of, g.vertices, g.normals)
+                 for g in groups for faces, normal_of in [step_faces(g)]]
     style_base = {kind: N_GLOBAL + 1 + 7 * i for i, kind in enumerate(KINDS)}
     next_id = N_GLOBAL + 1 + 7 * len(KINDS)
     n_entities = next_id
