@@ -3,7 +3,7 @@
 - ``ifc``: ifcopenshell opens ``model.ifc``; one element per BOM row with the
   same id (Name and Tag), one per glass unit (``P0001`` for the rows ``P0001.1 ...``, volumes summed); full mode also validates the file against the IFC4
   schema and its express rules' attribute types (``ifcopenshell.validate`` for every instance but the
-  face sets' faces, whose rules :func:`face_rule_errors` checks at once)
+  face sets' faces, whose rules :func:`read_face_sets` checks at once)
   and compares every element's volume, from ifcopenshell's own geometry
   kernel, with the BOM's within ``tol.file_volume`` (``1e-6``) relative.
 - ``3dm``: rhino3dm reads ``model.3dm``; one named object per BOM row on the
@@ -33,7 +33,7 @@ def _ids_result(expected: set, found: set, extra: dict) -> dict:
 def _without_faces(f):
     """``f`` (the same parsed file) iterated without its ``IfcIndexedPolygonalFace`` instances, for
     ``ifcopenshell.validate`` (which checks each instance's attributes in Python: the faces are two
-    thirds of the instances and their rules are checked at once by :func:`face_rule_errors`)."""
+    thirds of the instances and their rules are checked at once by :func:`read_face_sets`)."""
     import ifcopenshell
 
     class _Rest(ifcopenshell.file):
@@ -47,7 +47,7 @@ def _without_faces(f):
 
 
 FACES = ("IfcIndexedPolygonalFace", "IfcIndexedPolygonalFaceWithVoids")
-"""The face entities :func:`face_rule_errors` checks in place of ``ifcopenshell.validate``."""
+"""The face entities :func:`read_face_sets` checks in place of ``ifcopenshell.validate``."""
 
 
 def _bad_index(idx, n: int) -> bool:
@@ -55,15 +55,23 @@ def _bad_index(idx, n: int) -> bool:
             or min(idx) < 1 or max(idx) > n)
 
 
-def face_rule_errors(f) -> list[str]:
-    """The IFC4 rules of every ``IfcIndexedPolygonalFace`` and ``...WithVoids`` (what
-    ``ifcopenshell.validate`` checks on one): ``CoordIndex`` (and each of ``InnerCoordIndices``, a list
-    of one or more) a list of 3 or more positive integers, the face used by a face set (inverse
+def read_face_sets(f) -> tuple[dict[str, float], list[str]]:
+    """``(volumes, rule errors)`` of the face sets as ifcopenshell parses them, in one pass over their faces.
+
+    volumes : element name -> volume (mm3) of its closed ``IfcPolygonalFaceSet`` s, from the
+    coordinates and face indices (divergence theorem over fan triangles; a hole's loop turns the
+    other way, so its triangles take its share off): the file's content, without the writer's
+    arrays and without a geometry kernel; NaN for a set whose indices are not its points'.
+    rule errors : the IFC4 rules of every ``IfcIndexedPolygonalFace`` and ``...WithVoids`` (what
+    ``ifcopenshell.validate`` checks on one): ``CoordIndex`` (and each of ``InnerCoordIndices``, a
+    list of one or more) a list of 3 or more positive integers, the face used by a face set (inverse
     ``ToFaceSet [1:?]``); and each index within its face set's points."""
-    out = []
+    errors: list[str] = []
     used: set[int] = set()
+    set_volume: dict[int, float] = {}
     for s in f.by_type("IfcPolygonalFaceSet"):
-        n = len(s.Coordinates.CoordList)
+        P = np.asarray(s.Coordinates.CoordList, dtype=float)
+        n, tri, ok = len(P), [], True
         for face in s.Faces:
             used.add(face.id())
             loops = [face.CoordIndex]
@@ -72,46 +80,37 @@ def face_rule_errors(f) -> list[str]:
                 loops += list(inner) if isinstance(inner, tuple) and inner else [None]
             for idx in loops:
                 if _bad_index(idx, n):
-                    out.append(f"#{face.id()} {face.is_a()} indices {idx!r}: expected 3 or more indices 1..{n} "
-                               f"of its face set #{s.id()}'s points")
+                    ok = False
+                    errors.append(f"#{face.id()} {face.is_a()} indices {idx!r}: expected 3 or more indices "
+                                  f"1..{n} of its face set #{s.id()}'s points")
+                    continue
+                tri += [(idx[0] - 1, idx[j] - 1, idx[j + 1] - 1) for j in range(1, len(idx) - 1)]
+        T = np.asarray(tri, dtype=np.int64).reshape(-1, 3)
+        if not ok or len(T) == 0:                                  # no shape: a NaN volume fails the check
+            set_volume[s.id()] = float("nan")
+            continue
+        a, b, c = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
+        set_volume[s.id()] = float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0
     for face in f.by_type("IfcIndexedPolygonalFace"):
         if face.id() not in used:
-            out.append(f"#{face.id()} IfcIndexedPolygonalFace: used by no IfcPolygonalFaceSet (ToFaceSet [1:?])")
-    return out
-
-
-def _loops(face) -> list:
-    """A face's index loops: its outer one and, for a face with voids, each hole (which turns the
-    other way, so that its fan triangles take the hole's share off the face's)."""
-    if face.is_a() == "IfcIndexedPolygonalFaceWithVoids":
-        return [face.CoordIndex, *face.InnerCoordIndices]
-    return [face.CoordIndex]
-
-
-def face_set_volumes(f) -> dict[str, float]:
-    """Element name -> volume (mm3) of its closed ``IfcPolygonalFaceSet`` s, from the coordinates and
-    face indices as ifcopenshell parses them from the file (divergence theorem over fan triangles):
-    the file's content, without the writer's arrays and without a geometry kernel."""
-    out: dict[str, float] = {}
+            errors.append(f"#{face.id()} IfcIndexedPolygonalFace: used by no IfcPolygonalFaceSet (ToFaceSet [1:?])")
+    volumes: dict[str, float] = {}
     for el in f.by_type("IfcElement"):
         if el.is_a("IfcCurtainWall") or el.Representation is None:
             continue
-        total = 0.0
-        for rep in el.Representation.Representations:
-            for item in rep.Items:
-                if not item.is_a("IfcPolygonalFaceSet"):
-                    continue
-                P = np.asarray(item.Coordinates.CoordList, dtype=float)
-                tri = [(f_[0], f_[j], f_[j + 1]) for face in item.Faces for loop in _loops(face)
-                       for f_ in [[i - 1 for i in loop]] for j in range(1, len(f_) - 1)]
-                T = np.asarray(tri, dtype=np.int64).reshape(-1, 3)
-                if len(T) == 0 or T.min() < 0 or T.max() >= len(P):   # no shape: a NaN volume fails the check
-                    total = float("nan")
-                    continue
-                a, b, c = P[T[:, 0]], P[T[:, 1]], P[T[:, 2]]
-                total += float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6.0
-        out[el.Name] = total
-    return out
+        volumes[el.Name] = sum(set_volume[item.id()] for rep in el.Representation.Representations
+                               for item in rep.Items if item.is_a("IfcPolygonalFaceSet"))
+    return volumes, errors
+
+
+def face_rule_errors(f) -> list[str]:
+    """The face rules of :func:`read_face_sets`."""
+    return read_face_sets(f)[1]
+
+
+def face_set_volumes(f) -> dict[str, float]:
+    """The element volumes of :func:`read_face_sets`."""
+    return read_face_sets(f)[0]
 
 
 def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False, tol: Tolerances = DEFAULT) -> dict:
@@ -139,10 +138,9 @@ def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False, tol: 
 
         log = ifcopenshell.validate.json_logger()
         ifcopenshell.validate.validate(_without_faces(f), log)
-        extra["bad_schema"] = ([str(s.get("message", s))[:200] for s in log.statements[:10]]
-                               + face_rule_errors(f)[:10])[:10]
-        volumes = ({pid: item["volume_mm3"] for pid, item in read_ifc(path).items()} if kernel
-                   else face_set_volumes(f))
+        parsed, face_errors = read_face_sets(f)
+        extra["bad_schema"] = ([str(s.get("message", s))[:200] for s in log.statements[:10]] + face_errors[:10])[:10]
+        volumes = {pid: item["volume_mm3"] for pid, item in read_ifc(path).items()} if kernel else parsed
         errors = {pid: abs(v / float(rows[pid]["volume_mm3"]) - 1.0) for pid, v in volumes.items() if pid in rows}
         extra["volumes_from"] = "ifcopenshell geometry kernel" if kernel else "face sets as parsed"
         extra["volume_rel_error_max"] = max(errors.values(), default=0.0)
