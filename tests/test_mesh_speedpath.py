@@ -81,7 +81,7 @@ def _plain_stl_records(parts, origin):
     """The STL records as the plain code makes them: one float64 soup, ``np.cross``, ``np.linalg.norm``."""
     from fabricate.export.stl import RECORD
 
-    P = meshes.soup(parts, origin)
+    P = _soup(parts, origin)
     n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
     n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
     rec = np.zeros(len(P), dtype=RECORD)
@@ -187,3 +187,10 @@ def test_3mf_model_is_the_text_of_the_plain_code(block, far, tmp_path, monkeypat
     assert tail.count("<item objectid=") == facts["objects"] == len(parts)
     assert f'<item objectid="{len(parts) + 1}"' in tail and facts["triangles"] == sum(
         len(g) * sum(len(f) - 2 for f in g.faces) for g in parts.groups)
+
+
+def _soup(parts, origin: np.ndarray) -> np.ndarray:
+    """(T, 3, 3) float64: every triangle of every part, relative to ``origin``, part order (the plain
+    reference the STL writer's per-group records are held to)."""
+    out = [X[:, T].reshape(-1, 3, 3) for X, T in (meshes.group_triangles(g, origin) for g in parts.groups)]
+    return np.concatenate(out) if out else np.zeros((0, 3, 3))

@@ -25,12 +25,6 @@ def group_triangles(group, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return group.vertices - origin[None, None, :], fan_triangles(group.faces)
 
 
-def soup(parts, origin: np.ndarray) -> np.ndarray:
-    """(T, 3, 3) float64: every triangle of every part, relative to ``origin``, part order."""
-    out = [X[:, T].reshape(-1, 3, 3) for X, T in (group_triangles(g, origin) for g in parts.groups)]
-    return np.concatenate(out) if out else np.zeros((0, 3, 3))
-
-
 def manifold_of(X: np.ndarray, T: np.ndarray):
     """One ``manifold3d.Manifold`` of ``p`` disjoint solids ``X (p, nv, 3)`` sharing triangles ``T``."""
     import manifold3d
