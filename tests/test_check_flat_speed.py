@@ -126,3 +126,33 @@ def test_a_part_whose_figures_are_not_numbers_fails(files, tmp_path):
     assert not res["pass"] and g["ids"][0] in [f["id"] for f in res["failures"]]
     res = _check_dxf(files / "outlines.dxf", bom, tmp_path / "flat.json", "text")
     assert not res["pass"] and g["ids"][1] in [f["id"] for f in res["failures"]]
+
+
+@pytest.mark.parametrize("key, edit, expected", [
+    ("outline", lambda g: g["outline"][0].pop(), "key 'outline'"),                 # a ragged array
+    ("transform", lambda g: g.__setitem__("transform", "x"), "key 'transform'"),
+    ("cuts", lambda g: g["cuts"][0].__setitem__(0, 99), "key 'cuts'"),            # no such face
+    ("faces", lambda g: g["faces"][0].__setitem__(0, -1), "key 'faces'"),
+    ("reference_corners", lambda g: g["reference_corners"].append(10 ** 6), "key 'reference_corners'"),
+    ("ids", lambda g: g.pop("ids"), "key 'ids'"),
+    ("top_face", lambda g: g.__setitem__("top_face", 1.5), "key 'top_face'"),
+])
+def test_a_flat_json_of_the_wrong_layout_is_refused_naming_group_and_key(files, tmp_path, key, edit, expected):
+    """A tampered flat.json (a ragged or mis-shaped array, an index out of range, a missing key) is a
+    failed check naming the group and the key, never an internal error."""
+    doc = json.loads((files / "flat.json").read_text())
+    edit(doc["groups"][1])
+    (tmp_path / "flat.json").write_text(json.dumps(doc))
+    with pytest.raises(flatdata.ExportError, match=f"flat.json: group 2 {expected}: .*; expected "):
+        read_flat(tmp_path / "flat.json")
+    bom = read_bom(files / "bom.csv")
+    res = _check_flat_result(tmp_path, bom)
+    assert res["pass"] is False and "group 2" in res["error"]
+
+
+def _check_flat_result(folder, bom):
+    from fabricate.check import _one_check
+
+    paths = {"flat": folder / "flat.json"}
+    return _one_check("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, {}), None), paths,
+                      frozenset(), {}, {})

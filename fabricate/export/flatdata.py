@@ -94,24 +94,81 @@ def json_array(a: np.ndarray) -> str:
 
 
 def read_flat(path) -> list[dict]:
-    """The groups of a ``flat.json`` with their arrays as numpy arrays."""
+    """The groups of a ``flat.json`` with their arrays as numpy arrays; a file that does not have
+    the layout :func:`write_flat` writes (a missing key, an array of the wrong shape, a face or a
+    corner index out of range) is refused with an :class:`ExportError` naming the group and the key."""
     try:
         with open(path, encoding="utf-8") as fh:
             doc = json.load(fh)
     except (OSError, ValueError) as exc:
         raise ExportError(f"{path}: not a readable flat data file ({exc})") from None
-    if doc.get("format") != FORMAT:
-        raise ExportError(f"{path}: format {doc.get('format')!r}, expected {FORMAT!r}")
-    out = []
-    for g in doc["groups"]:
-        g = dict(g)
-        for key in ("thickness_mm", "outline", "bevel_reference", "bevel_reference_z_mm", "bevel_deg",
-                    "transform", "rect_mm"):
-            g[key] = np.asarray(g[key], dtype=float)
-        g["cuts"] = np.asarray(g["cuts"], dtype=np.int64)
-        g["faces"] = tuple(tuple(f) for f in g["faces"])
-        out.append(g)
-    return out
+    if not isinstance(doc, dict) or doc.get("format") != FORMAT:
+        got = doc.get("format") if isinstance(doc, dict) else type(doc).__name__
+        raise ExportError(f"{path}: format {got!r}, expected {FORMAT!r}")
+    groups = doc.get("groups")
+    if not isinstance(groups, list):
+        raise ExportError(f"{path}: key 'groups' is {type(groups).__name__}, expected a list of part groups")
+    return [_group(g, j, path) for j, g in enumerate(groups)]
+
+
+_SHAPES = {"thickness_mm": (), "outline": ("k", 2), "bevel_reference": ("k", 2), "bevel_reference_z_mm": ("k",),
+           "bevel_deg": ("k", 2), "transform": (4, 4), "rect_mm": (2,)}
+"""The per-part arrays of a group: their shape after the part axis (``k``: the outline's corners)."""
+
+
+def _group(g, j: int, path) -> dict:
+    """Group ``j`` of a flat.json, checked and with numpy arrays (see :func:`read_flat`)."""
+    def bad(key, value, expected):
+        text = repr(value)
+        raise ExportError(f"{path}: group {j + 1} key {key!r}: {text[:60] + '...' if len(text) > 60 else text}; "
+                          f"expected {expected}")
+
+    if not isinstance(g, dict):
+        bad("groups", g, "an object of part arrays")
+    g = dict(g)
+    for key in ("kind", "member", "material"):
+        if not isinstance(g.get(key), str):
+            bad(key, g.get(key), "a string")
+    ids = g.get("ids")
+    if not isinstance(ids, list) or not all(isinstance(i, str) for i in ids):
+        bad("ids", ids, "a list of part ids (strings)")
+    faces = g.get("faces")
+    if (not isinstance(faces, list) or len(faces) < 4
+            or not all(isinstance(f, list) and len(f) >= 3 and all(type(v) is int and v >= 0 for v in f)
+                       for f in faces)):
+        bad("faces", faces, "a list of at least 4 faces, each a list of 3 or more vertex indices")
+    g["faces"] = tuple(tuple(f) for f in faces)
+    nv = 1 + max(max(f) for f in faces)
+    on = np.zeros(nv, np.int64)
+    for f in faces:
+        on[list(set(f))] += 1
+    if (on < 3).any():
+        bad("faces", faces, f"every vertex on 3 faces or more (vertex {int(np.argmax(on < 3))} is not)")
+    for key in ("top_face", "bottom_face"):
+        if type(g.get(key)) is not int or not 0 <= g[key] < len(faces):
+            bad(key, g.get(key), f"a face index 0..{len(faces) - 1}")
+    ring = g.get("reference_corners")
+    if not isinstance(ring, list) or len(ring) < 3 or not all(type(v) is int and 0 <= v < nv for v in ring):
+        bad("reference_corners", ring, f"a list of 3 or more vertex indices 0..{nv - 1}")
+    k = len(ring)
+    try:
+        cuts = np.asarray(g.get("cuts"), dtype=np.int64)
+    except (TypeError, ValueError, OverflowError):
+        cuts = None
+    if cuts is None or cuts.shape != (k, 2) or (cuts < 0).any() or (cuts >= len(faces)).any():
+        bad("cuts", g.get("cuts"), f"{k} pairs of face indices 0..{len(faces) - 1} (one per outline edge)")
+    g["cuts"] = cuts
+    p = len(ids)
+    for key, tail in _SHAPES.items():
+        shape = (p,) + tuple(k if d == "k" else d for d in tail)
+        try:
+            a = np.asarray(g.get(key), dtype=float)
+        except (TypeError, ValueError, OverflowError):
+            a = None
+        if a is None or a.shape != shape:
+            bad(key, g.get(key), f"numbers of shape {shape} ({p} parts, {k} outline corners)")
+        g[key] = a
+    return g
 
 
 def rebuild(g: dict) -> np.ndarray:
