@@ -20,6 +20,8 @@ import csv
 import time
 from pathlib import Path
 
+import numpy as np
+
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
@@ -72,13 +74,45 @@ def write_bom(parts, path, *, mesh=None) -> dict:
             "mass_kg": {k: round(v, 3) for k, v in mass.items()}, "seconds": time.perf_counter() - t0}
 
 
+NUMBERS = ("element", "area_m2", "length_mm", "thickness_mm", "volume_mm3", "weight_kg", "rect_w_mm", "rect_h_mm")
+"""Columns that :func:`read_bom` holds to be finite numbers (``planarity_mm``, ``residual_mm``: numbers)."""
+
+
 def read_bom(path) -> list[dict]:
-    """Rows of a bill of materials as dicts (strings), in file order."""
+    """Rows of a bill of materials as dicts (strings), in file order; a file that is not one (a row of
+    too many or too few fields, a number column that is not a finite number, not UTF-8) is refused
+    with an :class:`ExportError` naming the line, the column and the value."""
     try:
         with open(path, newline="", encoding="utf-8") as fh:
-            rows = list(csv.DictReader(fh))
+            reader = csv.DictReader(fh)
+            rows = list(reader)
     except OSError as exc:
         raise ExportError(f"{path}: cannot read the bill of materials ({exc.strerror or exc})") from None
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise ExportError(f"{path}: not a bill of materials in CSV ({exc}); expected the bom.csv of a run") from None
     if rows and set(COLUMNS) - set(rows[0]):
         raise ExportError(f"{path}: columns {sorted(set(COLUMNS) - set(rows[0]))} missing; expected {COLUMNS}")
+    for i, r in enumerate(rows):
+        if None in r or None in r.values():
+            n = sum(v is not None for k, v in r.items() if k is not None) + len(r.get(None) or ())
+            raise ExportError(f"{path}: line {i + 2} has {n} fields, expected {len(reader.fieldnames)} (the columns)")
+    for col in NUMBERS + ("planarity_mm", "residual_mm"):
+        values = [r[col] for r in rows]
+        try:
+            x = np.array(values, dtype=float)
+            good = np.isfinite(x) if col in NUMBERS else np.ones(len(x), bool)
+        except ValueError:
+            good = np.array([_is_number(v) for v in values], dtype=bool)
+        if not good.all():
+            i = int(np.argmin(good))
+            raise ExportError(f"{path}: line {i + 2} column {col}: {values[i][:40]!r}; expected a "
+                              f"{'finite ' if col in NUMBERS else ''}number")
     return rows
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True

@@ -120,7 +120,9 @@ def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False, tol: 
 
     from fabricate.cad.parts import unit_id
 
-    f = ifcopenshell.open(str(path))
+    from .ifc import open_ifc
+
+    f = open_ifc(path)
     elements = {e.Name: e for e in f.by_type("IfcElement") if not e.is_a("IfcCurtainWall")}
     rows: dict[str, dict] = {}
     for r in bom:  # a glass unit of several solids (P0001.1 ...) is one element: its volumes summed

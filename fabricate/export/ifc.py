@@ -289,6 +289,17 @@ def _faces(group) -> tuple:
     return step_faces(group)[0]
 
 
+def open_ifc(path):
+    """``ifcopenshell.open`` of ``path``; a file it cannot read or parse is an :class:`ExportError`
+    naming it (ifcopenshell's own errors are not)."""
+    import ifcopenshell
+
+    try:
+        return ifcopenshell.open(str(path))
+    except (OSError, ifcopenshell.Error) as exc:
+        raise ExportError(f"{path}: not a readable IFC file ({exc}); expected the model.ifc of a run") from None
+
+
 def read_ifc(path) -> dict[str, dict]:
     """Elements of an IFC file written by :func:`write_ifc`: id -> ``{class, predefined, volume_mm3}``.
 
@@ -299,7 +310,7 @@ def read_ifc(path) -> dict[str, dict]:
     import ifcopenshell.geom
     import ifcopenshell.util.shape
 
-    f = ifcopenshell.open(str(path))
+    f = open_ifc(path)
     elements = {e.GlobalId: e for e in f.by_type("IfcElement") if not e.is_a("IfcCurtainWall")}
     out: dict[str, dict] = {}
     if not elements:
