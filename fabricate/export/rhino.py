@@ -28,19 +28,37 @@ KIND_LAYER = {"panel": "glass", "beam": "steel", "node": "nodes"}
 
 def _mesh(rh, V: np.ndarray, faces) -> object:
     """A rhino3dm Mesh of polygons ``faces`` over ``V (n, 3)`` (double precision vertices); ``faces``
-    as rows (``-1`` padding) or as :func:`_mesh_faces` made them once for many parts of one shape."""
-    m = rh.Mesh()
-    m.Vertices.UseDoublePrecisionVertices = True
-    m.Vertices.SetCount(len(V))
+    as rows (``-1`` padding), as :func:`_mesh_faces` made them, or a :func:`_template` mesh of them
+    made once for many parts of one shape (copied, its vertices set: its faces are not added again)."""
+    if isinstance(faces, _Template):
+        m = faces.mesh.Duplicate()
+    else:
+        m = _template(rh, len(V), faces).mesh
     point, set_point = rh.Point3d, m.Vertices.SetPoint3dAt
     for j, (x, y, z) in enumerate(V.tolist()):  # Vertices.Add(x, y, z) would round to float32
         set_point(j, point(x, y, z))
-    add = m.Faces.AddFace
-    for face in (faces if isinstance(faces, _Faces) else _mesh_faces(faces)):
-        add(*face)
     m.Normals.ComputeNormals()
     m.Compact()
     return m
+
+
+class _Template:
+    """A rhino3dm Mesh with its faces and ``n`` double-precision vertices (not yet placed): the parts of
+    one group share it (:func:`_mesh` copies it)."""
+
+    def __init__(self, mesh):
+        self.mesh = mesh
+
+
+def _template(rh, n: int, faces) -> _Template:
+    """:class:`_Template` of ``n`` vertices and the polygons ``faces`` (rows or :func:`_mesh_faces`)."""
+    m = rh.Mesh()
+    m.Vertices.UseDoublePrecisionVertices = True
+    m.Vertices.SetCount(n)
+    add = m.Faces.AddFace
+    for face in (faces if isinstance(faces, _Faces) else _mesh_faces(faces)):
+        add(*face)
+    return _Template(m)
 
 
 class _Faces(list):
@@ -89,7 +107,7 @@ def write_3dm(parts, path, *, structure=None, mesh=None) -> dict:
     for g in parts.groups:
         layer = KIND_LAYER[g.kind]
         density = parts.spec.group_density(g)
-        faces = _mesh_faces(g.faces)                     # the same polygons for every part of the group
+        faces = _template(rh, g.vertices.shape[1], g.faces)   # the same polygons for every part of the group
         for i, pid in enumerate(g.ids):
             row = {"id": pid, "kind": g.kind, "element": int(g.element[i]),
                    "volume_mm3": repr(float(g.volume_mm3[i])),
