@@ -132,10 +132,9 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                                       {f for f in side[i, which:which + 1] if f >= 0})]) if glass else ())
                     + tuple(bid[i] + s for s in sibs) + row[len(set(beams["faces"][i].tolist())):]
                     for i, row in enumerate(nb)]
-        _validate("beam", ids, e, V, faces, normals, hint)
         groups.append(_group("beam", ids, e, V, faces, normals, outline, bevel, beams["planarity_mm"],
                              np.full(len(e), float(t)), length, near, spec, ring=ring, dashed=dashed,
-                             member=member, centre_line=centre))
+                             member=member, centre_line=centre, hint=hint))
     node_facts = {}
     if with_nodes:
         nodes = node_solids(structure, P0, P1, spec.hub_radius, spec.node_sides)
