@@ -35,7 +35,7 @@ _STD = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/"
 _IFC = "0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz_$"
 _TO_IFC = str.maketrans(_STD, _IFC)
 _LISTS = str.maketrans({"[": "(", "]": ")", " ": None, "e": "E"})
-_NO_DOT = re.compile(r"(?<![\d.])(\d+)e")     # a mantissa without '.' (repr 1e-05): Part 21 wants 1.E-05
+_NO_DOT = re.compile(r"([^\d.]\d)e")  # repr's one-digit mantissa without '.' (1e-05): Part 21 wants 1.E-05
 QUANTITY = {"length": "IFCQUANTITYLENGTH", "area": "IFCQUANTITYAREA", "volume": "IFCQUANTITYVOLUME",
             "weight": "IFCQUANTITYWEIGHT"}
 
