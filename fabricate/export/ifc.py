@@ -31,7 +31,7 @@ building, curtain wall, units, contexts, materials); the per-part entities
 (face sets, elements, placements, property and quantity sets, relationships)
 follow as Part 21 text generated in bulk by :mod:`fabricate.export.ifc_text`,
 their ids continuing the skeleton's (one template per group of solids of the
-same topology), about 20 times faster than creating each entity through
+same topology), about ten times faster than creating each entity through
 ifcopenshell.  ifcopenshell is imported here only: the rest of the pipeline
 starts without it.
 """
