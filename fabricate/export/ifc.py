@@ -1,4 +1,4 @@
-"""IFC4 of every part (ifcopenshell): the coordination model a BIM tool opens.
+"""IFC4 of every part: the coordination model a BIM tool opens.
 
 Structure of the file::
 
@@ -26,15 +26,20 @@ volume, weight) and ``Qto_MemberBaseQuantities`` (length, volume, weight);
 the fabrication figures (planarity of a panel, twist of a beam, construction
 residual, all in mm) in the property set ``Pset_ConicalFabFabrication``.
 
-ifcopenshell is imported here only: the rest of the pipeline starts without it.
+Writing: ifcopenshell makes the file's skeleton (header, project, site,
+building, curtain wall, units, contexts, materials); the per-part entities
+(face sets, elements, placements, property and quantity sets, relationships)
+follow as Part 21 text generated in bulk by :mod:`fabricate.export.ifc_text`,
+their ids continuing the skeleton's (one template per group of solids of the
+same topology), about ten times faster than creating each entity through
+ifcopenshell.  ifcopenshell is imported here only: the rest of the pipeline
+starts without it.
 """
 from __future__ import annotations
 
 import os
 import time
 from pathlib import Path
-
-import numpy as np
 
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
@@ -45,81 +50,47 @@ CLASS = {"panel": ("IfcPlate", "CURTAIN_PANEL", None),
          "node": ("IfcMember", "USERDEFINED", "NODE")}
 
 
-class _Writer:
-    """Entity factory over one ``ifcopenshell.file`` (direct creation: thousands of parts in seconds)."""
+def _skeleton(name: str, grade: str, spec):
+    """The file's skeleton made by ifcopenshell: project, site, building, curtain wall, units, the
+    representation context and its Body subcontext, the materials.  Returns ``(file, refs)``, refs the
+    ids :func:`fabricate.export.ifc_text.write_body` refers to."""
+    import ifcopenshell
+    import ifcopenshell.guid
 
-    def __init__(self, name: str):
-        import ifcopenshell
-        import ifcopenshell.guid
-
-        self.f = ifcopenshell.file(schema="IFC4")
-        self.guid = ifcopenshell.guid.new
-        f = self.f
-        origin = f.createIfcAxis2Placement3D(f.createIfcCartesianPoint((0.0, 0.0, 0.0)), None, None)
-        self.origin = origin
-        self.context = f.createIfcGeometricRepresentationContext(None, "Model", 3, 1.0e-5, origin, None)
-        self.body = f.createIfcGeometricRepresentationSubContext(
-            "Body", "Model", None, None, None, None, self.context, None, "MODEL_VIEW", None)
-        units = f.createIfcUnitAssignment([
-            f.createIfcSIUnit(None, "LENGTHUNIT", "MILLI", "METRE"),
-            f.createIfcSIUnit(None, "AREAUNIT", None, "SQUARE_METRE"),
-            f.createIfcSIUnit(None, "VOLUMEUNIT", None, "CUBIC_METRE"),
-            f.createIfcSIUnit(None, "MASSUNIT", "KILO", "GRAM"),
-            f.createIfcSIUnit(None, "PLANEANGLEUNIT", None, "RADIAN")])
-        self.project = f.createIfcProject(self.guid(), None, name, "conical-fab model", None, None, None,
-                                          [self.context], units)
-
-    def placement(self, parent=None):
-        return self.f.createIfcLocalPlacement(parent, self.origin)
-
-    def aggregate(self, whole, parts) -> None:
-        self.f.createIfcRelAggregates(self.guid(), None, None, None, whole, list(parts))
-
-    def solid(self, V: np.ndarray, faces) -> object:
-        """A closed ``IfcPolygonalFaceSet`` of one polyhedron: V (nv, 3) mm, faces outward vertex-index
-        tuples (0-based; IFC counts from 1), or, for a face with holes, its loops (the outer one, then
-        each hole: an ``IfcIndexedPolygonalFaceWithVoids``).  Every face is a planar polygon, so the set
-        is the solid."""
-        f = self.f
-        points = f.createIfcCartesianPointList3D(V.tolist())
-        polys = [f.createIfcIndexedPolygonalFace([i + 1 for i in face]) if not isinstance(face[0], tuple)
-                 else f.createIfcIndexedPolygonalFaceWithVoids([i + 1 for i in face[0]],
-                                                             [[i + 1 for i in hole] for hole in face[1:]])
-                 for face in faces]
-        return f.createIfcPolygonalFaceSet(points, True, polys, None)
-
-    def shape(self, item) -> object:
-        rep = self.f.createIfcShapeRepresentation(self.body, "Body", "Tessellation", [item])
-        return self.f.createIfcProductDefinitionShape(None, None, [rep])
-
-    def props(self, obj, name: str, values: dict) -> None:
-        """A property set of single values (str, float, int) on ``obj``."""
-        f = self.f
-        singles = []
-        for key, value in values.items():
-            if isinstance(value, str):
-                v = f.createIfcLabel(value) if len(value) <= 255 else f.createIfcText(value)
-            elif isinstance(value, (int, np.integer)):
-                v = f.createIfcInteger(int(value))
-            else:
-                v = f.createIfcReal(float(value))
-            singles.append(f.createIfcPropertySingleValue(key, None, v, None))
-        pset = f.createIfcPropertySet(self.guid(), None, name, None, singles)
-        f.createIfcRelDefinesByProperties(self.guid(), None, None, None, [obj], pset)
-
-    def quantities(self, obj, name: str, values: dict) -> None:
-        """``values``: key -> (kind, number), kind one of length, area, volume, weight."""
-        f = self.f
-        make = {"length": f.createIfcQuantityLength, "area": f.createIfcQuantityArea,
-                "volume": f.createIfcQuantityVolume, "weight": f.createIfcQuantityWeight}
-        qs = [make[kind](key, None, None, float(v), None) for key, (kind, v) in values.items()]
-        qto = f.createIfcElementQuantity(self.guid(), None, name, None, None, qs)
-        f.createIfcRelDefinesByProperties(self.guid(), None, None, None, [obj], qto)
+    guid = ifcopenshell.guid.new
+    f = ifcopenshell.file(schema="IFC4")
+    origin = f.createIfcAxis2Placement3D(f.createIfcCartesianPoint((0.0, 0.0, 0.0)), None, None)
+    context = f.createIfcGeometricRepresentationContext(None, "Model", 3, 1.0e-5, origin, None)
+    body = f.createIfcGeometricRepresentationSubContext(
+        "Body", "Model", None, None, None, None, context, None, "MODEL_VIEW", None)
+    units = f.createIfcUnitAssignment([
+        f.createIfcSIUnit(None, "LENGTHUNIT", "MILLI", "METRE"),
+        f.createIfcSIUnit(None, "AREAUNIT", None, "SQUARE_METRE"),
+        f.createIfcSIUnit(None, "VOLUMEUNIT", None, "CUBIC_METRE"),
+        f.createIfcSIUnit(None, "MASSUNIT", "KILO", "GRAM"),
+        f.createIfcSIUnit(None, "PLANEANGLEUNIT", None, "RADIAN")])
+    project = f.createIfcProject(guid(), None, name, "conical-fab model", None, None, None, [context], units)
+    site = f.createIfcSite(guid(), None, "Site", None, None, f.createIfcLocalPlacement(None, origin), None, None,
+                           "ELEMENT", None, None, None, None, None)
+    building = f.createIfcBuilding(guid(), None, "Building", None, None,
+                                   f.createIfcLocalPlacement(site.ObjectPlacement, origin),
+                                   None, None, "ELEMENT", None, None, None)
+    f.createIfcRelAggregates(guid(), None, None, None, project, [site])
+    f.createIfcRelAggregates(guid(), None, None, None, site, [building])
+    wall_place = f.createIfcLocalPlacement(building.ObjectPlacement, origin)
+    wall = f.createIfcCurtainWall(guid(), None, "Roof", "glass roof on torsion-free beams", None,
+                                  wall_place, None, "CW", "USERDEFINED")
+    wall.ObjectType = "conical-mesh glass roof"
+    f.createIfcRelContainedInSpatialStructure(guid(), None, None, None, [wall], building)
+    steel = f.createIfcMaterial(grade, "structural steel", "steel")
+    _density(f, steel, spec.density_steel)
+    layers = _glass_layers(f, spec)
+    return f, {"body": body.id(), "origin": origin.id(), "wall_place": wall_place.id(), "wall": wall.id(),
+               "layers": layers.id(), "steel": steel.id()}
 
 
-def _glass_layers(w: _Writer, spec) -> object:
+def _glass_layers(f, spec) -> object:
     """The glass build-up as an ``IfcMaterialLayerSet``: one layer per ply, interlayer and cavity, outside in."""
-    f = w.f
     build_up = spec.glass
     made: dict[str, object] = {}
 
@@ -127,10 +98,10 @@ def _glass_layers(w: _Writer, spec) -> object:
         if name not in made:
             if name == "glass":
                 made[name] = f.createIfcMaterial("Glass", "float glass", "glass")
-                _density(w, made[name], spec.density_glass)
+                _density(f, made[name], spec.density_glass)
             elif name in ("PVB", "SGP"):
                 made[name] = f.createIfcMaterial(name, f"{name} interlayer", "plastic")
-                _density(w, made[name], spec.density("panel", name))
+                _density(f, made[name], spec.density("panel", name))
             else:
                 made[name] = f.createIfcMaterial(name.capitalize(), f"{name} filling of the cavity", "gas")
         return made[name]
@@ -141,8 +112,7 @@ def _glass_layers(w: _Writer, spec) -> object:
     return f.createIfcMaterialLayerSet(layers, build_up.describe()[:255], None)
 
 
-def _density(w: _Writer, material, density: float) -> None:
-    f = w.f
+def _density(f, material, density: float) -> None:
     prop = f.createIfcPropertySingleValue("MassDensity", None, f.createIfcMassDensityMeasure(float(density)), None)
     f.createIfcMaterialProperties("Pset_MaterialCommon", None, [prop], material)
 
@@ -152,63 +122,41 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
 
     grade : steel grade written as the beams' and nodes' material name (default: the parts' steel_grade).
     """
+    from .ifc_text import write_body
+
     t0 = time.perf_counter()
     grade = grade or getattr(parts.spec, "steel_grade", "S355")
     path = Path(path)
     try:
-        w = _Writer(project)
+        f, refs = _skeleton(project, grade, parts.spec)
     except ImportError as exc:  # a declared dependency; only a broken install lands here
         raise ExportError(f"{path}: ifcopenshell is not available ({exc}); expected it installed") from None
-    f = w.f
-    site = f.createIfcSite(w.guid(), None, "Site", None, None, w.placement(), None, None, "ELEMENT",
-                           None, None, None, None, None)
-    building = f.createIfcBuilding(w.guid(), None, "Building", None, None, w.placement(site.ObjectPlacement),
-                                   None, None, "ELEMENT", None, None, None)
-    w.aggregate(w.project, [site])
-    w.aggregate(site, [building])
-    wall_place = w.placement(building.ObjectPlacement)
-    wall = f.createIfcCurtainWall(w.guid(), None, "Roof", "glass roof on torsion-free beams", None,
-                                  wall_place, None, "CW", "USERDEFINED")
-    wall.ObjectType = "conical-mesh glass roof"
-    f.createIfcRelContainedInSpatialStructure(w.guid(), None, None, None, [wall], building)
-    steel = f.createIfcMaterial(grade, "structural steel", "steel")
-    _density(w, steel, parts.spec.density_steel)
-    layers = _glass_layers(w, parts.spec)
-    members: dict[str, list] = {"panel": [], "beam": [], "node": []}
-    _glass_units(w, parts, wall_place, members["panel"])
-    from fabricate.cad.parts import unit_id
-
-    solids_of: dict[tuple[str, str], list] = {}   # a beam welded from plates, a hub of tube and caps: one element
-    for g in parts.groups:
-        if g.kind != "panel":
-            for i, pid in enumerate(g.ids):
-                solids_of.setdefault((g.kind, unit_id(pid)), []).append((g, i))
-    for (kind, uid), items in solids_of.items():  # one element per unit, one face set per solid
-        cls, predefined, object_type = CLASS[kind]
-        rep = f.createIfcShapeRepresentation(w.body, "Body", "Tessellation",
-                                             [w.solid(g.vertices[i], _faces(g)) for g, i in items])
-        el = f.create_entity(cls, GlobalId=w.guid(), Name=uid, Description=kind,
-                             ObjectType=object_type, ObjectPlacement=w.placement(wall_place),
-                             Representation=f.createIfcProductDefinitionShape(None, None, [rep]), Tag=uid,
-                             PredefinedType=predefined)
-        members[kind].append(el)
-        g, i = items[0]
-        _describe(w, el, g, i, parts.spec.group_density(g), items if len(items) > 1 else None, parts.spec)
-    w.aggregate(wall, [e for kind in members for e in members[kind]])
-    if members["panel"]:
-        f.createIfcRelAssociatesMaterial(w.guid(), None, None, None, members["panel"], layers)
-    if members["beam"] or members["node"]:
-        f.createIfcRelAssociatesMaterial(w.guid(), None, None, None, members["beam"] + members["node"], steel)
+    head = f.to_string()
+    end = head.rindex("ENDSEC;", 0, head.rindex("END-ISO-10303-21;"))
+    groups = list(parts.groups)
+    index = {id(g): k for k, g in enumerate(groups)}
+    units = _glass_units(parts, index) + _steel_units(parts, index)
     try:
         with atomic_open(path, "w", encoding="utf-8") as fh:
-            fh.write(f.to_string())
+            fh.write(head[:end])
+            write_body(fh, groups, [_faces(g) for g in groups], units, refs,
+                       max(e.id() for e in f) + 1, PSET)
+            fh.write(head[end:])
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the IFC file ({exc.strerror or exc})") from None
+    elements = {k: sum(u.kind == k for u in units) for k in CLASS}
     return {"file": path.name, "bytes": path.stat().st_size, "schema": "IFC4",
-            "elements": {k: len(v) for k, v in members.items()}, "seconds": time.perf_counter() - t0}
+            "elements": elements, "seconds": time.perf_counter() - t0}
 
 
-def _glass_units(w: _Writer, parts, wall_place, out: list) -> None:
+def _unit(kind: str, uid: str, description: str, solids: list, qto_name: str, quantities: dict, props: dict):
+    from .ifc_text import Unit
+
+    cls, predefined, object_type = CLASS[kind]
+    return Unit(kind, cls.upper(), predefined, object_type, uid, description, solids, qto_name, quantities, props)
+
+
+def _glass_units(parts, index: dict) -> list:
     """One IfcPlate per glass unit: its ply on the beams gives area and planarity, every ply and
     interlayer a face set of its body; volume and weight summed over them."""
     from fabricate.cad.glass import bearing_groups
@@ -219,39 +167,53 @@ def _glass_units(w: _Writer, parts, wall_place, out: list) -> None:
     for g in parts.of_kind("panel"):
         density = spec.group_density(g)
         for i, pid in enumerate(g.ids):  # one face set per solid
-            solids.setdefault(unit_id(pid), []).append((w.solid(g.vertices[i], g.faces),
-                                                        float(g.volume_mm3[i]), density))
-    cls, predefined, object_type = CLASS["panel"]
+            solids.setdefault(unit_id(pid), []).append(((index[id(g)], i), float(g.volume_mm3[i]), density))
+    out = []
     for g in bearing_groups(parts):
         for i, ply in enumerate(g.ids):  # one element per unit
             uid = unit_id(ply)
             items = solids[uid]
-            rep = w.f.createIfcShapeRepresentation(w.body, "Body", "Tessellation", [it[0] for it in items])
-            el = w.f.create_entity(cls, GlobalId=w.guid(), Name=uid, Description="glass unit " + spec.glass.short(),
-                                   ObjectType=object_type, ObjectPlacement=w.placement(wall_place),
-                                   Representation=w.f.createIfcProductDefinitionShape(None, None, [rep]), Tag=uid,
-                                   PredefinedType=predefined)
-            out.append(el)
             volume_m3 = sum(it[1] for it in items) * 1e-9
             weight = sum(it[1] * it[2] for it in items) * 1e-9
             area = float(g.area_mm2[i]) * 1e-6
-            w.quantities(el, "Qto_PlateBaseQuantities", {
-                "Width": ("length", spec.glass.thickness_mm), "GrossArea": ("area", area), "NetArea": ("area", area),
-                "GrossVolume": ("volume", volume_m3), "NetVolume": ("volume", volume_m3),
-                "GrossWeight": ("weight", weight), "NetWeight": ("weight", weight)})
             fab = {"PartId": uid, "MeshElement": int(g.element[i]), "BuildUp": spec.glass.short(),
                    "Solids": " ".join(f"{uid}.{k + 1}" for k in range(len(items))) if len(items) > 1 else uid,
                    "Residual_mm": float(g.residual_mm[i]), "Planarity_mm": float(g.planarity_mm[i]),
                    "Neighbours": " ".join(n for n in g.neighbours[i] if unit_id(n) != uid)}
             if spec.glass.type == "insulated":
                 fab["SpacerSetback_mm"] = float(spec.glass.edge_seal_mm)
-            w.props(el, PSET, fab)
+            out.append(_unit("panel", uid, "glass unit " + spec.glass.short(), [it[0] for it in items],
+                             "Qto_PlateBaseQuantities", {
+                                 "Width": ("length", spec.glass.thickness_mm), "GrossArea": ("area", area),
+                                 "NetArea": ("area", area), "GrossVolume": ("volume", volume_m3),
+                                 "NetVolume": ("volume", volume_m3), "GrossWeight": ("weight", weight),
+                                 "NetWeight": ("weight", weight)}, fab))
+    return out
 
 
-def _describe(w: _Writer, el, g, i: int, density: float, unit=None, spec=None) -> None:
-    """Quantities and fabrication figures of part ``i`` of group ``g``; ``unit``: ``[(group, i)]`` of
-    every solid of a unit of several (a beam's plates, a hub's tube and caps): volumes and weights
-    summed, the solids listed."""
+def _steel_units(parts, index: dict) -> list:
+    """One IfcMember per beam and per node hub: a beam welded from plates, a hub of tube and caps is
+    one element of one face set per solid."""
+    from fabricate.cad.parts import unit_id
+
+    solids_of: dict[tuple[str, str], list] = {}
+    for g in parts.groups:
+        if g.kind != "panel":
+            for i, pid in enumerate(g.ids):
+                solids_of.setdefault((g.kind, unit_id(pid)), []).append((g, i))
+    out = []
+    for (kind, uid), items in solids_of.items():
+        g, i = items[0]
+        qto_name, quantities, fab = _describe(g, i, parts.spec.group_density(g),
+                                              items if len(items) > 1 else None, parts.spec)
+        out.append(_unit(kind, uid, kind, [(index[id(h)], k) for h, k in items], qto_name, quantities, fab))
+    return out
+
+
+def _describe(g, i: int, density: float, unit=None, spec=None) -> tuple[str, dict, dict]:
+    """``(quantity set name, quantities, fabrication figures)`` of part ``i`` of group ``g``; ``unit``:
+    ``[(group, i)]`` of every solid of a unit of several (a beam's plates, a hub's tube and caps):
+    volumes and weights summed, the solids listed."""
     from fabricate.cad.parts import unit_id
 
     volume_m3 = float(g.volume_mm3[i]) * 1e-9
@@ -267,18 +229,16 @@ def _describe(w: _Writer, el, g, i: int, density: float, unit=None, spec=None) -
                    Residual_mm=max(float(h.residual_mm[k]) for h, k in unit))
     if g.kind == "panel":
         area = float(g.area_mm2[i]) * 1e-6
-        w.quantities(el, "Qto_PlateBaseQuantities", {
+        fab["Planarity_mm"] = float(g.planarity_mm[i])
+        return "Qto_PlateBaseQuantities", {
             "Width": ("length", g.thickness_mm[i]), "GrossArea": ("area", area), "NetArea": ("area", area),
             "GrossVolume": ("volume", volume_m3), "NetVolume": ("volume", volume_m3),
-            "GrossWeight": ("weight", weight), "NetWeight": ("weight", weight)})
-        fab["Planarity_mm"] = float(g.planarity_mm[i])
-    else:
-        w.quantities(el, "Qto_MemberBaseQuantities", {
-            "Length": ("length", g.length_mm[i]), "GrossVolume": ("volume", volume_m3),
-            "NetVolume": ("volume", volume_m3), "GrossWeight": ("weight", weight),
-            "NetWeight": ("weight", weight)})
-        fab["Twist_mm" if g.kind == "beam" else "Planarity_mm"] = float(g.planarity_mm[i])
-    w.props(el, PSET, fab)
+            "GrossWeight": ("weight", weight), "NetWeight": ("weight", weight)}, fab
+    fab["Twist_mm" if g.kind == "beam" else "Planarity_mm"] = float(g.planarity_mm[i])
+    return "Qto_MemberBaseQuantities", {
+        "Length": ("length", g.length_mm[i]), "GrossVolume": ("volume", volume_m3),
+        "NetVolume": ("volume", volume_m3), "GrossWeight": ("weight", weight),
+        "NetWeight": ("weight", weight)}, fab
 
 
 def _faces(group) -> tuple:
