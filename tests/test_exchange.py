@@ -345,13 +345,14 @@ def test_ifc_check_validates_the_faces_it_leaves_out_of_ifcopenshell_validate(if
     uses each fail the full IFC check, and the file as written passes it."""
     import re
 
-    from fabricate.export.exchange_check import _without_faces, check_ifc, face_rule_errors
+    from fabricate.export.exchange_check import GEOMETRY, _without_faces, check_ifc, face_rule_errors
 
     path = ifc_file[0]
     f = ifcopenshell.open(str(path))
     faces = f.by_type("IfcIndexedPolygonalFace")
     rest = list(_without_faces(f))
-    assert faces and len(rest) == len(list(f)) - len(faces) and not any(x.is_a("IfcIndexedPolygonalFace") for x in rest)
+    geometry = [x for t in GEOMETRY for x in f.by_type(t) if x.is_a() == t]
+    assert faces and len(rest) == len(list(f)) - len(geometry) and not any(x.is_a() in GEOMETRY for x in rest)
     assert face_rule_errors(f) == []
     bom = [{"id": x.Name, "volume_mm3": "1", "kind": "panel"} for x in f.by_type("IfcElement")
            if not x.is_a("IfcCurtainWall")]
@@ -370,3 +371,35 @@ def test_ifc_check_validates_the_faces_it_leaves_out_of_ifcopenshell_validate(if
         assert errors, what
         if what != "two indices":   # ifcopenshell may refuse a too short list itself
             assert any(("used by no" in e) == (what == "used by no") for e in errors), (what, errors)
+
+
+def test_ifc_check_holds_the_face_sets_and_point_lists_to_their_rules(ifc_file, tmp_path):
+    """The face sets and point lists are left out of ifcopenshell.validate too; a point of two
+    coordinates, a face set whose faces are not faces, one whose Closed is not a boolean: each fails the
+    full IFC check, and ifcopenshell.validate over every instance says so too."""
+    import re
+
+    import ifcopenshell.validate
+
+    from fabricate.export.exchange_check import check_ifc
+
+    path = ifc_file[0]
+    f = ifcopenshell.open(str(path))
+    bom = [{"id": x.Name, "volume_mm3": "1", "kind": "panel"} for x in f.by_type("IfcElement")
+           if not x.is_a("IfcCurtainWall")]
+    text = path.read_text()
+    point = re.search(r"IFCCARTESIANPOINTLIST3D\(\(\(([^,()]+),([^,()]+),([^,()]+)\)", text)
+    face_set = re.search(r"IFCPOLYGONALFACESET\((#\d+),\.T\.,\((#\d+)", text)
+    edits = {"lists of 3 reals": text.replace(point.group(0), point.group(0)[:-1].rsplit(",", 1)[0] + ")", 1),
+             "Faces: expected": text.replace(face_set.group(0), face_set.group(0).replace(
+                 face_set.group(2), face_set.group(1)), 1),
+             "Closed": text.replace(face_set.group(0), face_set.group(0).replace(".T.", "'yes'"), 1)}
+    for what, broken in edits.items():
+        assert broken != text, what
+        bad = tmp_path / "bad.ifc"
+        bad.write_text(broken)
+        errors = check_ifc(bad, bom, full=True)["bad_schema"]
+        assert any(what in e for e in errors), (what, errors)
+        log = ifcopenshell.validate.json_logger()
+        ifcopenshell.validate.validate(ifcopenshell.open(str(bad)), log)
+        assert log.statements, what     # the schema validator over every instance refuses it as well

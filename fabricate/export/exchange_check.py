@@ -3,7 +3,7 @@
 - ``ifc``: ifcopenshell opens ``model.ifc``; one element per BOM row with the
   same id (Name and Tag), one per glass unit (``P0001`` for the rows ``P0001.1 ...``, volumes summed); full mode also validates the file against the IFC4
   schema and its express rules' attribute types (``ifcopenshell.validate`` for every instance but the
-  face sets' faces, whose rules :func:`read_face_sets` checks at once)
+  face sets, their faces and point lists, whose rules :func:`read_face_sets` checks at once)
   and compares every element's volume, from ifcopenshell's own geometry
   kernel, with the BOM's within ``tol.file_volume`` (``1e-6``) relative.
 - ``3dm``: rhino3dm reads ``model.3dm``; one named object per BOM row on the
@@ -15,6 +15,7 @@
 """
 from __future__ import annotations
 
+import itertools
 from pathlib import Path
 
 import numpy as np
@@ -31,9 +32,10 @@ def _ids_result(expected: set, found: set, extra: dict) -> dict:
 
 
 def _without_faces(f):
-    """``f`` (the same parsed file) iterated without its ``IfcIndexedPolygonalFace`` instances, for
-    ``ifcopenshell.validate`` (which checks each instance's attributes in Python: the faces are two
-    thirds of the instances and their rules are checked at once by :func:`read_face_sets`)."""
+    """``f`` (the same parsed file) iterated without its face sets, their faces and point lists
+    (:data:`GEOMETRY`), for ``ifcopenshell.validate`` (which checks each instance's attributes in
+    Python, each coordinate and each face reference one at a time: the geometry is four fifths of the
+    instances and most of the attributes, and its rules are checked at once by :func:`read_face_sets`)."""
     import ifcopenshell
 
     class _Rest(ifcopenshell.file):
@@ -42,16 +44,33 @@ def _without_faces(f):
 
     view = _Rest.__new__(_Rest)
     view.__dict__.update(f.__dict__)
-    view.skip = {x.id() for x in f.by_type("IfcIndexedPolygonalFace") if x.is_a() in FACES}
+    view.skip = {x.id() for t in GEOMETRY for x in f.by_type(t) if x.is_a() in GEOMETRY}
     return view
 
 
 FACES = ("IfcIndexedPolygonalFace", "IfcIndexedPolygonalFaceWithVoids")
-"""The face entities :func:`read_face_sets` checks in place of ``ifcopenshell.validate``."""
+GEOMETRY = FACES + ("IfcPolygonalFaceSet", "IfcCartesianPointList3D")
+"""The entities :func:`read_face_sets` checks in place of ``ifcopenshell.validate``."""
 
 
-def _bad_index(idx, n: int) -> bool:
-    return (not isinstance(idx, tuple) or len(idx) < 3 or not all(isinstance(i, int) for i in idx)
+def _point_list_errors(pl) -> tuple[np.ndarray | None, list[str]]:
+    """``(P (n, 3) or None, rule errors)`` of an ``IfcCartesianPointList3D``: ``CoordList`` a list of
+    one or more lists of exactly 3 ``IfcLengthMeasure`` (reals: an integer is refused, as by
+    ``ifcopenshell.validate``), finite."""
+    cl = pl.CoordList
+    what = f"#{pl.id()} IfcCartesianPointList3D CoordList"
+    if not isinstance(cl, tuple) or not cl or not all(isinstance(q, tuple) and len(q) == 3 for q in cl):
+        return None, [f"{what}: expected a list of 1 or more lists of 3 reals"]
+    if set(map(type, itertools.chain.from_iterable(cl))) != {float}:
+        return None, [f"{what}: a coordinate is not a real (IfcLengthMeasure)"]
+    P = np.asarray(cl, dtype=float)
+    if not np.isfinite(P).all():
+        return None, [f"{what}: a coordinate is not a finite number"]
+    return P, []
+
+
+def _bad_index(idx, n: int, least: int = 3) -> bool:
+    return (not isinstance(idx, tuple) or len(idx) < least or not all(isinstance(i, int) for i in idx)
             or min(idx) < 1 or max(idx) > n)
 
 
@@ -62,17 +81,43 @@ def read_face_sets(f) -> tuple[dict[str, float], list[str]]:
     coordinates and face indices (divergence theorem over fan triangles; a hole's loop turns the
     other way, so its triangles take its share off): the file's content, without the writer's
     arrays and without a geometry kernel; NaN for a set whose indices are not its points'.
-    rule errors : the IFC4 rules of every ``IfcIndexedPolygonalFace`` and ``...WithVoids`` (what
-    ``ifcopenshell.validate`` checks on one): ``CoordIndex`` (and each of ``InnerCoordIndices``, a
-    list of one or more) a list of 3 or more positive integers, the face used by a face set (inverse
-    ``ToFaceSet [1:?]``); and each index within its face set's points."""
+    rule errors : the IFC4 rules of the :data:`GEOMETRY` entities (what ``ifcopenshell.validate``
+    checks on one): every ``IfcCartesianPointList3D`` (:func:`_point_list_errors`); every
+    ``IfcPolygonalFaceSet``'s ``Coordinates`` one, ``Closed`` a boolean or unset, ``Faces`` a set of
+    one or more ``IfcIndexedPolygonalFace`` (or ``...WithVoids``), ``PnIndex`` unset or a list of
+    positive integers within its points; every face's ``CoordIndex`` (and each of
+    ``InnerCoordIndices``, a list of one or more) a list of 3 or more positive integers, the face
+    used by a face set (inverse ``ToFaceSet [1:?]``); and each index within its face set's points."""
     errors: list[str] = []
     used: set[int] = set()
     set_volume: dict[int, float] = {}
+    points: dict[int, np.ndarray | None] = {}
+    for pl in f.by_type("IfcCartesianPointList3D"):
+        if pl.is_a() == "IfcCartesianPointList3D":
+            points[pl.id()], bad = _point_list_errors(pl)
+            errors += bad
     for s in f.by_type("IfcPolygonalFaceSet"):
-        P = np.asarray(s.Coordinates.CoordList, dtype=float)
-        n, tri, ok = len(P), [], True
-        for face in s.Faces:
+        coords, faces, pn = s.Coordinates, s.Faces, s.PnIndex
+        P = points.get(coords.id()) if coords is not None and coords.is_a() == "IfcCartesianPointList3D" else None
+        ok = P is not None
+        if coords is None or coords.id() not in points:
+            errors.append(f"#{s.id()} IfcPolygonalFaceSet Coordinates: expected an IfcCartesianPointList3D")
+        if s.Closed not in (True, False, None):
+            errors.append(f"#{s.id()} IfcPolygonalFaceSet Closed {s.Closed!r}: expected a boolean or unset")
+        if not isinstance(faces, tuple) or not faces or not all(
+                hasattr(x, "is_a") and x.is_a() in FACES for x in faces):
+            errors.append(f"#{s.id()} IfcPolygonalFaceSet Faces: expected a set of 1 or more IfcIndexedPolygonalFace")
+            faces, ok = (), False
+        if pn is not None:
+            if ok and not _bad_index(pn, len(P), least=1):
+                P = P[np.asarray(pn, dtype=np.int64) - 1]           # the faces index the points through PnIndex
+            else:
+                errors.append(f"#{s.id()} IfcPolygonalFaceSet PnIndex: expected positive integers within its points")
+                ok = False
+        if P is None:
+            P = np.zeros((0, 3))
+        n, tri = len(P), []
+        for face in faces:
             used.add(face.id())
             loops = [face.CoordIndex]
             if face.is_a() == "IfcIndexedPolygonalFaceWithVoids":
