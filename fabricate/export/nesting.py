@@ -32,6 +32,7 @@ rectpack takes seconds on ten thousand plates.  Its arrays are read-only.
 """
 from __future__ import annotations
 
+import os
 import weakref
 from dataclasses import dataclass
 
@@ -40,6 +41,12 @@ import numpy as np
 from optimize.errors import ConfigError
 
 FAST_ABOVE = 4000
+KERNEL_FROM = 2000
+"""From this many rectangles on, :func:`pack` runs the compiled kernel (when numba is installed): below,
+importing numba and loading the kernel (about 0.5 s) would cost more than it saves."""
+ENABLED = os.environ.get("CONICAL_FAB_NUMBA", "1") != "0"
+"""False (or ``CONICAL_FAB_NUMBA=0``): :func:`pack` never runs the compiled kernel."""
+_KERNEL = None  # fabricate.export._nest_kernel once imported, False when numba is missing
 _LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """``{parts: {arguments: Layout}}``: the layouts made of each (immutable) parts object, while it lives."""
 
@@ -217,9 +224,17 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
     Returns ``sheet, x, y, width``: (n,) int, the bin of each rectangle, the lower-left corner on it and
     its width there (``!= w`` where it was turned); all four -1 for a rectangle not placed.
     """
+    n = len(w)
+    kernel = _kernel() if n >= KERNEL_FROM else None
+    if kernel is not None:
+        w, h = np.ascontiguousarray(w, np.int64), np.ascontiguousarray(h, np.int64)
+        order = np.argsort(-(w * h), kind="stable")
+        *out, failed = kernel.pack_bins(w, h, order, int(bw), int(bh), bool(rotation), bool(next_fit))
+        if failed >= 0:
+            raise ConfigError(f"nesting: a {w[failed]} x {h[failed]} rectangle fits no empty {bw} x {bh} bin")
+        return tuple(out)
     from .guillotine import GuillotineBssfSas
 
-    n = len(w)
     sheet = np.full(n, -1, dtype=np.int64)
     x, y, pw = np.full(n, -1, np.int64), np.full(n, -1, np.int64), np.full(n, -1, np.int64)
     bins: list = []
@@ -256,6 +271,22 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
         if not next_fit:
             _refresh(bins[b], b, fit, sec, many)
     return sheet, x, y, pw
+
+
+def _kernel():
+    """:mod:`fabricate.export._nest_kernel` (numba, imported on first use), or None without numba or when
+    switched off (:data:`ENABLED`)."""
+    global _KERNEL
+    if not ENABLED:
+        return None
+    if _KERNEL is None:
+        try:
+            from . import _nest_kernel
+        except ImportError:
+            _KERNEL = False
+        else:
+            _KERNEL = _nest_kernel
+    return _KERNEL or None
 
 
 SECTIONS_KEPT = 8
