@@ -89,3 +89,27 @@ def test_without_numba_pack_takes_the_python_path(monkeypatch):
     monkeypatch.setattr(nesting, "_KERNEL", None)  # forget the failed import afterwards
     monkeypatch.setattr(nesting, "ENABLED", False)
     assert nesting._kernel() is None
+
+
+def test_kernel_and_python_path_agree_on_small_odd_cases(monkeypatch):
+    """200 small seeded cases: bins from a few mm, rectangles of the bin's size and its halves (exact fits,
+    merged sections), many too large for the bin (unplaced, also amid next fit); then a rectangle of no
+    width fails rectpack's assertion on both paths."""
+    for seed in range(200):
+        rng = np.random.default_rng(seed)
+        n, bw, bh = int(rng.integers(1, 150)), int(rng.integers(5, 300)), int(rng.integers(5, 300))
+        top = int(rng.integers(2, 200))
+        w, h = rng.integers(1, top, n), rng.integers(1, top, n)
+        if seed % 3 == 0:
+            w, h = rng.choice([bw, bw // 2, bw // 3 + 1, 7], n), rng.choice([bh, bh // 2, bh // 4 + 1, 7], n)
+        w, h = np.maximum(w, 1), np.maximum(h, 1)
+        runs = []
+        for kernel_from in (0, 10**9):
+            monkeypatch.setattr(nesting, "KERNEL_FROM", kernel_from)
+            runs.append(nesting.pack(w, h, bw, bh, bool(seed % 2), next_fit=seed % 4 < 2))
+        for a, b in zip(*runs):
+            assert np.array_equal(a, b), seed
+    for kernel_from in (0, 10**9):
+        monkeypatch.setattr(nesting, "KERNEL_FROM", kernel_from)
+        with pytest.raises(AssertionError):
+            nesting.pack(np.array([5, 0]), np.array([5, 5]), 10, 10)

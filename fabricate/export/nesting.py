@@ -237,8 +237,9 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
     """
     n = len(w)
     kernel = _kernel() if n >= KERNEL_FROM else None
-    if kernel is not None:
-        w, h = np.ascontiguousarray(w, np.int64), np.ascontiguousarray(h, np.int64)
+    wa, ha = np.ascontiguousarray(w, np.int64), np.ascontiguousarray(h, np.int64)
+    if kernel is not None and (wa > 0).all() and (ha > 0).all():  # else rectpack's assertion, below
+        w, h = wa, ha
         order = np.argsort(-(w * h), kind="stable")
         *out, failed = kernel.pack_bins(w, h, order, int(bw), int(bh), bool(rotation), bool(next_fit))
         if failed >= 0:
