@@ -20,8 +20,10 @@ list grows again): a sheet of a few sections does not pay for it.  The split
 (short axis) is rectpack's ``_split``, inlined.
 
 Imported by :func:`fabricate.export.nesting.pack` only (rectpack stays a
-lazy import); ``tests/test_cutfiles.py`` compares its placements with
-rectpack's own class.
+lazy import), for fewer than ``nesting.KERNEL_FROM`` rectangles or without
+numba: above, the compiled :mod:`fabricate.export._nest_kernel` applies the
+same rules (``tests/test_nesting_kernel.py`` checks the two agree);
+``tests/test_cutfiles.py`` compares its placements with rectpack's own class.
 """
 from __future__ import annotations
 

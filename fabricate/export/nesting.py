@@ -18,8 +18,15 @@ of their total rectangle area (a drawing, not a cutting plan), packed the same
 way.  Above :data:`FAST_ABOVE` parts a sheet only tries the last open sheet
 (``PackingBin.BNF``: linear time, a few more sheets).
 
-rectpack's guillotine class runs with its two inner loops rewritten (:mod:`fabricate.export.guillotine`:
-the same placements, 2 to 5 times faster), and rectpack's packer (the loop over the sheets) is
+From :data:`KERNEL_FROM` rectangles on, with numba installed, :func:`pack` is one compiled call
+(:mod:`fabricate.export._nest_kernel`: the guillotine rules and the loop over the sheets, rule for rule,
+in integers: the same placements; on the 5,000-panel dome of RHS beams, hubs and insulated glass, 90,800
+parts on the strip in 0.19 s against 1.8 s, and the 86,000 of the cut files in 0.02 s against 0.5 s).
+The first call compiles it (a few seconds, once: it is cached on disk), a new process loads numba and
+the cache (about 0.5 s), hence the threshold; ``CONICAL_FAB_NUMBA=0`` switches it off.  Otherwise (and
+in the tests, as the reference beside rectpack's own classes) rectpack's guillotine class runs with its
+two inner loops rewritten (:mod:`fabricate.export.guillotine`: the same placements, 2 to 5 times
+faster), and rectpack's packer (the loop over the sheets) is
 :func:`pack`, placement for placement: the parts in its order, each on the first open sheet that takes
 it, else on a new one.  Its fast path: rectpack asks every open sheet in turn (1,980 plies of 6 mm glass
 on 1,200 sheets: 113,000 refusals before the sheet that takes each); :func:`pack` keeps per sheet, in
@@ -32,6 +39,7 @@ rectpack takes seconds on ten thousand plates.  Its arrays are read-only.
 """
 from __future__ import annotations
 
+import os
 import weakref
 from dataclasses import dataclass
 
@@ -40,6 +48,12 @@ import numpy as np
 from optimize.errors import ConfigError
 
 FAST_ABOVE = 4000
+KERNEL_FROM = 2000
+"""From this many rectangles on, :func:`pack` runs the compiled kernel (when numba is installed): below,
+importing numba and loading the kernel (about 0.5 s) would cost more than it saves."""
+ENABLED = os.environ.get("CONICAL_FAB_NUMBA", "1") != "0"
+"""False (or ``CONICAL_FAB_NUMBA=0``): :func:`pack` never runs the compiled kernel."""
+_KERNEL = None  # fabricate.export._nest_kernel once imported, False when numba is missing
 _LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """``{parts: {arguments: Layout}}``: the layouts made of each (immutable) parts object, while it lives."""
 
@@ -214,12 +228,25 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
     k = :data:`SECTIONS_KEPT` of them, must show one that holds it (a bin with more is asked).  A bin
     refusing a rectangle is left unchanged, so skipping it changes nothing.
 
+    From :data:`KERNEL_FROM` rectangles on, when numba is installed (:func:`_kernel`), all of this is one
+    call of :func:`fabricate.export._nest_kernel.pack_bins` (same placements; its bins are skipped by
+    their largest free width, height, short and long side only).
+
     Returns ``sheet, x, y, width``: (n,) int, the bin of each rectangle, the lower-left corner on it and
     its width there (``!= w`` where it was turned); all four -1 for a rectangle not placed.
     """
+    n = len(w)
+    kernel = _kernel() if n >= KERNEL_FROM else None
+    wa, ha = np.ascontiguousarray(w, np.int64), np.ascontiguousarray(h, np.int64)
+    if kernel is not None and (wa > 0).all() and (ha > 0).all():  # else rectpack's assertion, below
+        w, h = wa, ha
+        order = np.argsort(-(w * h), kind="stable")
+        *out, failed = kernel.pack_bins(w, h, order, int(bw), int(bh), bool(rotation), bool(next_fit))
+        if failed >= 0:
+            raise ConfigError(f"nesting: a {w[failed]} x {h[failed]} rectangle fits no empty {bw} x {bh} bin")
+        return tuple(out)
     from .guillotine import GuillotineBssfSas
 
-    n = len(w)
     sheet = np.full(n, -1, dtype=np.int64)
     x, y, pw = np.full(n, -1, np.int64), np.full(n, -1, np.int64), np.full(n, -1, np.int64)
     bins: list = []
@@ -256,6 +283,22 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
         if not next_fit:
             _refresh(bins[b], b, fit, sec, many)
     return sheet, x, y, pw
+
+
+def _kernel():
+    """:mod:`fabricate.export._nest_kernel` (numba, imported on first use), or None without numba or when
+    switched off (:data:`ENABLED`)."""
+    global _KERNEL
+    if not ENABLED:
+        return None
+    if _KERNEL is None:
+        try:
+            from . import _nest_kernel
+        except ImportError:
+            _KERNEL = False
+        else:
+            _KERNEL = _nest_kernel
+    return _KERNEL or None
 
 
 SECTIONS_KEPT = 8
