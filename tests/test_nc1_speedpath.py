@@ -84,6 +84,7 @@ def test_files_have_the_umask_mode_and_no_temporary_is_left(rhs_parts, tmp_path)
         os.umask(old)
     names = os.listdir(tmp_path / "nc1")
     assert len(names) == facts["files"] and all(n.endswith(".nc1") and not n.startswith(".") for n in names)
+    assert os.listdir(tmp_path) == ["nc1"]                            # the staging folder is gone
     assert {os.stat(tmp_path / "nc1" / n).st_mode & 0o7777 for n in names} == {0o640}
     first = rhs_parts.of_kind("beam")[0]
     data = (tmp_path / "nc1" / f"{first.ids[0]}.nc1").read_bytes()
@@ -287,3 +288,32 @@ def test_the_reader_reads_mangled_files_as_the_line_by_line_reader(rhs_parts, tm
             assert new == old, (n, text)
         seen.add(old[0] if isinstance(old[0], str) else "read")
     assert {"read", "ValueError"} <= seen                                   # both outcomes were met
+
+
+def test_a_new_folder_is_put_in_place_whole_and_not_at_all_on_failure(rhs_parts, tmp_path, monkeypatch):
+    """Into a new folder the files are written in a staging folder beside it, published when all are
+    written: the same files as written one by one into a folder that holds a file already; a failure
+    half-way leaves no nc1/ and no staging folder, and the folder of files is kept as it was."""
+    fresh, kept = tmp_path / "fresh" / "nc1", tmp_path / "kept" / "nc1"
+    kept.mkdir(parents=True)
+    (kept / "mine.txt").write_text("a user's note")
+    a, b = nc1.write_nc1(rhs_parts, fresh), nc1.write_nc1(rhs_parts, kept)
+    assert a["files"] == b["files"] == len(_ids(rhs_parts)) and a["bytes"] == b["bytes"]
+    assert sorted(os.listdir(kept)) == sorted(os.listdir(fresh) + ["mine.txt"])
+    assert all((fresh / n).read_bytes() == (kept / n).read_bytes() for n in os.listdir(fresh))
+    real, calls = nc1._Files.write, []
+
+    def failing(self, name, data):
+        calls.append(name)
+        if len(calls) == 7:
+            raise OSError(28, "No space left on device")
+        return real(self, name, data)
+
+    monkeypatch.setattr(nc1._Files, "write", failing)
+    with pytest.raises(ExportError, match="cannot write the NC1 files .No space left on device"):
+        nc1.write_nc1(rhs_parts, tmp_path / "failed" / "nc1")
+    assert os.listdir(tmp_path / "failed") == []
+    calls.clear()
+    with pytest.raises(ExportError):
+        nc1.write_nc1(rhs_parts, kept)
+    assert (kept / "mine.txt").read_text() == "a user's note" and len(os.listdir(kept)) == len(_ids(rhs_parts)) + 1

@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from optimize.atomic import umask
+from optimize.atomic import atomic_dir, umask
 from optimize.errors import ExportError
 
 NUM = "{:10.3f}"
@@ -187,18 +187,27 @@ def nc1_tube_texts(group, *, order: str, grade: str, density: float) -> list[str
 class _Files:
     """Atomic files in one folder with few system calls: each written under a temporary name of its own
     beside it (``.<name>.<token>.part``, created exclusively, so no other file is touched), then renamed
-    to its name; removed on failure.  The mode: 0666 less the umask, as ``open`` creates it (checked
-    on the first file; set on every file where the folder's ACL makes it differ)."""
+    to its name; removed on failure.  ``staged``: the folder is a new one of this writer's that is put
+    in place whole (:func:`optimize.atomic.atomic_dir`): each file is created under its name at once.
+    The mode: 0666 less the umask, as ``open`` creates it (checked on the first file; set on every file
+    where the folder's ACL makes it differ)."""
 
     FLAGS = (os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0) | getattr(os, "O_NOFOLLOW", 0)
              | getattr(os, "O_BINARY", 0))
 
-    def __init__(self, folder: Path, mode: int):
-        self.folder, self.mode, self.chmod = os.fspath(folder), mode, None
+    def __init__(self, folder: Path, mode: int, staged: bool = False):
+        self.folder, self.mode, self.chmod, self.staged = os.fspath(folder), mode, None, staged
         self.token = secrets.token_hex(6)
 
     def write(self, name: str, data: bytes) -> None:
         target = os.path.join(self.folder, name)
+        if self.staged:   # a new folder of this writer's, published whole: each file under its name at once
+            fd = os.open(target, self.FLAGS, 0o666)
+            try:
+                self._fill(fd, data)
+            finally:
+                os.close(fd)
+            return
         while True:
             tmp = os.path.join(self.folder, f".{name}.{self.token}.part")
             try:
@@ -208,13 +217,7 @@ class _Files:
                 self.token = secrets.token_hex(6)
         try:
             try:
-                if self.chmod is None:
-                    self.chmod = os.fstat(fd).st_mode & 0o7777 != self.mode
-                if self.chmod:
-                    os.fchmod(fd, self.mode)
-                view = memoryview(data)
-                while view:
-                    view = view[os.write(fd, view):]
+                self._fill(fd, data)
             finally:
                 os.close(fd)
             os.replace(tmp, target)
@@ -223,10 +226,24 @@ class _Files:
                 os.unlink(tmp)
             raise
 
+    def _fill(self, fd: int, data: bytes) -> None:
+        if self.chmod is None:
+            self.chmod = os.fstat(fd).st_mode & 0o7777 != self.mode
+        if self.chmod:
+            os.fchmod(fd, self.mode)
+        view = memoryview(data)
+        while view:
+            view = view[os.write(fd, view):]
+
 
 def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -> dict:
-    """One NC1 file per beam plate and per hub tube in ``folder`` (created; each file atomic).  ``grade``:
-    default the parts' ``steel_grade``.  Returns facts: ``folder, files, tubes, bytes, seconds``."""
+    """One NC1 file per beam plate and per hub tube in ``folder``.  ``grade``: default the parts'
+    ``steel_grade``.  Returns facts: ``folder, files, tubes, bytes, seconds``.
+
+    A new (or empty) ``folder`` is written whole beside it and put in place when every file is
+    complete (a failed or interrupted run leaves no ``nc1/``, and each file is one create instead of
+    a create and a rename); into a folder that holds files, each file is written atomically and
+    nothing else in it is touched."""
     from .schedules import beam_angles
 
     t0 = time.perf_counter()
@@ -243,15 +260,22 @@ def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -
                 texts = nc1_tube_texts(g, order=order, grade=grade, density=parts.spec.group_density(g))
                 yield from zip(g.ids, texts, itertools.repeat(True))
 
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-        out = _Files(folder, 0o666 & ~umask())      # the umask read once: thousands of small files
+    def write_all(out: _Files) -> None:
+        nonlocal files, tubes, size
         for pid, text, tube in texts():
             data = text.replace("\n", "\r\n").encode("ascii")
             out.write(f"{pid}.nc1", data)
             files += 1
             tubes += tube
             size += len(data)
+
+    mode = 0o666 & ~umask()                         # the umask read once: thousands of small files
+    try:
+        if folder.is_dir() and not folder.is_symlink() and any(os.scandir(folder)):
+            write_all(_Files(folder, mode))         # a folder with files: each file atomic, the others kept
+        else:                                       # none yet: all in a new folder, put in place when complete
+            with atomic_dir(folder) as tmp:
+                write_all(_Files(tmp, mode, staged=True))
     except OSError as exc:
         raise ExportError(f"{folder}: cannot write the NC1 files ({exc.strerror or exc})") from None
     return {"file": folder.name + "/", "files": files, "tubes": tubes, "bytes": size,
