@@ -15,6 +15,7 @@ caches), one after the other.  Prints a JSON line per side and the ratio.
     python benchmarks/bench_cad.py --check       # the file check against the export it checks
     python benchmarks/bench_cad.py --handoff     # also the CAD stage with the hand-off files (issue 18)
     python benchmarks/bench_cad.py --sections    # plate beams against RHS beams on tube hubs (issue 18)
+    python benchmarks/bench_cad.py --sections --repeat 3   # three times over, and the medians
 
 ``--sections`` (issue 18 item 1): for the railway station (the run's CAD and exports stages) and the
 dome of ``--panels`` panels (build_parts and every fabrication writer), in one run: today's plate
@@ -42,6 +43,7 @@ import argparse
 import json
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -294,13 +296,32 @@ def sections_dome(variant: str, panels: int, out: Path) -> dict:
             "check_full_cpu_s": _cpu_with_children() - c0}
 
 
-def main_sections(panels: int) -> None:
-    """Plate-only against RHS beams on tube hubs, railway station and the dome, in one run."""
-    rows = {}
-    for case in ("railway", "dome"):
-        for variant in SECTIONS:
-            with tempfile.TemporaryDirectory(prefix="bench_sections_") as tmp:
-                rows[case, variant] = _child(f"sections_{case}_{variant}", panels, tmp)
+def main_sections(panels: int, repeat: int = 1) -> None:
+    """Plate-only against RHS beams on tube hubs, railway station and the dome, in one run; ``repeat``
+    times over (the four children in the same order each time), then the median of each ratio.  The
+    file system is synced after each child's folder is removed, so that the next child does not pay for
+    writing back the last one's gigabytes."""
+    runs = []
+    for _ in range(repeat):
+        rows = {}
+        for case in ("railway", "dome"):
+            for variant in SECTIONS:
+                with tempfile.TemporaryDirectory(prefix="bench_sections_") as tmp:
+                    rows[case, variant] = _child(f"sections_{case}_{variant}", panels, tmp)
+                os.sync()
+        _print_sections(rows)
+        runs.append(rows)
+    if repeat > 1:
+        for case in ("railway", "dome"):
+            ratio = [r[case, "rhs"]["cad_export_s"] / r[case, "plate"]["cad_export_s"] for r in runs]
+            check = [r[case, "rhs"]["check_full_s"] / r[case, "rhs"]["export_s"] for r in runs]
+            print(f"{runs[0][case, 'rhs']['case']}, median of {repeat} runs: RHS / plate-only "
+                  f"{statistics.median(ratio):.2f} x (runs {' '.join(f'{x:.2f}' for x in ratio)}; goal <= 3.0); "
+                  f"full check / export {statistics.median(check):.2f} x (runs {' '.join(f'{x:.2f}' for x in check)}; "
+                  "goal <= 1.0)")
+
+
+def _print_sections(rows: dict) -> None:
     glass = "insulated glass 10/16/66.4" if GLASS_INSULATED else "glass as configured"
     for case in ("railway", "dome"):
         p, r = rows[case, "plate"], rows[case, "rhs"]
@@ -309,6 +330,8 @@ def main_sections(panels: int) -> None:
               f"{r['cad_export_s'] / p['cad_export_s']:.2f} x plate-only (goal <= 3.0); full check "
               f"{r['check_full_s']:.2f} s = {r['check_full_s'] / r['export_s']:.2f} x its export "
               f"{r['export_s']:.2f} s (goal <= 1.0), pass {r['check_pass']}")
+        print(f"{r['case']} per part: plate-only {1e3 * p['cad_export_s'] / p['parts']:.2f} ms, RHS "
+              f"{1e3 * r['cad_export_s'] / r['parts']:.2f} ms ({r['parts'] / p['parts']:.1f} x the parts)")
         if "cad_export_cpu_s" in r:  # CPU time in the same processes: far less disturbed on a shared machine
             print(f"{r['case']} CPU time: plate-only CAD + export {p['cad_export_cpu_s']:.2f} s; RHS "
                   f"{r['cad_export_cpu_s']:.2f} s = {r['cad_export_cpu_s'] / p['cad_export_cpu_s']:.2f} x plate-only; "
@@ -367,6 +390,7 @@ def main() -> None:
                     help="time the fast and full file check against the export (railway station, dome)")
     ap.add_argument("--occ", action="store_true", help="with --check: also the check with OpenCASCADE")
     ap.add_argument("--handoff", action="store_true", help="also time the CAD stage with the hand-off files")
+    ap.add_argument("--repeat", type=int, default=1, help="with --sections: run it this many times, then the medians")
     ap.add_argument("--sections", action="store_true",
                     help="plate beams with mitred ends against RHS beams on tube hubs: CAD + export and the "
                          "full check, railway station and the dome")
@@ -382,7 +406,7 @@ def main() -> None:
         main_check(args.panels, args.occ)
         return
     if args.sections:
-        main_sections(args.panels)
+        main_sections(args.panels, args.repeat)
         return
     with tempfile.TemporaryDirectory(prefix="bench_cad_") as tmp:
         results = {}
