@@ -36,6 +36,10 @@ with it:
   (``tol.file_area``, ``1e-9`` relative) and the edge lengths (``tol.file_edge_mm``, ``1e-6`` mm) of
   the flat data's outline with the same id, a BOM row's (without ``flat.json``: its area
   against the BOM's).
+- ``cut``: the nested cut files ``cut_<material>_<t>mm.dxf`` (:mod:`fabricate.check_cut`): every part
+  cut from sheet once, in the file of its material and thickness, of the shape of its
+  ``outlines.dxf`` outline (moved, turned a quarter or not), on one sheet with the margin clear and
+  the kerf kept to the others; left out only when too large for the sheet.
 - ``svg``: parses, one group per part cut from sheet.
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
   element / object / file per BOM row with the same id; IFC schema-valid with the volume of
@@ -59,6 +63,7 @@ from optimize.errors import ExportError
 from optimize.tolerances import DEFAULT, Tolerances
 
 from .cad.parts import cut_from_sheet
+from .check_cut import check_cut_files
 from .check_heap import heap_reuse
 from .check_mesh import check_3mf as _check_3mf
 from .check_mesh import check_stl as _check_stl
@@ -118,8 +123,9 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
         ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
         ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
         ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
-        ("dxf", "dxf", None, lambda: (_check_dxf(paths["dxf"], bom, paths["flat"],
-                                                 None if step_reader == "occ" else "text", tol), None)),
+        ("dxf", "dxf", None, lambda: _check_dxf_keep(paths["dxf"], bom, paths["flat"],
+                                                     None if step_reader == "occ" else "text", tol)),
+        ("cut", "dxf", "dxf", lambda: (check_cut_files(out, bom, read["dxf"], written, tol), None)),
         ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
         ("ifc", "ifc", None, lambda: (exchange_check.check_ifc(paths["ifc"], bom,
                                                                  full="ifc_geometry" not in skip,
@@ -388,7 +394,14 @@ def _check_flat(path, bom, read):
     return check_flat(path, bom, step_solids=read.get("step"), meshes=read.get("3mf"))
 
 
-def _check_dxf(path, bom, flat_path=None, reader=None, tol: Tolerances = DEFAULT):
+def _check_dxf_keep(path, bom, flat_path=None, reader=None, tol: Tolerances = DEFAULT):
+    """:func:`_check_dxf` and the outlines it read (``{id: (k, 2)}``; empty without flat.json), which
+    the cut files' check compares theirs with."""
+    kept: dict = {}
+    return _check_dxf(path, bom, flat_path, reader, tol, kept=kept), kept
+
+
+def _check_dxf(path, bom, flat_path=None, reader=None, tol: Tolerances = DEFAULT, *, kept: dict | None = None):
     """CUT outlines against the flat data's outlines (which the flat check holds to the STEP solids),
     or, without flat.json, their areas against the BOM's (a beam's true outline, V ends and ridge
     included, is not a face of its solid).  Every outline's id must be a BOM row's (the STEP check
@@ -418,6 +431,8 @@ def _check_dxf(path, bom, flat_path=None, reader=None, tol: Tolerances = DEFAULT
         for pid, Q in zip(g["ids"], O):
             outline_of[pid] = [np.concatenate([Q, np.zeros((len(Q), 1))], axis=1)]
     outlines, facts = read_outlines(path)
+    if kept is not None:
+        kept.update(outlines)
     flat = [r["id"] for r in bom if cut_from_sheet(r["kind"], r.get("member", ""))]
     rows = {r["id"] for r in bom}
     missing = sorted(set(flat) - set(outlines))

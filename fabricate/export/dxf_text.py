@@ -61,9 +61,11 @@ def _codes(buf: np.ndarray, data: bytes, cs: np.ndarray, ce: np.ndarray, path) -
     return codes
 
 
-def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
+def read_outlines_text(path, *, sheets: bool = False) -> tuple[dict[str, np.ndarray], dict]:
     """``({part id: CUT outline (k, 2)}, facts)``; facts: ``lint`` (problems), ``audit_errors``
-    (their count), ``units`` ($INSUNITS), ``texts`` (TEXT entities on ETCH)."""
+    (their count), ``units`` ($INSUNITS), ``texts`` (TEXT entities on ETCH); with ``sheets``, also
+    ``sheets`` ``(s, 4, 2)`` the corners of the stock sheets' frames (LWPOLYLINE on SHEET) and
+    ``sheet_labels`` their labels (TEXT on SHEET)."""
     path = Path(path)
     try:
         data = path.read_bytes()
@@ -184,5 +186,19 @@ def read_outlines_text(path) -> tuple[dict[str, np.ndarray], dict]:
     for j, e in enumerate(cut_ids.tolist()):
         if ok_app[e] and pid[e] is not None:
             out[str(pid[e])] = P[bounds[j]:bounds[j + 1]]
-    return out, {"lint": lint, "audit_errors": len(lint), "units": units, "texts": texts,
-                 "reader": "independent DXF text reader"}
+    facts = {"lint": lint, "audit_errors": len(lint), "units": units, "texts": texts,
+             "reader": "independent DXF text reader"}
+    if not sheets:
+        return out, facts
+    sheet = (etype == "LWPOLYLINE") & (layer == "SHEET")              # the stock sheets' frames, in order
+    in_sheet = sheet[ent]
+    frames = np.zeros((0, 4, 2))
+    if sheet.any():
+        fx = numbers(at(in_sheet & (c == 10)), float, "a sheet corner")
+        fy = numbers(at(in_sheet & (c == 20)), float, "a sheet corner")
+        if fx.size == fy.size == 4 * int(sheet.sum()) and np.isfinite(fx).all() and np.isfinite(fy).all():
+            frames = np.stack([fx, fy], axis=1).reshape(-1, 4, 2)
+        else:
+            lint.append("a SHEET frame is not 4 finite corners")
+    labels = pick(np.flatnonzero(((etype == "TEXT") & (layer == "SHEET"))[ent] & (c == 1)) + a).tolist()
+    return out, dict(facts, audit_errors=len(lint), sheets=frames, sheet_labels=labels)

@@ -55,6 +55,7 @@ def _summary(name: str, r: dict) -> str:
             "intersections": ("box_pairs", "boolean_pairs", "max_volume_mm3", "failed"),
             "bearing": ("pairs", "max_gap_mm", "failed"),
             "dxf": ("outlines", "audit_errors", "area_rel_error_max", "edge_error_mm_max", "failed"),
+            "cut": ("files", "sheets", "outlines", "failed"),
             "svg": ("groups", "expected"), "ifc": ("elements", "volume_rel_error_max", "missing", "bad_schema"),
             "3dm": ("elements", "missing", "bad_strings"), "nc1": ("elements", "missing", "bad_files")}.get(name, ())
     return ", ".join(f"{k}={r[k]:.3g}" if isinstance(r.get(k), float) else f"{k}={r.get(k)}" for k in keys)
