@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from cad_fixtures import dome_structure
 
-from fabricate.export.ifc import CLASS, PSET, _faces, write_ifc
+from fabricate.export.ifc import CLASS, PSET, _density, _faces, _glass_layers, _units, write_ifc
 from fabricate.export.ifc_text import new_guids, point_lists, real, string
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
@@ -45,12 +45,7 @@ class _Writer:
         self.context = f.createIfcGeometricRepresentationContext(None, "Model", 3, 1.0e-5, origin, None)
         self.body = f.createIfcGeometricRepresentationSubContext(
             "Body", "Model", None, None, None, None, self.context, None, "MODEL_VIEW", None)
-        units = f.createIfcUnitAssignment([
-            f.createIfcSIUnit(None, "LENGTHUNIT", "MILLI", "METRE"),
-            f.createIfcSIUnit(None, "AREAUNIT", None, "SQUARE_METRE"),
-            f.createIfcSIUnit(None, "VOLUMEUNIT", None, "CUBIC_METRE"),
-            f.createIfcSIUnit(None, "MASSUNIT", "KILO", "GRAM"),
-            f.createIfcSIUnit(None, "PLANEANGLEUNIT", None, "RADIAN")])
+        units = _units(f)     # the skeleton is ifcopenshell's in both writers: the package's own helpers
         self.project = f.createIfcProject(self.guid(), None, name, "conical-fab model", None, None, None,
                                           [self.context], units)
 
@@ -102,36 +97,6 @@ class _Writer:
         f.createIfcRelDefinesByProperties(self.guid(), None, None, None, [obj], qto)
 
 
-def _glass_layers(w: _Writer, spec) -> object:
-    """The glass build-up as an ``IfcMaterialLayerSet``: one layer per ply, interlayer and cavity, outside in."""
-    f = w.f
-    build_up = spec.glass
-    made: dict[str, object] = {}
-
-    def material(name: str):
-        if name not in made:
-            if name == "glass":
-                made[name] = f.createIfcMaterial("Glass", "float glass", "glass")
-                _density(w, made[name], spec.density_glass)
-            elif name in ("PVB", "SGP"):
-                made[name] = f.createIfcMaterial(name, f"{name} interlayer", "plastic")
-                _density(w, made[name], spec.density("panel", name))
-            else:
-                made[name] = f.createIfcMaterial(name.capitalize(), f"{name} filling of the cavity", "gas")
-        return made[name]
-
-    layers = [f.createIfcMaterialLayer(material(ly.material), float(ly.thickness_mm), False, ly.member or "ply 1",
-                                       None, ly.material if ly.solid else "cavity", None)
-              for ly in build_up.layers()]
-    return f.createIfcMaterialLayerSet(layers, build_up.describe()[:255], None)
-
-
-def _density(w: _Writer, material, density: float) -> None:
-    f = w.f
-    prop = f.createIfcPropertySingleValue("MassDensity", None, f.createIfcMassDensityMeasure(float(density)), None)
-    f.createIfcMaterialProperties("Pset_MaterialCommon", None, [prop], material)
-
-
 def reference_write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-fab") -> dict:
     """The former ``write_ifc``: every entity created through ifcopenshell, then ``to_string``.  Returns facts: ``file, bytes, elements`` per kind, ``seconds``.
 
@@ -157,8 +122,8 @@ def reference_write_ifc(parts, path, *, grade: str | None = None, project: str =
     wall.ObjectType = "conical-mesh glass roof"
     f.createIfcRelContainedInSpatialStructure(w.guid(), None, None, None, [wall], building)
     steel = f.createIfcMaterial(grade, "structural steel", "steel")
-    _density(w, steel, parts.spec.density_steel)
-    layers = _glass_layers(w, parts.spec)
+    _density(w.f, steel, parts.spec.density_steel)
+    layers = _glass_layers(w.f, parts.spec)
     members: dict[str, list] = {"panel": [], "beam": [], "node": []}
     _glass_units(w, parts, wall_place, members["panel"])
     from fabricate.cad.parts import unit_id
@@ -234,35 +199,12 @@ def _glass_units(w: _Writer, parts, wall_place, out: list) -> None:
 
 
 def _describe(w: _Writer, el, g, i: int, density: float, unit=None, spec=None) -> None:
-    """Quantities and fabrication figures of part ``i`` of group ``g``; ``unit``: ``[(group, i)]`` of
-    every solid of a unit of several (a beam's plates, a hub's tube and caps): volumes and weights
-    summed, the solids listed."""
-    from fabricate.cad.parts import unit_id
+    """Quantities and fabrication figures of part ``i`` of group ``g`` (the package's figures: what is
+    compared here is how each writer puts them in the file)."""
+    from fabricate.export.ifc import _describe as figures
 
-    volume_m3 = float(g.volume_mm3[i]) * 1e-9
-    weight = volume_m3 * density
-    fab = {"PartId": g.ids[i], "MeshElement": int(g.element[i]),
-           "Residual_mm": float(g.residual_mm[i]), "Neighbours": " ".join(g.neighbours[i])}
-    if unit is not None:
-        uid = unit_id(g.ids[i])
-        volume_m3 = sum(float(h.volume_mm3[k]) for h, k in unit) * 1e-9
-        weight = sum(float(h.volume_mm3[k]) * spec.group_density(h) for h, k in unit) * 1e-9
-        near = {n for h, k in unit for n in h.neighbours[k] if unit_id(n) != uid}
-        fab.update(PartId=uid, Solids=" ".join(h.ids[k] for h, k in unit), Neighbours=" ".join(sorted(near)),
-                   Residual_mm=max(float(h.residual_mm[k]) for h, k in unit))
-    if g.kind == "panel":
-        area = float(g.area_mm2[i]) * 1e-6
-        w.quantities(el, "Qto_PlateBaseQuantities", {
-            "Width": ("length", g.thickness_mm[i]), "GrossArea": ("area", area), "NetArea": ("area", area),
-            "GrossVolume": ("volume", volume_m3), "NetVolume": ("volume", volume_m3),
-            "GrossWeight": ("weight", weight), "NetWeight": ("weight", weight)})
-        fab["Planarity_mm"] = float(g.planarity_mm[i])
-    else:
-        w.quantities(el, "Qto_MemberBaseQuantities", {
-            "Length": ("length", g.length_mm[i]), "GrossVolume": ("volume", volume_m3),
-            "NetVolume": ("volume", volume_m3), "GrossWeight": ("weight", weight),
-            "NetWeight": ("weight", weight)})
-        fab["Twist_mm" if g.kind == "beam" else "Planarity_mm"] = float(g.planarity_mm[i])
+    name, quantities, fab = figures(g, i, density, unit, spec)
+    w.quantities(el, name, quantities)
     w.props(el, PSET, fab)
 
 

@@ -63,12 +63,7 @@ def _skeleton(name: str, grade: str, spec):
     context = f.createIfcGeometricRepresentationContext(None, "Model", 3, 1.0e-5, origin, None)
     body = f.createIfcGeometricRepresentationSubContext(
         "Body", "Model", None, None, None, None, context, None, "MODEL_VIEW", None)
-    units = f.createIfcUnitAssignment([
-        f.createIfcSIUnit(None, "LENGTHUNIT", "MILLI", "METRE"),
-        f.createIfcSIUnit(None, "AREAUNIT", None, "SQUARE_METRE"),
-        f.createIfcSIUnit(None, "VOLUMEUNIT", None, "CUBIC_METRE"),
-        f.createIfcSIUnit(None, "MASSUNIT", "KILO", "GRAM"),
-        f.createIfcSIUnit(None, "PLANEANGLEUNIT", None, "RADIAN")])
+    units = _units(f)
     project = f.createIfcProject(guid(), None, name, "conical-fab model", None, None, None, [context], units)
     site = f.createIfcSite(guid(), None, "Site", None, None, f.createIfcLocalPlacement(None, origin), None, None,
                            "ELEMENT", None, None, None, None, None)
@@ -87,6 +82,16 @@ def _skeleton(name: str, grade: str, spec):
     layers = _glass_layers(f, spec)
     return f, {"body": body.id(), "origin": origin.id(), "wall_place": wall_place.id(), "wall": wall.id(),
                "layers": layers.id(), "steel": steel.id()}
+
+
+def _units(f) -> object:
+    """The model's ``IfcUnitAssignment``: mm, m2, m3, kg, rad."""
+    return f.createIfcUnitAssignment([
+        f.createIfcSIUnit(None, "LENGTHUNIT", "MILLI", "METRE"),
+        f.createIfcSIUnit(None, "AREAUNIT", None, "SQUARE_METRE"),
+        f.createIfcSIUnit(None, "VOLUMEUNIT", None, "CUBIC_METRE"),
+        f.createIfcSIUnit(None, "MASSUNIT", "KILO", "GRAM"),
+        f.createIfcSIUnit(None, "PLANEANGLEUNIT", None, "RADIAN")])
 
 
 def _glass_layers(f, spec) -> object:
