@@ -203,8 +203,8 @@ def _describe(w: _Writer, el, g, i: int, density: float, unit=None, spec=None) -
     compared here is how each writer puts them in the file)."""
     from fabricate.export.ifc import _describe as figures
 
-    name, quantities, fab = figures(g, i, density, unit, spec)
-    w.quantities(el, name, quantities)
+    quantities, fab = figures(g, i, density, unit, spec)
+    w.quantities(el, "Qto_MemberBaseQuantities", quantities)
     w.props(el, PSET, fab)
 
 

@@ -154,11 +154,18 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
             "elements": elements, "seconds": time.perf_counter() - t0}
 
 
-def _unit(kind: str, uid: str, description: str, solids: list, qto_name: str, quantities: dict, props: dict):
+def _unit(kind: str, uid: str, description: str, solids: list, quantities: dict, props: dict):
     from .ifc_text import Unit
 
     cls, predefined, object_type = CLASS[kind]
+    qto_name = "Qto_PlateBaseQuantities" if kind == "panel" else "Qto_MemberBaseQuantities"
     return Unit(kind, cls.upper(), predefined, object_type, uid, description, solids, qto_name, quantities, props)
+
+
+def _amounts(volume_m3: float, weight: float) -> dict:
+    """The volume and weight quantities of an element (gross = net: no openings)."""
+    return {"GrossVolume": ("volume", volume_m3), "NetVolume": ("volume", volume_m3),
+            "GrossWeight": ("weight", weight), "NetWeight": ("weight", weight)}
 
 
 def _glass_units(parts, index: dict) -> list:
@@ -188,11 +195,8 @@ def _glass_units(parts, index: dict) -> list:
             if spec.glass.type == "insulated":
                 fab["SpacerSetback_mm"] = float(spec.glass.edge_seal_mm)
             out.append(_unit("panel", uid, "glass unit " + spec.glass.short(), [it[0] for it in items],
-                             "Qto_PlateBaseQuantities", {
-                                 "Width": ("length", spec.glass.thickness_mm), "GrossArea": ("area", area),
-                                 "NetArea": ("area", area), "GrossVolume": ("volume", volume_m3),
-                                 "NetVolume": ("volume", volume_m3), "GrossWeight": ("weight", weight),
-                                 "NetWeight": ("weight", weight)}, fab))
+                             {"Width": ("length", spec.glass.thickness_mm), "GrossArea": ("area", area),
+                              "NetArea": ("area", area), **_amounts(volume_m3, weight)}, fab))
     return out
 
 
@@ -209,16 +213,15 @@ def _steel_units(parts, index: dict) -> list:
     out = []
     for (kind, uid), items in solids_of.items():
         g, i = items[0]
-        qto_name, quantities, fab = _describe(g, i, parts.spec.group_density(g),
-                                              items if len(items) > 1 else None, parts.spec)
-        out.append(_unit(kind, uid, kind, [(index[id(h)], k) for h, k in items], qto_name, quantities, fab))
+        quantities, fab = _describe(g, i, parts.spec.group_density(g), items if len(items) > 1 else None, parts.spec)
+        out.append(_unit(kind, uid, kind, [(index[id(h)], k) for h, k in items], quantities, fab))
     return out
 
 
-def _describe(g, i: int, density: float, unit=None, spec=None) -> tuple[str, dict, dict]:
-    """``(quantity set name, quantities, fabrication figures)`` of part ``i`` of group ``g``; ``unit``:
+def _describe(g, i: int, density: float, unit=None, spec=None) -> tuple[dict, dict]:
+    """``(quantities, fabrication figures)`` of beam or node part ``i`` of group ``g``; ``unit``:
     ``[(group, i)]`` of every solid of a unit of several (a beam's plates, a hub's tube and caps):
-    volumes and weights summed, the solids listed."""
+    volumes and weights summed, the solids listed.  (Glass units: :func:`_glass_units`.)"""
     from fabricate.cad.parts import unit_id
 
     volume_m3 = float(g.volume_mm3[i]) * 1e-9
@@ -232,18 +235,8 @@ def _describe(g, i: int, density: float, unit=None, spec=None) -> tuple[str, dic
         near = {n for h, k in unit for n in h.neighbours[k] if unit_id(n) != uid}
         fab.update(PartId=uid, Solids=" ".join(h.ids[k] for h, k in unit), Neighbours=" ".join(sorted(near)),
                    Residual_mm=max(float(h.residual_mm[k]) for h, k in unit))
-    if g.kind == "panel":
-        area = float(g.area_mm2[i]) * 1e-6
-        fab["Planarity_mm"] = float(g.planarity_mm[i])
-        return "Qto_PlateBaseQuantities", {
-            "Width": ("length", g.thickness_mm[i]), "GrossArea": ("area", area), "NetArea": ("area", area),
-            "GrossVolume": ("volume", volume_m3), "NetVolume": ("volume", volume_m3),
-            "GrossWeight": ("weight", weight), "NetWeight": ("weight", weight)}, fab
     fab["Twist_mm" if g.kind == "beam" else "Planarity_mm"] = float(g.planarity_mm[i])
-    return "Qto_MemberBaseQuantities", {
-        "Length": ("length", g.length_mm[i]), "GrossVolume": ("volume", volume_m3),
-        "NetVolume": ("volume", volume_m3), "GrossWeight": ("weight", weight),
-        "NetWeight": ("weight", weight)}, fab
+    return {"Length": ("length", g.length_mm[i]), **_amounts(volume_m3, weight)}, fab
 
 
 def _faces(group) -> tuple:

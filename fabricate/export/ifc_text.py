@@ -149,6 +149,18 @@ def _value(v) -> str:
     return f"IFCREAL({real(v)})"
 
 
+def _defined_by(out: list, nid: int, el: int, guids, cls: str, name: str, blanks: str, members: list[str]) -> int:
+    """Append ``members`` (entity texts) from id ``nid`` on, the set of class ``cls`` and ``name`` that
+    holds them (``blanks``: its unset attributes between the name and the members) and the
+    ``IfcRelDefinesByProperties`` tying it to element ``el``; returns the next free id."""
+    out.extend(f"#{nid + k}={text};\n" for k, text in enumerate(members))
+    s = nid + len(members)
+    out.append(f"#{s}={cls}('{next(guids)}',$,{string(name)},{blanks}("
+               + ",".join(f"#{k}" for k in range(nid, s)) + "));\n"
+               f"#{s + 1}=IFCRELDEFINESBYPROPERTIES('{next(guids)}',$,$,$,(#{el}),#{s});\n")
+    return s + 2
+
+
 def write_body(fh, groups, faces, units: list[Unit], refs: dict, first_id: int, pset: str) -> int:
     """Write every solid of ``groups`` (faces of each: ``faces``), then every unit, then the wall's
     relations, as Part 21 entities from id ``first_id`` on.  ``refs``: ids of the skeleton's
@@ -176,23 +188,10 @@ def write_body(fh, groups, faces, units: list[Unit], refs: dict, first_id: int, 
                    f"#{nid + 2}=IFCPRODUCTDEFINITIONSHAPE($,$,(#{nid}));\n"
                    f"#{el}={u.cls}('{next(guids)}',$,{name},{string(u.description)},{ot},#{nid + 1},"
                    f"#{nid + 2},{name},.{u.predefined}.);\n")
-        nid = el + 1
-        q0 = nid
-        for key, (kind, v) in u.quantities.items():
-            out.append(f"#{nid}={QUANTITY[kind]}({string(key)},$,$,{real(v)},$);\n")
-            nid += 1
-        out.append(f"#{nid}=IFCELEMENTQUANTITY('{next(guids)}',$,{string(u.qto_name)},$,$,("
-                   + ",".join(f"#{k}" for k in range(q0, nid)) + "));\n"
-                   f"#{nid + 1}=IFCRELDEFINESBYPROPERTIES('{next(guids)}',$,$,$,(#{el}),#{nid});\n")
-        nid += 2
-        p0 = nid
-        for key, v in u.props.items():
-            out.append(f"#{nid}=IFCPROPERTYSINGLEVALUE({string(key)},$,{_value(v)},$);\n")
-            nid += 1
-        out.append(f"#{nid}=IFCPROPERTYSET('{next(guids)}',$,{string(pset)},$,("
-                   + ",".join(f"#{k}" for k in range(p0, nid)) + "));\n"
-                   f"#{nid + 1}=IFCRELDEFINESBYPROPERTIES('{next(guids)}',$,$,$,(#{el}),#{nid});\n")
-        nid += 2
+        nid = _defined_by(out, el + 1, el, guids, "IFCELEMENTQUANTITY", u.qto_name, "$,$,",
+                          [f"{QUANTITY[kind]}({string(key)},$,$,{real(v)},$)" for key, (kind, v) in u.quantities.items()])
+        nid = _defined_by(out, nid, el, guids, "IFCPROPERTYSET", pset, "$,",
+                          [f"IFCPROPERTYSINGLEVALUE({string(key)},$,{_value(v)},$)" for key, v in u.props.items()])
         if len(out) > 20 * CHUNK:
             fh.write("".join(out))
             out.clear()
