@@ -7,7 +7,7 @@ triangles over its own vertices, so manifold3d builds one part of each group
 genus of the group's solids (0, a hub tube 1), which depend on the triangles
 alone; every vertex of every part must be finite (the one thing about a vertex
 that manifold3d's status tells), and the volume of every part's triangles
-(numpy determinants) is summed against the analytic volume.  Coordinates are taken relative to
+(:func:`fabricate.cad.geometry.volumes`, of the same fan triangles) is summed against the analytic volume.  Coordinates are taken relative to
 ``Parts.local_origin()`` (zero unless the model is far from the origin),
 because STL stores float32.  The check is made once per parts object and origin
 (:data:`_CHECKED`): the STL and the 3MF writer check the same triangles.
@@ -20,7 +20,7 @@ import numpy as np
 
 from optimize.errors import ExportError
 
-from ..cad.geometry import fan_triangles
+from ..cad.geometry import fan_triangles, volumes
 
 
 def group_triangles(group, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -54,7 +54,7 @@ def validate_manifold(parts, origin: np.ndarray | None = None) -> dict:
     and genus of the group's first part are every part's (its vertices finite,
     checked for every part).  Facts: ``status`` ("NoError"), ``components``
     (= parts), ``genus`` of all the solids (1 - parts + their holes),
-    ``volume_mm3`` (the triangles' determinants) and ``volume_rel_error`` against
+    ``volume_mm3`` (the triangles' determinants, about each part's first vertex) and ``volume_rel_error`` against
     the analytic sum.
     """
     origin = parts.local_origin() if origin is None else origin
@@ -90,19 +90,9 @@ def _validate(parts, origin: np.ndarray) -> dict:
         if m.genus() != holes:  # each part one closed surface of its genus
             raise ExportError(f"{g.kind} group: manifold3d genus {m.genus()} for {g.ids[0]} (its triangles are every "
                               f"part's), expected {holes} (every part a closed genus-{holes} surface)")
-        total += float(triangle_volumes(X, T).sum())
+        total += float(volumes(X, g.faces).sum())    # the same fan triangles as T
         analytic += float(g.volume_mm3.sum())
         comps += len(g)
         genus += holes * len(g) - len(g)  # genus of a union of c closed surfaces is 1 - c + their genera
     return {"status": "NoError", "components": comps, "genus": genus + 1, "volume_mm3": total,
             "volume_rel_error": abs(total - analytic) / max(analytic, 1e-300)}
-
-
-def triangle_volumes(X: np.ndarray, T: np.ndarray, chunk: int = 4096) -> np.ndarray:
-    """``(p,)`` signed volumes of the closed triangle meshes ``X (p, nv, 3)`` sharing the outward
-    triangles ``T (t, 3)`` (sum of ``det(a, b, c) / 6``), a chunk of parts at a time."""
-    out = np.empty(len(X))
-    for lo in range(0, len(X), chunk):
-        A, B, C = (X[lo:lo + chunk, T[:, k]] for k in range(3))             # (q, t, 3) each
-        out[lo:lo + chunk] = np.einsum("qtk,qtk->q", A, np.cross(B, C)) / 6.0
-    return out

@@ -28,12 +28,9 @@ KIND_LAYER = {"panel": "glass", "beam": "steel", "node": "nodes"}
 
 def _mesh(rh, V: np.ndarray, faces) -> object:
     """A rhino3dm Mesh of polygons ``faces`` over ``V (n, 3)`` (double precision vertices); ``faces``
-    as rows (``-1`` padding), as :func:`_mesh_faces` made them, or a :func:`_template` mesh of them
-    made once for many parts of one shape (copied, its vertices set: its faces are not added again)."""
-    if isinstance(faces, _Template):
-        m = faces.mesh.Duplicate()
-    else:
-        m = _template(rh, len(V), faces).mesh
+    as rows (``-1`` padding), or a :func:`_template` mesh of them made once for the parts of a group
+    (copied and its vertices set: its faces are not added again)."""
+    m = faces.Duplicate() if isinstance(faces, rh.Mesh) else _template(rh, len(V), faces)
     point, set_point = rh.Point3d, m.Vertices.SetPoint3dAt
     for j, (x, y, z) in enumerate(V.tolist()):  # Vertices.Add(x, y, z) would round to float32
         set_point(j, point(x, y, z))
@@ -42,33 +39,22 @@ def _mesh(rh, V: np.ndarray, faces) -> object:
     return m
 
 
-class _Template:
-    """A rhino3dm Mesh with its faces and ``n`` double-precision vertices (not yet placed): the parts of
-    one group share it (:func:`_mesh` copies it)."""
-
-    def __init__(self, mesh):
-        self.mesh = mesh
-
-
-def _template(rh, n: int, faces) -> _Template:
-    """:class:`_Template` of ``n`` vertices and the polygons ``faces`` (rows or :func:`_mesh_faces`)."""
+def _template(rh, n: int, faces) -> object:
+    """A rhino3dm Mesh of ``n`` double-precision vertices (not yet placed) and the polygons ``faces``
+    (rows, ``-1`` padding)."""
     m = rh.Mesh()
     m.Vertices.UseDoublePrecisionVertices = True
     m.Vertices.SetCount(n)
     add = m.Faces.AddFace
-    for face in (faces if isinstance(faces, _Faces) else _mesh_faces(faces)):
+    for face in _mesh_faces(faces):
         add(*face)
-    return _Template(m)
+    return m
 
 
-class _Faces(list):
-    """Triangles and quads (tuples of vertex indices) of :func:`_mesh_faces`."""
-
-
-def _mesh_faces(faces) -> _Faces:
+def _mesh_faces(faces) -> list[tuple[int, ...]]:
     """Polygons as rhino3dm faces: triangles and quads as they are, larger ones as fans (the faces are
     planar and convex)."""
-    out = _Faces()
+    out = []
     for face in faces:
         face = [int(i) for i in face if i >= 0]
         if len(face) in (3, 4):
