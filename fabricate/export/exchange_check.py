@@ -15,7 +15,6 @@
 """
 from __future__ import annotations
 
-import itertools
 from pathlib import Path
 
 import numpy as np
@@ -55,15 +54,16 @@ GEOMETRY = FACES + ("IfcPolygonalFaceSet", "IfcCartesianPointList3D")
 
 def _point_list_errors(pl) -> tuple[np.ndarray | None, list[str]]:
     """``(P (n, 3) or None, rule errors)`` of an ``IfcCartesianPointList3D``: ``CoordList`` a list of
-    one or more lists of exactly 3 ``IfcLengthMeasure`` (reals: an integer is refused, as by
-    ``ifcopenshell.validate``), finite."""
+    one or more lists of exactly 3 ``IfcLengthMeasure`` (reals; ifcopenshell reads an integer there as
+    a real), finite."""
     cl = pl.CoordList
     what = f"#{pl.id()} IfcCartesianPointList3D CoordList"
-    if not isinstance(cl, tuple) or not cl or not all(isinstance(q, tuple) and len(q) == 3 for q in cl):
+    try:
+        P = np.asarray(cl, dtype=float)
+    except (TypeError, ValueError):
+        P = None
+    if P is None or P.ndim != 2 or P.shape[1:] != (3,) or not len(P):
         return None, [f"{what}: expected a list of 1 or more lists of 3 reals"]
-    if set(map(type, itertools.chain.from_iterable(cl))) != {float}:
-        return None, [f"{what}: a coordinate is not a real (IfcLengthMeasure)"]
-    P = np.asarray(cl, dtype=float)
     if not np.isfinite(P).all():
         return None, [f"{what}: a coordinate is not a finite number"]
     return P, []
@@ -98,7 +98,7 @@ def read_face_sets(f) -> tuple[dict[str, float], list[str]]:
             errors += bad
     for s in f.by_type("IfcPolygonalFaceSet"):
         coords, faces, pn = s.Coordinates, s.Faces, s.PnIndex
-        P = points.get(coords.id()) if coords is not None and coords.is_a() == "IfcCartesianPointList3D" else None
+        P = points.get(coords.id()) if coords is not None else None      # None: not a valid point list
         ok = P is not None
         if coords is None or coords.id() not in points:
             errors.append(f"#{s.id()} IfcPolygonalFaceSet Coordinates: expected an IfcCartesianPointList3D")
