@@ -11,9 +11,10 @@ Each cut file is read by the independent DXF text reader (:mod:`fabricate.export
 - the sheets: every outline lies on one sheet, its margin clear, and the boxes around two outlines
   on a sheet stay at least the kerf apart (the nesting places each part in its stock rectangle, so
   boxes apart means parts apart);
-- nothing left out: every row of a material and thickness that has a cut file is in it, unless its
-  stock rectangle with the margins does not fit the sheet (a part larger than the sheet is listed,
-  not nested: :func:`fabricate.export.cutfiles.nest_cut_files`).
+- nothing left out: every material and thickness has its cut file, and every row of it is in it,
+  unless its stock rectangle with the margins does not fit the sheet (a part larger than the sheet
+  is listed, not nested: :func:`fabricate.export.cutfiles.nest_cut_files`; a file of no sheet at all,
+  every part too large, states no sheet size to hold its rows to).
 """
 from __future__ import annotations
 
@@ -65,7 +66,7 @@ def check_cut_files(folder, bom, strip: dict[str, np.ndarray], written: dict,
     failures: list[dict] = [{"file": n, "error": "the run wrote it; it is missing"} for n in gone]
     seen: dict[str, str] = {}
     sheets = outlines_n = 0
-    covered: dict[tuple[str, float], tuple[float, float, float]] = {}
+    covered: dict[tuple[str, float], tuple[float, float, float] | None] = {}
     for path in files:
         m = CUT_FILE.fullmatch(path.name)
         key = (m.group(1), round(float(m.group(2)), 3))
@@ -76,13 +77,14 @@ def check_cut_files(folder, bom, strip: dict[str, np.ndarray], written: dict,
             continue
         outlines_n += len(outlines)
         sheets += len(facts["sheets"])
-        bad = _file_errors(facts)
+        bad = _file_errors(facts, len(outlines))
         failures += [{"file": path.name, "error": e} for e in bad]
         labels = [LABEL.search(t) for t in facts["sheet_labels"]]
+        covered[key] = None                                  # written; its sheet size from its labels
         if bad or not labels or not all(labels):
-            if not bad:
+            if labels and not bad:
                 failures.append({"file": path.name, "error": "a sheet label without its size, margin and kerf"})
-            continue
+            continue                                         # no sheets (every part too large): nothing nested
         W, H, margin, kerf = (float(x) for x in labels[0].groups())
         covered[key] = (W, H, margin)
         mine = rows.get(key, {})
@@ -96,7 +98,14 @@ def check_cut_files(folder, bom, strip: dict[str, np.ndarray], written: dict,
         failures += [dict(f, file=path.name) for f in _shape_errors(outlines, strip, tol.file_edge_mm)]
         failures += [dict(f, file=path.name) for f in _sheet_errors(outlines, facts["sheets"], margin, kerf)]
     for key, mine in rows.items():
-        W, H, margin = covered.get(key, (0.0, 0.0, 0.0))
+        if key not in covered:
+            if files:   # the writer writes one file per material and thickness, empty when nothing fits
+                failures.append({"file": f"cut_{key[0]}_{key[1]:g}mm.dxf", "error": f"no cut file for the "
+                                 f"{len(mine)} {key[0]} parts {key[1]:g} mm thick"})
+            continue
+        if covered[key] is None:   # a file without sheets: its parts' sizes against the sheet are not in it
+            continue
+        W, H, margin = covered[key]
         for pid, r in mine.items():
             w, h = float(r["rect_w_mm"]) + 2 * margin, float(r["rect_h_mm"]) + 2 * margin
             fits = (w <= W - FIT and h <= H - FIT) or (h <= W - FIT and w <= H - FIT)
@@ -107,13 +116,13 @@ def check_cut_files(folder, bom, strip: dict[str, np.ndarray], written: dict,
             "failed": len(failures), "failures": failures[:20], "seconds": round(time.perf_counter() - t0, 3)}
 
 
-def _file_errors(facts: dict) -> list[str]:
+def _file_errors(facts: dict, outlines: int) -> list[str]:
     out = list(facts["lint"])
     if facts["units"] != 4:
         out.append(f"$INSUNITS {facts['units']}, expected 4 (mm)")
-    if not len(facts["sheets"]) or len(facts["sheet_labels"]) != len(facts["sheets"]):
-        out.append(f"{len(facts['sheets'])} sheet frames and {len(facts['sheet_labels'])} sheet labels: "
-                   "expected one label per frame, one frame or more")
+    if (outlines and not len(facts["sheets"])) or len(facts["sheet_labels"]) != len(facts["sheets"]):
+        out.append(f"{len(facts['sheets'])} sheet frames and {len(facts['sheet_labels'])} sheet labels for "
+                   f"{outlines} parts: expected one label per frame, one frame or more when there are parts")
     return out
 
 

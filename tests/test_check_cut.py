@@ -122,3 +122,18 @@ def test_a_cut_file_the_run_wrote_and_that_is_gone_fails(run_dir, tmp_path):
     (d / "cut_steel_60mm.dxf").unlink()
     errors = _errors(_check(d))
     assert "the run wrote it; it is missing" in errors
+
+
+def test_a_material_every_part_of_which_is_too_large_has_an_empty_file_and_passes(tmp_path):
+    """A glass sheet smaller than every panel: the glass file holds no sheet and no part, and passes;
+    without it, the check says the glass has no cut file."""
+    parts = build_parts(dome_structure(n_around=6, k=3), PartSpec(glass_thickness=8.0))
+    for name, fn in (("bom.csv", write_bom), ("flat.json", write_flat), ("outlines.dxf", write_dxf)):
+        fn(parts, tmp_path / name)
+    nesting = NestingSection().model_dump()
+    nesting["glass"]["sheet_mm"] = (500.0, 400.0)
+    facts = write_cut_files(parts, tmp_path, nesting)
+    assert len(facts["cut_glass_8mm.dxf"]["oversize"]) == len(parts.panels)
+    assert _check(tmp_path)["pass"] is True
+    (tmp_path / "cut_glass_8mm.dxf").unlink()
+    assert "no cut file for the 12 glass parts 8 mm thick" in _errors(_check(tmp_path))
