@@ -126,6 +126,14 @@ def _file_errors(facts: dict, outlines: int) -> list[str]:
     return out
 
 
+def _by_corners(outlines: dict) -> list[tuple[list[str], np.ndarray]]:
+    """The outlines stacked by their number of corners: ``[(ids, (n, k, 2))]``."""
+    by_k: dict[int, list[str]] = {}
+    for pid, Q in outlines.items():
+        by_k.setdefault(len(Q), []).append(pid)
+    return [(ids, np.stack([outlines[p] for p in ids])) for ids in by_k.values()]
+
+
 def _turns(Q: np.ndarray) -> list[np.ndarray]:
     """``Q (n, k, 2)`` moved to the origin as it is and turned a quarter either way."""
     out = []
@@ -136,15 +144,9 @@ def _turns(Q: np.ndarray) -> list[np.ndarray]:
 
 def _shape_errors(outlines: dict, strip: dict, tol_mm: float) -> list[dict]:
     """Outlines whose shape is not their ``outlines.dxf`` outline's (moved, turned a quarter or not)."""
-    out = []
-    by_k: dict[int, list[str]] = {}
-    for pid, Q in outlines.items():
-        if pid in strip and len(strip[pid]) == len(Q):
-            by_k.setdefault(len(Q), []).append(pid)
-        elif pid in strip:
-            out.append({"id": pid, "error": f"{len(Q)} corners, {len(strip[pid])} in outlines.dxf"})
-    for ids in by_k.values():
-        A = np.stack([outlines[p] for p in ids])
+    out = [{"id": pid, "error": f"{len(Q)} corners, {len(strip[pid])} in outlines.dxf"}
+           for pid, Q in outlines.items() if pid in strip and len(strip[pid]) != len(Q)]
+    for ids, A in _by_corners({p: Q for p, Q in outlines.items() if p in strip and len(strip[p]) == len(Q)}):
         B = np.stack([strip[p] for p in ids])
         A0 = A - A.min(axis=1, keepdims=True)
         err = np.min([np.abs(A0 - T).max(axis=(1, 2)) for T in _turns(B)], axis=0)
@@ -158,8 +160,11 @@ def _sheet_errors(outlines: dict, frames: np.ndarray, margin: float, kerf: float
     """Outlines off their sheet or inside its margin, and pairs on a sheet closer than the kerf."""
     if not outlines:
         return []
-    ids = list(outlines)
-    box = np.array([np.concatenate([Q.min(axis=0), Q.max(axis=0)]) for Q in outlines.values()])   # (n, 4)
+    ids, boxes = [], []
+    for group, A in _by_corners(outlines):
+        ids += group
+        boxes.append(np.concatenate([A.min(axis=1), A.max(axis=1)], axis=1))
+    box = np.concatenate(boxes)                                                                    # (n, 4)
     lo, hi = frames.min(axis=1), frames.max(axis=1)                                                # (s, 2)
     inside = ((box[:, None, :2] >= lo[None] + margin - SLACK).all(axis=2)
               & (box[:, None, 2:] <= hi[None] - margin + SLACK).all(axis=2))                       # (n, s)
