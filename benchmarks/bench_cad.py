@@ -235,6 +235,18 @@ def _spec_overrides(variant: str) -> dict:
     return dict(SECTIONS[variant], **(GLASS_INSULATED if variant != "plate" else {}))
 
 
+def spec_keywords(variant: str) -> dict:
+    """``variant``'s overrides as ``PartSpec`` keywords: ``"parts.beam.section"`` -> ``{"beam": {"section": ...}}``."""
+    spec: dict = {}
+    for key, value in _spec_overrides(variant).items():
+        path = key.split(".")[1:]
+        d = spec
+        for k in path[:-1]:
+            d = d.setdefault(k, {})
+        d[path[-1]] = value
+    return spec
+
+
 def sections_railway(variant: str, out: Path) -> dict:
     """configs/railway_station.yaml with ``variant``'s beams and nodes: the run's CAD and exports stage
     times (structure check, pictures and the file check off), then the full file check on its files."""
@@ -267,13 +279,7 @@ def sections_dome(variant: str, panels: int, out: Path) -> dict:
                                   write_steel_cut_list, write_stl, write_svg)
     from fabricate.export.nc1 import write_nc1
 
-    spec: dict = {}
-    for key, value in _spec_overrides(variant).items():  # "parts.beam.section" -> {"beam": {"section": ...}}
-        path = key.split(".")[1:]
-        d = spec
-        for k in path[:-1]:
-            d = d.setdefault(k, {})
-        d[path[-1]] = value
+    spec = spec_keywords(variant)
     s = structure(panels)
     t0, c0 = time.perf_counter(), time.process_time()
     parts = build_parts(s, PartSpec(beam_width=80.0, **spec))

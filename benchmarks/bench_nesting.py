@@ -33,15 +33,9 @@ def main(argv=None) -> None:
     from fabricate.cad import PartSpec, build_parts
     from fabricate.export import nesting
     from fabricate.export.cutfiles import nest_cut_files
+    from optimize import kernels
 
-    spec: dict = {}
-    for key, value in bench_cad._spec_overrides("rhs").items():  # "parts.beam.section" -> {"beam": {...}}
-        path = key.split(".")[1:]
-        d = spec
-        for k in path[:-1]:
-            d = d.setdefault(k, {})
-        d[path[-1]] = value
-    parts = build_parts(bench_cad.structure(args.panels), PartSpec(beam_width=80.0, **spec))
+    parts = build_parts(bench_cad.structure(args.panels), PartSpec(beam_width=80.0, **bench_cad.spec_keywords("rhs")))
     t = time.perf_counter()
     kernel = nesting._kernel()
     if kernel is not None:
@@ -51,7 +45,7 @@ def main(argv=None) -> None:
     best: dict = {}
     layouts: dict = {}
     for enabled in (True, False) * args.repeat:
-        nesting.ENABLED = enabled
+        kernels.ENABLED = enabled                 # the compiled kernels' switch (CONICAL_FAB_NUMBA)
         nesting._LAYOUTS.clear()
         t = time.perf_counter()
         strip = nesting.layout(parts)

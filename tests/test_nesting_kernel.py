@@ -88,7 +88,9 @@ def test_without_numba_pack_takes_the_python_path(monkeypatch):
     sheet, x, y, pw = nesting.pack(w, h, 1000, 800)
     assert (sheet >= 0).all()
     monkeypatch.setattr(nesting, "_KERNEL", None)  # forget the failed import afterwards
-    monkeypatch.setattr(nesting, "ENABLED", False)
+    from optimize import kernels
+
+    monkeypatch.setattr(kernels, "ENABLED", False)                # the optimizer's switch, CONICAL_FAB_NUMBA
     assert nesting._kernel() is None
 
 

@@ -39,7 +39,6 @@ rectpack takes seconds on ten thousand plates.  Its arrays are read-only.
 """
 from __future__ import annotations
 
-import os
 import weakref
 from dataclasses import dataclass
 
@@ -51,8 +50,6 @@ FAST_ABOVE = 4000
 KERNEL_FROM = 2000
 """From this many rectangles on, :func:`pack` runs the compiled kernel (when numba is installed): below,
 importing numba and loading the kernel (about 0.5 s) would cost more than it saves."""
-ENABLED = os.environ.get("CONICAL_FAB_NUMBA", "1") != "0"
-"""False (or ``CONICAL_FAB_NUMBA=0``): :func:`pack` never runs the compiled kernel."""
 _KERNEL = None  # fabricate.export._nest_kernel once imported, False when numba is missing
 _LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """``{parts: {arguments: Layout}}``: the layouts made of each (immutable) parts object, while it lives."""
@@ -287,9 +284,12 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
 
 def _kernel():
     """:mod:`fabricate.export._nest_kernel` (numba, imported on first use), or None without numba or when
-    switched off (:data:`ENABLED`)."""
+    the compiled kernels are switched off (``CONICAL_FAB_NUMBA=0``, :data:`optimize.kernels.ENABLED`:
+    one switch for the optimizer's kernels and this one)."""
     global _KERNEL
-    if not ENABLED:
+    from optimize import kernels
+
+    if not kernels.ENABLED:
         return None
     if _KERNEL is None:
         try:
