@@ -84,8 +84,18 @@ def test_one_part_per_group_checks_what_every_part_would():
         np.testing.assert_allclose(vol, g.volume_mm3, rtol=1e-10)
 
 
+def _writers():
+    from fabricate.export import write_step
+    from fabricate.export.ifc import write_ifc
+    from fabricate.export.rhino import write_3dm
+
+    return {"validate": lambda parts, out: meshes.validate_manifold(parts), "stl": write_stl, "3mf": write_3mf,
+            "step": write_step, "ifc": write_ifc, "3dm": write_3dm}
+
+
+@pytest.mark.parametrize("writer", ["validate", "stl", "3mf", "step", "ifc", "3dm"])
 @pytest.mark.parametrize("value", [np.nan, np.inf])
-def test_a_part_with_a_vertex_that_is_not_finite_is_named(value):
+def test_a_part_with_a_vertex_that_is_not_finite_is_named_and_no_file_is_written(value, writer, tmp_path):
     import dataclasses
 
     parts = rhs_parts()
@@ -94,8 +104,10 @@ def test_a_part_with_a_vertex_that_is_not_finite_is_named(value):
     V[len(g) - 1, 2, 0] = value
     bad = type(parts)(groups=parts.groups[:1] + (dataclasses.replace(g, vertices=V),) + parts.groups[2:],
                       spec=parts.spec, edge_mode=parts.edge_mode)
+    out = tmp_path / f"model.{writer}"
     with pytest.raises(ExportError, match=f"{g.ids[-1]}: a vertex is not a finite number"):
-        meshes.validate_manifold(bad)
+        _writers()[writer](bad, out)
+    assert list(tmp_path.iterdir()) == []
 
 
 def _open_group(g):

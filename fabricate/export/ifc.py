@@ -44,6 +44,8 @@ from pathlib import Path
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
+from .meshes import require_finite
+
 PSET = "Pset_ConicalFabFabrication"
 CLASS = {"panel": ("IfcPlate", "CURTAIN_PANEL", None),
          "beam": ("IfcMember", "MULLION", None),
@@ -130,6 +132,7 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
     from .ifc_text import write_body
 
     t0 = time.perf_counter()
+    require_finite(parts)
     grade = grade or getattr(parts.spec, "steel_grade", "S355")
     path = Path(path)
     try:

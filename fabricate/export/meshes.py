@@ -68,14 +68,21 @@ def validate_manifold(parts, origin: np.ndarray | None = None) -> dict:
     return dict(known[key])
 
 
-def _validate(parts, origin: np.ndarray) -> dict:
-    """:func:`validate_manifold` without the cache: manifold3d on the first part of each group (the
-    others have its triangles), every vertex finite, the triangles' volumes in numpy."""
-    for g in parts.groups:    # first: a bad vertex spoils the origin, and so every group after it
+def require_finite(parts) -> None:
+    """ExportError naming the first part with a vertex that is not a finite number (every writer calls it
+    before it formats a coordinate: ``nan`` or ``inf`` in a STEP, IFC or 3dm file makes a file that no
+    reader takes, or worse, one that reads)."""
+    for g in parts.groups:
         finite = np.isfinite(g.vertices).all(axis=(1, 2))
         if not finite.all():
             i = int(np.argmin(finite))
             raise ExportError(f"{g.ids[i]}: a vertex is not a finite number; expected a closed solid of finite points")
+
+
+def _validate(parts, origin: np.ndarray) -> dict:
+    """:func:`validate_manifold` without the cache: manifold3d on the first part of each group (the
+    others have its triangles), every vertex finite, the triangles' volumes in numpy."""
+    require_finite(parts)    # first: a bad vertex spoils the origin, and so every group after it
     total, analytic, comps, genus = 0.0, 0.0, 0, 0
     for g in parts.groups:
         if not len(g):

@@ -21,6 +21,8 @@ import numpy as np
 from optimize.atomic import atomic_path
 from optimize.errors import ExportError
 
+from .meshes import require_finite
+
 LAYERS = (("glass", (140, 199, 230)), ("steel", (115, 120, 128)), ("nodes", (204, 115, 38)),
           ("design mesh", (60, 60, 60)), ("offset layers", (150, 150, 150)), ("node axes", (200, 40, 40)))
 KIND_LAYER = {"panel": "glass", "beam": "steel", "node": "nodes"}
@@ -79,6 +81,7 @@ def write_3dm(parts, path, *, structure=None, mesh=None) -> dict:
     import rhino3dm as rh
 
     t0 = time.perf_counter()
+    require_finite(parts)
     path = Path(path)
     mesh = mesh if mesh is not None else getattr(parts, "mesh", None)
     model = rh.File3dm()

@@ -32,6 +32,7 @@ from optimize.errors import ExportError
 
 from ..cad.parts import COLOURS, KINDS
 from .brep import edge_table
+from .meshes import require_finite
 
 REAL = "%#.15G"
 PREFIX, NAME, INDEX = "\x00", "\x01", "\x02"  # stand-ins in a template: a part's id prefix, its name, its index
@@ -239,6 +240,7 @@ def write_step(parts, path, *, engine: str = "direct", name: str = "model", pcur
     path = Path(path)
     if schema not in SCHEMAS:
         raise ExportError(f"{path.name}: STEP schema {schema!r}: expected one of {', '.join(SCHEMAS)}")
+    require_finite(parts)
     if engine == "occ":
         from .step_occ import write_step_occ
 
