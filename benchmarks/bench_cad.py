@@ -16,13 +16,16 @@ caches), one after the other.  Prints a JSON line per side and the ratio.
     python benchmarks/bench_cad.py --handoff     # also the CAD stage with the hand-off files (issue 18)
     python benchmarks/bench_cad.py --sections    # plate beams against RHS beams on tube hubs (issue 18)
     python benchmarks/bench_cad.py --sections --repeat 3   # three times over, and the medians
+    python benchmarks/bench_cad.py --sections --node-sides 6   # the RHS side's hubs as hexagons
 
 ``--sections`` (issue 18 item 1): for the railway station (the run's CAD and exports stages) and the
 dome of ``--panels`` panels (build_parts and every fabrication writer), in one run: today's plate
 beams with mitred ends against RHS beams welded from six plates on tube hubs with two cap plates
 (goal: within 3x of plate-only), and the full file check of the RHS files against their export
 (goal: not longer); the new side also has insulated glass (``GLASS_INSULATED``).  For the dome the
-CPU times of the same steps are printed too (the railway's are the pipeline's wall times only).
+CPU times of the same steps are printed too (the railway's are the pipeline's wall times only), and
+the CAD + export's user and system CPU apart (the system's share is mostly creating files: on a
+shared VM its cost per file moves tenfold from one run to the next).
 
 ``--check`` (issue 14): for the railway station (configs/railway_station.yaml,
 run with the check off) and the dome of ``--panels`` panels, one child process
