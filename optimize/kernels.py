@@ -64,6 +64,25 @@ def get():
     return _KERNELS or None
 
 
+_LOADED: dict = {}  # module name -> the module, or False when it did not import (no numba)
+
+
+def load(module: str):
+    """Another compiled kernel module (``fabricate.export._nest_kernel`` ...), imported on first use, or None
+    without numba or when the kernels are switched off (:data:`ENABLED`, ``CONICAL_FAB_NUMBA=0``: one switch
+    for the optimizer's kernels and every other)."""
+    if not ENABLED:
+        return None
+    if module not in _LOADED:
+        import importlib
+
+        try:
+            _LOADED[module] = importlib.import_module(module)
+        except ImportError:
+            _LOADED[module] = False
+    return _LOADED[module] or None
+
+
 def matvec(M, x: np.ndarray) -> np.ndarray:
     """``M @ x`` for a CSR matrix ``M (r, k)`` and ``x (k,)`` float: compiled when the kernels
     exist (SciPy's call overhead is most of the cost on the small matrices of an iteration)."""

@@ -77,8 +77,9 @@ def test_kernel_lays_out_a_small_dome_as_rectpack_does(monkeypatch):
 
 def test_without_numba_pack_takes_the_python_path(monkeypatch):
     import fabricate.export
+    from optimize import kernels
 
-    monkeypatch.setattr(nesting, "_KERNEL", None)
+    monkeypatch.setattr(kernels, "_LOADED", {})
     monkeypatch.setitem(sys.modules, "numba", None)  # import numba raises ImportError
     monkeypatch.delitem(sys.modules, "fabricate.export._nest_kernel", raising=False)
     monkeypatch.delattr(fabricate.export, "_nest_kernel", raising=False)
@@ -87,9 +88,7 @@ def test_without_numba_pack_takes_the_python_path(monkeypatch):
     w, h = _random(2, 200)
     sheet, x, y, pw = nesting.pack(w, h, 1000, 800)
     assert (sheet >= 0).all()
-    monkeypatch.setattr(nesting, "_KERNEL", None)  # forget the failed import afterwards
-    from optimize import kernels
-
+    monkeypatch.setattr(kernels, "_LOADED", {})  # forget the failed import afterwards
     monkeypatch.setattr(kernels, "ENABLED", False)                # the optimizer's switch, CONICAL_FAB_NUMBA
     assert nesting._kernel() is None
 

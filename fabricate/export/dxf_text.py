@@ -27,13 +27,29 @@ APPID = "CONICAL_FAB"
 
 
 CHUNK = 1 << 22
+KERNEL_FROM_BYTES = 4 << 20
+"""From this file size on the lines are split and the group codes read by the compiled kernels
+(:mod:`fabricate.export._dxf_kernel`, when numba is installed): below, loading them costs more than
+they save."""
 
 
-def _codes(buf: np.ndarray, data: bytes, cs: np.ndarray, ce: np.ndarray, path) -> np.ndarray:
+def _kernel(n_bytes: int):
+    """The compiled kernels for a file of ``n_bytes``, or None (:func:`optimize.kernels.load`)."""
+    from optimize import kernels
+
+    return kernels.load("fabricate.export._dxf_kernel") if n_bytes >= KERNEL_FROM_BYTES else None
+
+
+def _codes(buf: np.ndarray, data: bytes, cs: np.ndarray, ce: np.ndarray, path, kernel=None) -> np.ndarray:
     """``(n,)`` group codes of the code lines ``data[cs:ce]``: up to 8 characters, spaces then digits,
-    read eight bytes at a time; other lines (a sign, more characters) by ``np.fromstring``."""
+    read eight bytes at a time (or by ``kernel``, :mod:`fabricate.export._dxf_kernel`); other lines (a
+    sign, more characters) by ``np.fromstring``."""
     L = ce - cs
-    if len(cs) and (L >= 1).all() and (L <= 8).all():
+    if kernel is not None:
+        codes, bad = kernel.group_codes(buf, cs, ce)
+        if bad < 0:
+            return codes
+    elif len(cs) and (L >= 1).all() and (L <= 8).all():
         words = np.ndarray(shape=(len(buf) - 8,), dtype="<u8", buffer=data, strides=(1,))  # unaligned
         W = words[cs].view(np.uint8).reshape(-1, 8)                          # (n, 8) the line's bytes
         inside = np.arange(8)[None, :] < L[:, None]
@@ -76,8 +92,12 @@ def read_outlines_text(path, *, sheets: bool = False) -> tuple[dict[str, np.ndar
     n_data = len(data)
     data += b"\n" + b" " * 16                      # the last line ends; words never run off the end
     buf = np.frombuffer(data, np.uint8)
-    ends = np.concatenate([np.flatnonzero(buf[c:min(c + CHUNK, n_data + 1)] == 10) + c
-                           for c in range(0, n_data + 1, CHUNK)])
+    kernel = _kernel(n_data)
+    if kernel is not None:
+        ends = kernel.line_ends(buf, n_data + 1)
+    else:
+        ends = np.concatenate([np.flatnonzero(buf[c:min(c + CHUNK, n_data + 1)] == 10) + c
+                               for c in range(0, n_data + 1, CHUNK)])
     starts = np.concatenate([[0], ends[:-1] + 1])
     if len(ends) and starts[-1] == n_data:          # the newline after the last line
         starts, ends = starts[:-1], ends[:-1]
@@ -86,7 +106,7 @@ def read_outlines_text(path, *, sheets: bool = False) -> tuple[dict[str, np.ndar
         lint.append(f"{len(starts)} lines: a group code without its value")
         starts, ends = starts[:-1], ends[:-1]
     cs, ce, vs, ve = starts[0::2], ends[0::2], starts[1::2], ends[1::2]
-    codes = _codes(buf, data, cs, ce, path)
+    codes = _codes(buf, data, cs, ce, path, kernel)
 
     def pick(idx) -> np.ndarray:
         """The values at ``idx`` (indices or mask), stripped, as an object array of str."""

@@ -50,7 +50,6 @@ FAST_ABOVE = 4000
 KERNEL_FROM = 2000
 """From this many rectangles on, :func:`pack` runs the compiled kernel (when numba is installed): below,
 importing numba and loading the kernel (about 0.5 s) would cost more than it saves."""
-_KERNEL = None  # fabricate.export._nest_kernel once imported, False when numba is missing
 _LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """``{parts: {arguments: Layout}}``: the layouts made of each (immutable) parts object, while it lives."""
 
@@ -284,21 +283,10 @@ def pack(w, h, bw: int, bh: int, rotation: bool = True, next_fit: bool = False):
 
 def _kernel():
     """:mod:`fabricate.export._nest_kernel` (numba, imported on first use), or None without numba or when
-    the compiled kernels are switched off (``CONICAL_FAB_NUMBA=0``, :data:`optimize.kernels.ENABLED`:
-    one switch for the optimizer's kernels and this one)."""
-    global _KERNEL
+    the compiled kernels are switched off (:func:`optimize.kernels.load`)."""
     from optimize import kernels
 
-    if not kernels.ENABLED:
-        return None
-    if _KERNEL is None:
-        try:
-            from . import _nest_kernel
-        except ImportError:
-            _KERNEL = False
-        else:
-            _KERNEL = _nest_kernel
-    return _KERNEL or None
+    return kernels.load("fabricate.export._nest_kernel")
 
 
 SECTIONS_KEPT = 8
