@@ -67,7 +67,30 @@ EDITS = {
     "a code that is not a number": lambda t: t.replace(b"\n 10\n", b"\n1x\n", 1),
     "a tab before the code": lambda t: t.replace(b"\n 10\n", b"\n\t10\n", 1),
     "an empty file": lambda t: b"",
+    "a duplicate handle": lambda t: _handles(t, lambda h: [h[0], h[0]] + h[2:]),
+    "a handle that is not hexadecimal": lambda t: _handles(t, lambda h: [h[0], b"G1"] + h[2:]),
+    "a handle of no characters": lambda t: _handles(t, lambda h: [h[0], b" "] + h[2:]),
+    "a handle with 0x": lambda t: _handles(t, lambda h: [h[0], b"0x" + h[1]] + h[2:]),
+    "two handles equal but for their case": lambda t: _handles(t, lambda h: [h[0], b"fffffa", b"FFFFFA"] + h[3:]),
+    "two lower case handles the same": lambda t: _handles(t, lambda h: [h[0], b"fffffa", b"fffffa"] + h[3:]),
+    "layers with spaces and tabs around": lambda t: t.replace(b"\n  8\nCUT\n", b"\n  8\n \tCUT \n", 7),
+    "a layer name that is not UTF-8": lambda t: t.replace(b"\n  8\nCUT\n", b"\n  8\nCUT\xff\n", 1),
+    "two names, one bad byte each": lambda t: t.replace(b"\n  8\nCUT\n", b"\n  8\nCU\xfe\n", 1).replace(
+        b"\n  8\nCUT\n", b"\n  8\nCU\xff\n", 1),
 }
+
+
+def _handles(text: bytes, change) -> bytes:
+    """``text`` with the handles (code 5) of the ENTITIES section replaced by ``change(handles)``."""
+    import re
+
+    at = text.index(b"\nENTITIES\n")
+    parts = re.split(rb"(\n  5\n)([^\n]*)(?=\n)", text[at:])
+    handles = parts[2::3]
+    new = change(list(handles))
+    assert len(new) == len(handles) > 2
+    parts[2::3] = new
+    return text[:at] + b"".join(parts)
 
 
 @pytest.mark.parametrize("edit", EDITS)
@@ -77,7 +100,16 @@ def test_edited_files_read_the_same_or_fail_the_same(files, tmp_path, monkeypatc
     assert new != raw
     path = tmp_path / "edited.dxf"
     path.write_bytes(new)
-    _same(_read(path, True, monkeypatch), _read(path, False, monkeypatch))
+    mine = _read(path, True, monkeypatch)
+    _same(mine, _read(path, False, monkeypatch))
+    if edit in LINT:
+        assert any(LINT[edit] in x for x in mine[1]["lint"]), mine[1]["lint"]
+
+
+LINT = {"a duplicate handle": "1 duplicate entity handles", "a handle that is not hexadecimal": "not hexadecimal",
+        "a handle of no characters": "not hexadecimal",
+        "two lower case handles the same": "1 duplicate entity handles"}
+"""The edits that a lint message must name (the others read without one, or fail)."""
 
 
 def test_small_files_do_not_load_the_kernels(monkeypatch):

@@ -52,3 +52,53 @@ def group_codes(buf, cs, ce):
             return out, r
         out[r] = v
     return out, -1
+
+
+@njit(cache=True)
+def _space(ch) -> bool:
+    return ch == 32 or 9 <= ch <= 13          # what bytes.strip() strips: space, \t \n \v \f \r
+
+
+@njit(cache=True)
+def intern(buf, vs, ve, rows):
+    """The values ``buf[vs[r]:ve[r]]`` of ``rows``, stripped as ``bytes.strip`` strips, as indices into their
+    distinct values: ``(ids (n,), first (k,), last (k,), exact, hexadecimal)``: value ``j`` is
+    ``buf[first[j]:last[j]]``; ``exact`` False when two distinct values met in the hash table (the caller then
+    reads them in Python); ``hexadecimal``: every value is one or more hexadecimal digits."""
+    n = len(rows)
+    ids = np.empty(n, np.int64)
+    first = np.empty(n, np.int64)
+    last = np.empty(n, np.int64)
+    table = dict()
+    table[np.uint64(0)] = np.int64(-1)        # typed uint64 -> int64; 0 is no key of ours (h | 1 below)
+    k = 0
+    hexadecimal = True
+    for t in range(n):
+        a, b = vs[rows[t]], ve[rows[t]]
+        while a < b and _space(buf[a]):
+            a += 1
+        while b > a and _space(buf[b - 1]):
+            b -= 1
+        h = np.uint64(14695981039346656037)
+        for p in range(a, b):
+            ch = buf[p]
+            h = (h ^ np.uint64(ch)) * np.uint64(1099511628211)
+            if not (48 <= ch <= 57 or 65 <= ch <= 70 or 97 <= ch <= 102):
+                hexadecimal = False
+        if a == b:
+            hexadecimal = False
+        h = h | np.uint64(1)                   # never 0
+        if h not in table:
+            table[h] = k
+            first[k], last[k] = a, b
+            ids[t] = k
+            k += 1
+            continue
+        j = table[h]
+        if last[j] - first[j] != b - a:
+            return ids, first[:0], last[:0], False, hexadecimal
+        for p in range(b - a):
+            if buf[first[j] + p] != buf[a + p]:
+                return ids, first[:0], last[:0], False, hexadecimal
+        ids[t] = j
+    return ids, first[:k], last[:k], True, hexadecimal

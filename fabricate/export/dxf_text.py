@@ -111,8 +111,27 @@ def read_outlines_text(path, *, sheets: bool = False) -> tuple[dict[str, np.ndar
     def pick(idx) -> np.ndarray:
         """The values at ``idx`` (indices or mask), stripped, as an object array of str."""
         idx = np.flatnonzero(idx) if getattr(idx, "dtype", None) == bool else np.asarray(idx, np.int64)
+        if kernel is not None and len(idx):             # each distinct value decoded once
+            ids, first, last, exact, _ = kernel.intern(buf, vs, ve, idx)
+            if exact:
+                distinct = [data[a:b].decode("utf-8", "replace") for a, b in zip(first.tolist(), last.tolist())]
+                return np.array(distinct + [None], dtype=object)[:-1][ids]
         return np.array([data[a:b].strip().decode("utf-8", "replace")
                          for a, b in zip(vs[idx].tolist(), ve[idx].tolist())] + [None], dtype=object)[:-1]
+
+    def handle_lint(idx) -> list[str]:
+        """The handles at ``idx``: duplicates, and whether each is hexadecimal (``int(h, 16)``)."""
+        if kernel is not None and len(idx):
+            _, first, _, exact, hexadecimal = kernel.intern(buf, vs, ve, idx)
+            if exact and hexadecimal:                 # plain digits: int(h, 16) reads every one
+                return [f"{len(idx) - len(first)} duplicate entity handles"] if len(first) != len(idx) else []
+        handles = pick(idx).tolist()
+        out = [f"{len(handles) - len(set(handles))} duplicate entity handles"] if len(set(handles)) != len(handles) else []
+        try:
+            [int(h, 16) for h in handles]
+        except ValueError:
+            out.append("an entity handle is not hexadecimal")
+        return out
 
     def numbers(idx, dtype, what: str) -> np.ndarray:
         idx = np.flatnonzero(idx)
@@ -156,13 +175,7 @@ def read_outlines_text(path, *, sheets: bool = False) -> tuple[dict[str, np.ndar
     layer = np.full(n, "", dtype=object)
     on = c == 8
     layer[ent[on]] = pick(np.flatnonzero(on) + a)
-    handles = pick(np.flatnonzero(c == 5) + a)
-    if len(set(handles.tolist())) != len(handles):
-        lint.append(f"{len(handles) - len(set(handles.tolist()))} duplicate entity handles")
-    try:
-        [int(h, 16) for h in handles.tolist()]
-    except ValueError:
-        lint.append("an entity handle is not hexadecimal")
+    lint += handle_lint(np.flatnonzero(c == 5) + a)
     cut = (etype == "LWPOLYLINE") & (layer == "CUT")
     texts = int(np.sum((etype == "TEXT") & (layer == "ETCH")))
     in_cut = cut[ent]
