@@ -189,10 +189,10 @@ def _one_check(name, key, needs, run, paths, skip, written, read) -> dict:
 def written_files(outdir: Path) -> dict[str, int]:
     """``{file: bytes}`` the run says it wrote (``report.json``'s ``files``); empty without a report
     (the check inside a run, or exports written by the library): then a file not there was not written."""
-    import json
+    from optimize import jsontext
 
     try:
-        report = json.loads((outdir / REPORT).read_text(encoding="utf-8"))
+        report = jsontext.loads((outdir / REPORT).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return {}
     files = report.get("files") if isinstance(report, dict) else None

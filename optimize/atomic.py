@@ -23,6 +23,8 @@ import time
 from pathlib import Path
 from typing import Iterator
 
+from . import jsontext
+
 PART_OWNER = ".conical-fab-part.json"
 """The owner record inside a temporary folder (removed when the folder is published)."""
 
@@ -107,7 +109,7 @@ def owner_alive(record: dict) -> bool | None:
 def read_owner(folder: Path) -> dict | None:
     """The owner record of a temporary folder, None if it has none (or it is unreadable)."""
     try:
-        data = json.loads((folder / PART_OWNER).read_text())
+        data = jsontext.loads((folder / PART_OWNER).read_text())
     except (OSError, ValueError):
         return None
     return data if isinstance(data, dict) else None

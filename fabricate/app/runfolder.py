@@ -34,6 +34,7 @@ from typing import Iterator
 
 from optimize.atomic import (PART_OWNER, folder_size, owner_alive, owner_record, part_dir, publish_dir,
                              read_owner, remove_part, stale_parts)
+from optimize import jsontext
 from optimize.errors import ConfigError
 
 log = logging.getLogger(__name__)
@@ -72,7 +73,7 @@ def write_marker(folder: Path, facts: dict) -> None:
 
 def read_marker(folder: Path) -> dict | None:
     try:
-        data = json.loads((folder / MARKER).read_text())
+        data = jsontext.loads((folder / MARKER).read_text())
     except (OSError, ValueError):
         return None
     return data if isinstance(data, dict) and data.get("tool") == "conical-fab" else None
@@ -202,7 +203,7 @@ def run_lock(target: Path) -> Iterator[None]:
 
 def _holder(path: Path) -> str:
     try:
-        rec = json.loads(path.read_text())
+        rec = jsontext.loads(path.read_text())
         return f"pid {rec['pid']} on {rec['host']}, since {rec['created_utc']}"
     except (OSError, ValueError, KeyError, TypeError):
         return "a process that just started"

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from fabricate.cad.parts import cut_from_sheet
+from optimize import jsontext
 from optimize.atomic import atomic_open
 from optimize.errors import ExportError
 
@@ -99,7 +100,7 @@ def read_flat(path) -> list[dict]:
     corner index out of range) is refused with an :class:`ExportError` naming the group and the key."""
     try:
         with open(path, encoding="utf-8") as fh:
-            doc = json.load(fh)
+            doc = jsontext.loads(fh.read())
     except (OSError, ValueError) as exc:
         raise ExportError(f"{path}: not a readable flat data file ({exc})") from None
     if not isinstance(doc, dict) or doc.get("format") != FORMAT:

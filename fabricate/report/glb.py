@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from optimize import jsontext
 from optimize.atomic import atomic_path
 
 GLB_MAGIC = 0x46546C67  # b"glTF"
@@ -138,7 +139,7 @@ def read_glb(data: bytes) -> tuple[dict, bytes]:
     n_json, kind = struct.unpack_from("<II", data, 12)
     if kind != CHUNK_JSON:
         raise ValueError(f"first GLB chunk has type {kind:#x}, expected JSON")
-    doc = json.loads(data[20:20 + n_json])
+    doc = jsontext.loads(data[20:20 + n_json])
     off = 20 + n_json
     binary = b""
     if off < len(data):

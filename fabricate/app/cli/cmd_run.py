@@ -62,12 +62,11 @@ def run(args) -> int:
 
 def _print_totals(target) -> None:
     """The client's totals (glass m2, sizes, steel m and t) from the run's report.json, if written."""
-    import json
-
     from fabricate.report.totals import totals_lines
+    from optimize import jsontext
 
     try:
-        totals = json.loads((Path(target) / "report.json").read_text(encoding="utf-8")).get("totals")
+        totals = jsontext.loads((Path(target) / "report.json").read_text(encoding="utf-8")).get("totals")
     except (OSError, ValueError, AttributeError):
         return
     for text in totals_lines(totals):
