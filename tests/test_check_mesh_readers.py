@@ -105,3 +105,31 @@ def test_dxf_reader_reads_crlf_the_same_and_refuses_a_bad_group_code(folder, tmp
     (tmp_path / "bad.dxf").write_bytes(raw.replace(b"\n 10\n", b"\n1x\n", 1))
     with pytest.raises(ExportError, match="group code is not an integer"):
         read_outlines_text(tmp_path / "bad.dxf")
+
+
+def test_a_3mf_that_unpacks_to_far_more_than_its_size_is_refused_unread(folder, tmp_path, capsys):
+    """A deflated run of one byte unpacks to 1,000 times its size: 20 MB of it would be 20 GB in memory.
+    Both readers refuse a model beyond MAX_UNPACK times the file before reading it; the check says so."""
+    import shutil
+    import zipfile
+
+    from fabricate.app.cli import main
+    from fabricate.export import threemf_text
+
+    d = tmp_path / "run"
+    shutil.copytree(folder, d)
+    with zipfile.ZipFile(folder / "model.3mf") as z:
+        names = {n: z.read(n) for n in z.namelist()}
+    model = names[threemf_text.MODEL]
+    names[threemf_text.MODEL] = model + b" " * (threemf_text.UNPACK_FLOOR + 200 * len(model))  # XML may end in spaces
+    with zipfile.ZipFile(d / "model.3mf", "w", zipfile.ZIP_DEFLATED) as z:
+        for n, data in names.items():
+            z.writestr(n, data)
+    size = (d / "model.3mf").stat().st_size
+    assert size < 2 * len(model)               # the spaces cost next to nothing packed
+    for read in (read_3mf, read_3mf_text):
+        with pytest.raises(ExportError, match=r"model.3mf: 3D/3dmodel.model unpacks to \d+ MiB from a"):
+            read(d / "model.3mf")
+    assert main(["check", str(d)]) == 4
+    out = capsys.readouterr()
+    assert "internal error" not in out.err and "FAIL 3mf" in out.out and "unpacks to" in out.out

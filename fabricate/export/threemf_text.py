@@ -26,6 +26,22 @@ import numpy as np
 from optimize.errors import ExportError
 
 MODEL = "3D/3dmodel.model"
+MAX_UNPACK = 100
+"""A 3MF's model may unpack to at most this many times the file's bytes, plus :data:`UNPACK_FLOOR`
+(this project's files unpack to 4-5 times; a deflated run of one byte, to 1,000 times: 20 MB of it
+would take 20 GB to read)."""
+UNPACK_FLOOR = 64 << 20
+
+
+def model_size(z: zipfile.ZipFile, path) -> int:
+    """The unpacked bytes of the model in 3MF ``z`` (at ``path``); ExportError beyond :data:`MAX_UNPACK`
+    (the reader stops at the size the archive declares, so this bounds the memory it takes)."""
+    size = z.getinfo(MODEL).file_size
+    packed = Path(path).stat().st_size
+    if size > MAX_UNPACK * packed + UNPACK_FLOOR:
+        raise ExportError(f"{path}: {MODEL} unpacks to {size / 2**20:.0f} MiB from a {packed / 2**20:.1f} MiB "
+                          f"file; expected at most {MAX_UNPACK} times the file (+ {UNPACK_FLOOR >> 20} MiB)")
+    return size
 _NUM = rb'[-+0-9.eE]+'
 VERTICES = re.compile(rb'<vertices>((?:\s*<vertex x="' + _NUM + rb'" y="' + _NUM + rb'" z="' + _NUM
                       + rb'"/>)*)\s*</vertices>')
@@ -102,6 +118,7 @@ def read_3mf_text(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     path = Path(path)
     try:
         with zipfile.ZipFile(path) as z:
+            model_size(z, path)
             model = z.read(MODEL)
     except (OSError, KeyError, zipfile.BadZipFile) as exc:
         raise ExportError(f"{path}: not a readable 3MF file ({exc})") from None
