@@ -163,3 +163,19 @@ def test_a_killed_worker_costs_one_retry_not_the_batch(tmp_path):
     assert "died twice" in by["always"].message and "BrokenProcessPool" in by["always"].message
     assert exit_code(summaries) == 1
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["healthy", "once"]
+
+
+def test_a_batch_of_too_many_jobs_is_refused_before_a_config_is_read(tmp_path, monkeypatch):
+    from fabricate.app import batch
+
+    calls = []
+    monkeypatch.setattr(batch, "load_config", lambda *a, **k: calls.append(a))
+    sets = parse_sets([f"parts.glass_thickness={','.join(map(str, range(1, 41)))}",
+                       f"parts.beam_width={','.join(map(str, range(10, 51)))}",
+                       "offset.distances=[0,-200],[0,-201],[0,-202]", "parts.beam_depth=200",
+                       f"parts.node.cap_mm={','.join(map(str, range(5, 12)))}"])
+    with pytest.raises(ConfigError, match=r"batch of 34,440 jobs \(1 config x 40 parts.glass_thickness x 41 "
+                                          r"parts.beam_width x 3 offset.distances x 7 parts.node.cap_mm\); "
+                                          r"expected at most 10,000") as info:
+        expand_jobs([tmp_path / "a.yaml"], sets)
+    assert info.value.exit_code == 2 and calls == []

@@ -19,6 +19,7 @@ import csv
 import io
 import itertools
 import logging
+import math
 import multiprocessing
 import os
 import signal
@@ -40,6 +41,10 @@ log = logging.getLogger(__name__)
 MAX_NAME = 200
 """Longest job (folder) name in bytes: 255 less the room of ``.<name>.<random>.part`` and
 ``<name>.failed-<time>-<k>``."""
+MAX_JOBS = 10_000
+"""A batch of more jobs is refused before any config is read: each job's config is validated before the
+first run (about 4 ms each), so 8 million combinations of five swept keys would take nine hours and
+their memory before anything ran; split the sweep."""
 COLUMNS = ("name", "status", "faces", "planarity", "conical", "parts", "seconds", "message", "out_dir")
 
 
@@ -103,6 +108,12 @@ def expand_jobs(config_files: list[str | Path], sets: dict[str, list[Any]] | Non
     sets = sets or {}
     keys = list(sets)
     swept = [k for k in keys if len(sets[k]) > 1]
+    count = len(config_files) * math.prod(len(sets[k]) for k in keys)
+    if count > MAX_JOBS:
+        sizes = " x ".join([f"{len(config_files)} config{'s' if len(config_files) > 1 else ''}"]
+                           + [f"{len(sets[k])} {k}" for k in swept])
+        raise ConfigError(f"batch of {count:,} jobs ({sizes}); expected at most {MAX_JOBS:,}: sweep fewer "
+                          "values, or split the sweep into several batches")
     jobs: list[Job] = []
     for path in config_files:
         for combo in itertools.product(*(sets[k] for k in keys)) if keys else [()]:
