@@ -274,7 +274,7 @@ class _Stacked(list):
 def _corner_sets(ids, expected: dict, against, step_solids, meshes) -> list:
     """The file's corners of every part of a group (``None``: not compared): the STEP solid's face
     loops (:func:`_step_points`) or the 3MF mesh's vertices.  Solids of the text reader (which keep
-    the file's loop array, ``_loops``) are gathered for the whole group at once, the same points in
+    the file's loop array, ``loops``) are gathered for the whole group at once, the same points in
     the same order."""
     n = len(ids)
     if against == "3mf":
@@ -283,7 +283,7 @@ def _corner_sets(ids, expected: dict, against, step_solids, meshes) -> list:
         return [None] * n
     rows = [i for i, p in enumerate(ids) if p in expected and p in step_solids]
     shapes = [step_solids[ids[i]] for i in rows]
-    loops = [getattr(s, "_loops", None) for s in shapes]
+    loops = [getattr(s, "loops", None) for s in shapes]
     P0, F0, C0 = loops[0][:3] if rows and loops[0] is not None else (None, None, None)
     shared = P0 is not None and all(lp is not None and lp[0] is P0 and lp[1] is F0 and lp[2] is C0
                                     for lp in loops)

@@ -396,16 +396,20 @@ def _outer_bounds(flagged: np.ndarray, along: np.ndarray, use_face: np.ndarray, 
 
 class _Facts(dict):
     """One solid's facts; its ``faces`` (list of ``(k, 3)`` outer loops, holes left out) are cut from
-    the file's loop array when first asked for (most checks never ask)."""
+    the file's loop array when first asked for (most checks never ask).
+
+    ``loops``: ``(P, first, counts, faces)``, the file's loop points ``P``, each loop's first point and
+    point count (shared by every solid of the file), and this solid's outer loops (indices into
+    them): callers that gather many solids' corners at once read them here."""
 
     def __init__(self, P, first, counts, faces, facts):
         super().__init__(facts)
-        self._loops = (P, first, counts, faces)
+        self.loops = (P, first, counts, faces)
 
     def __missing__(self, key):
         if key != "faces":
             raise KeyError(key)
-        P, first, counts, faces = self._loops
+        P, first, counts, faces = self.loops
         self["faces"] = [P[first[f]:first[f] + counts[f]] for f in faces.tolist()]
         return self["faces"]
 
