@@ -143,7 +143,8 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
     end = head.rindex("ENDSEC;", 0, head.rindex("END-ISO-10303-21;"))
     groups = list(parts.groups)
     index = {id(g): k for k, g in enumerate(groups)}
-    units = _glass_units(parts, index) + _steel_units(parts, index)
+    solids = _solids_by_unit(parts)
+    units = _glass_units(parts, solids, index) + _steel_units(parts, solids, index)
     try:
         with atomic_open(path, "w", encoding="utf-8") as fh:
             fh.write(head[:end])
@@ -171,25 +172,34 @@ def _amounts(volume_m3: float, weight: float) -> dict:
             "GrossWeight": ("weight", weight), "NetWeight": ("weight", weight)}
 
 
-def _glass_units(parts, index: dict) -> list:
+def _solids_by_unit(parts) -> dict[tuple[str, str], list]:
+    """``{(kind, unit id): [(group, i)]}``: the solids of each element, in the groups' order (a glass
+    unit's plies and interlayers, a beam's plates, a hub's tube and caps; else the part alone)."""
+    from fabricate.cad.parts import unit_id
+
+    out: dict[tuple[str, str], list] = {}
+    for g in parts.groups:
+        for i, pid in enumerate(g.ids):
+            out.setdefault((g.kind, unit_id(pid)), []).append((g, i))
+    return out
+
+
+def _glass_units(parts, solids: dict, index: dict) -> list:
     """One IfcPlate per glass unit: its ply on the beams gives area and planarity, every ply and
-    interlayer a face set of its body; volume and weight summed over them."""
+    interlayer (``solids``: :func:`_solids_by_unit`) a face set of its body; volume and weight summed
+    over them."""
     from fabricate.cad.glass import bearing_groups
     from fabricate.cad.parts import unit_id
 
     spec = parts.spec
-    solids: dict[str, list] = {}
-    for g in parts.of_kind("panel"):
-        density = spec.group_density(g)
-        for i, pid in enumerate(g.ids):  # one face set per solid
-            solids.setdefault(unit_id(pid), []).append(((index[id(g)], i), float(g.volume_mm3[i]), density))
+    density = {id(g): spec.group_density(g) for g in parts.of_kind("panel")}
     out = []
     for g in bearing_groups(parts):
         for i, ply in enumerate(g.ids):  # one element per unit
             uid = unit_id(ply)
-            items = solids[uid]
-            volume_m3 = sum(it[1] for it in items) * 1e-9
-            weight = sum(it[1] * it[2] for it in items) * 1e-9
+            items = solids["panel", uid]
+            volume_m3 = sum(float(h.volume_mm3[k]) for h, k in items) * 1e-9
+            weight = sum(float(h.volume_mm3[k]) * density[id(h)] for h, k in items) * 1e-9
             area = float(g.area_mm2[i]) * 1e-6
             fab = {"PartId": uid, "MeshElement": int(g.element[i]), "BuildUp": spec.glass.short(),
                    "Solids": " ".join(f"{uid}.{k + 1}" for k in range(len(items))) if len(items) > 1 else uid,
@@ -197,24 +207,19 @@ def _glass_units(parts, index: dict) -> list:
                    "Neighbours": " ".join(n for n in g.neighbours[i] if unit_id(n) != uid)}
             if spec.glass.type == "insulated":
                 fab["SpacerSetback_mm"] = float(spec.glass.edge_seal_mm)
-            out.append(_unit("panel", uid, "glass unit " + spec.glass.short(), [it[0] for it in items],
+            out.append(_unit("panel", uid, "glass unit " + spec.glass.short(), [(index[id(h)], k) for h, k in items],
                              {"Width": ("length", spec.glass.thickness_mm), "GrossArea": ("area", area),
                               "NetArea": ("area", area), **_amounts(volume_m3, weight)}, fab))
     return out
 
 
-def _steel_units(parts, index: dict) -> list:
+def _steel_units(parts, solids: dict, index: dict) -> list:
     """One IfcMember per beam and per node hub: a beam welded from plates, a hub of tube and caps is
-    one element of one face set per solid."""
-    from fabricate.cad.parts import unit_id
-
-    solids_of: dict[tuple[str, str], list] = {}
-    for g in parts.groups:
-        if g.kind != "panel":
-            for i, pid in enumerate(g.ids):
-                solids_of.setdefault((g.kind, unit_id(pid)), []).append((g, i))
+    one element of one face set per solid (``solids``: :func:`_solids_by_unit`)."""
     out = []
-    for (kind, uid), items in solids_of.items():
+    for (kind, uid), items in solids.items():
+        if kind == "panel":
+            continue
         g, i = items[0]
         quantities, fab = _describe(g, i, parts.spec.group_density(g), items if len(items) > 1 else None, parts.spec)
         out.append(_unit(kind, uid, kind, [(index[id(h)], k) for h, k in items], quantities, fab))
