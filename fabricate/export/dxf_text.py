@@ -121,17 +121,21 @@ def read_outlines_text(path, *, sheets: bool = False) -> tuple[dict[str, np.ndar
 
     def handle_lint(idx) -> list[str]:
         """The handles at ``idx``: duplicates, and whether each is hexadecimal (``int(h, 16)``)."""
+        distinct = None
         if kernel is not None and len(idx):
-            _, first, _, exact, hexadecimal = kernel.intern(buf, vs, ve, idx)
-            if exact and hexadecimal:                 # plain digits: int(h, 16) reads every one
-                return [f"{len(idx) - len(first)} duplicate entity handles"] if len(first) != len(idx) else []
-        handles = pick(idx).tolist()
-        out = [f"{len(handles) - len(set(handles))} duplicate entity handles"] if len(set(handles)) != len(handles) else []
-        try:
-            [int(h, 16) for h in handles]
-        except ValueError:
-            out.append("an entity handle is not hexadecimal")
-        return out
+            _, first, _, exact, plain = kernel.intern(buf, vs, ve, idx)
+            if exact and plain:                       # plain digits: int(h, 16) reads every one
+                distinct, hexadecimal = len(first), True
+        if distinct is None:
+            handles = pick(idx).tolist()
+            distinct = len(set(handles))
+            try:
+                [int(h, 16) for h in handles]
+                hexadecimal = True
+            except ValueError:
+                hexadecimal = False
+        out = [f"{len(idx) - distinct} duplicate entity handles"] if distinct != len(idx) else []
+        return out + ([] if hexadecimal else ["an entity handle is not hexadecimal"])
 
     def numbers(idx, dtype, what: str) -> np.ndarray:
         idx = np.flatnonzero(idx)
