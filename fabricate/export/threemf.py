@@ -20,7 +20,7 @@ from optimize.errors import ExportError
 
 from ..cad.parts import COLOURS, KINDS
 from .meshes import group_triangles, validate_manifold
-from .threemf_text import MODEL, model_size
+from .threemf_text import MODEL, open_model
 
 CORE = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"
 CONTENT_TYPES = ('<?xml version="1.0" encoding="UTF-8"?>\n'
@@ -188,20 +188,18 @@ def read_3mf(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     ns = f"{{{CORE}}}"
     out = {}
     try:
-        with zipfile.ZipFile(path) as z:
-            model_size(z, path)
-            with z.open(MODEL) as fh:
-                for _, el in ET.iterparse(fh, events=("end",)):
-                    if el.tag != ns + "object":
-                        continue
-                    verts = el.find(f"{ns}mesh/{ns}vertices")
-                    tris = el.find(f"{ns}mesh/{ns}triangles")
-                    V = np.array([[float(v.get("x")), float(v.get("y")), float(v.get("z"))] for v in verts],
-                                 dtype=float).reshape(-1, 3)
-                    T = np.array([[int(t.get("v1")), int(t.get("v2")), int(t.get("v3"))] for t in tris],
-                                 dtype=np.int64).reshape(-1, 3)
-                    out[el.get("name")] = (V, T)
-                    el.clear()
+        with zipfile.ZipFile(path) as z, open_model(z, path) as fh:
+            for _, el in ET.iterparse(fh, events=("end",)):
+                if el.tag != ns + "object":
+                    continue
+                verts = el.find(f"{ns}mesh/{ns}vertices")
+                tris = el.find(f"{ns}mesh/{ns}triangles")
+                V = np.array([[float(v.get("x")), float(v.get("y")), float(v.get("z"))] for v in verts],
+                             dtype=float).reshape(-1, 3)
+                T = np.array([[int(t.get("v1")), int(t.get("v2")), int(t.get("v3"))] for t in tris],
+                             dtype=np.int64).reshape(-1, 3)
+                out[el.get("name")] = (V, T)
+                el.clear()
     except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
         raise ExportError(f"{path}: not a readable 3MF file ({exc})") from None
     return out

@@ -33,15 +33,16 @@ would take 20 GB to read)."""
 UNPACK_FLOOR = 64 << 20
 
 
-def model_size(z: zipfile.ZipFile, path) -> int:
-    """The unpacked bytes of the model in 3MF ``z`` (at ``path``); ExportError beyond :data:`MAX_UNPACK`
-    (the reader stops at the size the archive declares, so this bounds the memory it takes)."""
+def open_model(z: zipfile.ZipFile, path):
+    """The model of 3MF ``z`` (at ``path``), opened for reading; ExportError when it unpacks to more than
+    :data:`MAX_UNPACK` times the file (the reader stops at the size the archive declares, so this bounds
+    the memory it takes)."""
     size = z.getinfo(MODEL).file_size
     packed = Path(path).stat().st_size
     if size > MAX_UNPACK * packed + UNPACK_FLOOR:
         raise ExportError(f"{path}: {MODEL} unpacks to {size / 2**20:.0f} MiB from a {packed / 2**20:.1f} MiB "
                           f"file; expected at most {MAX_UNPACK} times the file (+ {UNPACK_FLOOR >> 20} MiB)")
-    return size
+    return z.open(MODEL)
 _NUM = rb'[-+0-9.eE]+'
 VERTICES = re.compile(rb'<vertices>((?:\s*<vertex x="' + _NUM + rb'" y="' + _NUM + rb'" z="' + _NUM
                       + rb'"/>)*)\s*</vertices>')
@@ -117,9 +118,8 @@ def read_3mf_text(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """``{name: (V (nv, 3) float, T (t, 3) int)}`` of every object (vertices as stored)."""
     path = Path(path)
     try:
-        with zipfile.ZipFile(path) as z:
-            model_size(z, path)
-            model = z.read(MODEL)
+        with zipfile.ZipFile(path) as z, open_model(z, path) as fh:
+            model = fh.read()
     except (OSError, KeyError, zipfile.BadZipFile) as exc:
         raise ExportError(f"{path}: not a readable 3MF file ({exc})") from None
     try:
