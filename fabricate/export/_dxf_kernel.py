@@ -6,7 +6,9 @@ when numba is installed, through :func:`optimize.kernels.load`).
 - :func:`group_codes`: the group code of every code line ``buf[cs:ce]``, as
   :func:`fabricate.export.dxf_text._codes`' fast path reads it: one to eight characters, spaces and
   then at least one digit.  The first line that is not so is returned instead (the caller then reads
-  every line the slow way, as before).
+  every line the slow way, as before);
+- :func:`intern`: values (entity types, layers, handles) as indices into their distinct values, so that
+  Python decodes each distinct one once, and whether all are plain hexadecimal (handles).
 """
 from __future__ import annotations
 
