@@ -29,6 +29,10 @@ class Tolerances:
     cad_linear_mm : absolute, OpenCASCADE's modelling tolerance in mm.
     closeness : relative to the bounding-box diagonal, max distance to the
         reference surface (reported, not enforced by the optimizer).
+    closeness_mm : absolute (mm), a limit on how far the design may move: when
+        given, closeness becomes a requirement of the run (``None``: reported only).
+    roughness : the result's roughness (mean second difference along the mesh
+        lines over the mean edge) over the input's: above it, a warning.
     beam_twist_mm : absolute, the largest twist of a beam a steel shop takes.
     fold : signed corner sine: a corner convex in the input (sine above ``-fold``)
         that ends below ``-fold`` is dented (``measures.folded_faces``, the
@@ -49,6 +53,8 @@ class Tolerances:
     beam_planarity: float = 1e-6
     cad_linear_mm: float = 1e-3
     closeness: float = 5e-3
+    closeness_mm: float | None = None
+    roughness: float = 2.0
     beam_twist_mm: float = 1.0
     fold: float = 1e-6
     strip_parallel: float = 1e-6

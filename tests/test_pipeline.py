@@ -129,7 +129,9 @@ def _cli(*args, cwd):
                           timeout=300, env=dict(os.environ, PYTHONPATH=str(REPO)))
 
 
-def test_export_failure_raises_export_error_and_leaves_nothing(tmp_path, monkeypatch):
+def test_export_failure_is_exit_4_with_the_other_files_and_the_report_written(tmp_path, monkeypatch):
+    """An exporter that raises loses nothing else: the mesh, the other files and the report are
+    written, marked (CHECK_FAILED.txt), and the run ends 4 naming the file and the error (#30)."""
     import fabricate.export as export
 
     def broken_writer(parts, path):
@@ -137,10 +139,31 @@ def test_export_failure_raises_export_error_and_leaves_nothing(tmp_path, monkeyp
 
     monkeypatch.setattr(export, "write_stl", broken_writer)
     cfg = tiny_config(tmp_path, "exp", outputs={"stl": True, "step": False, "3mf": False, "dxf": False,
-                                                "svg": False, "bom": False, "pictures": False, "html": False})
-    with pytest.raises(ExportError, match="model.stl: export failed: RuntimeError: disk on fire") as info:
+                                                "svg": True, "bom": False, "pictures": False, "html": False})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    assert (summary.status, summary.exit_code) == ("export_failed", 4)
+    assert "export failed: model.stl: export failed: RuntimeError: disk on fire" in summary.message
+    out = tmp_path / "out" / "exp"
+    assert (out / "mesh.obj").is_file() and (out / "outlines.svg").is_file() and not (out / "model.stl").exists()
+    assert (out / "CHECK_FAILED.txt").is_file()
+    report = json.loads((out / "report.json").read_text())
+    assert report["exit_code"] == 4 and report["check"]["checks"]["export model.stl"]["pass"] is False
+
+
+def test_a_full_disk_while_exporting_still_leaves_nothing(tmp_path, monkeypatch):
+    """No file can be written after a full disk (the report neither): nothing is left (exit 4)."""
+    import errno
+
+    import fabricate.export as export
+
+    def full(parts, path):
+        raise OSError(errno.ENOSPC, "No space left on device", str(path))
+
+    monkeypatch.setattr(export, "write_stl", full)
+    cfg = tiny_config(tmp_path, "full", outputs={"stl": True, "step": False, "3mf": False, "dxf": False,
+                                                 "svg": False, "bom": False, "pictures": False, "html": False})
+    with pytest.raises(OSError, match="No space left"):
         run_pipeline(cfg, tmp_path / "out")
-    assert info.value.exit_code == 4
     assert list((tmp_path / "out").iterdir()) == []
 
 

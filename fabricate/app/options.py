@@ -89,6 +89,10 @@ TOLERANCE_KEYS = {
     "beam_planarity": dict(ge=1e-12, le=1.0, unit="relative", help="planarity of the beam quads"),
     "cad_linear_mm": dict(ge=1e-7, le=1.0, unit="mm", help="OpenCASCADE's modelling tolerance (1e-7 mm at least)"),
     "closeness": dict(ge=1e-12, le=1.0, unit="relative", help="distance to the reference / bbox diagonal"),
+    "closeness_mm": dict(ge=1e-6, le=1e6, unit="mm", help="how far the design may move (makes closeness a "
+                         "requirement; null: reported only)"),
+    "roughness": dict(ge=1.0, le=1e6, unit="ratio", help="roughness of the result / of the input beyond which "
+                      "a warning is given"),
     "beam_twist_mm": dict(ge=1e-9, le=1000.0, unit="mm", help="largest twist of a beam a steel shop takes"),
     "fold": dict(ge=1e-12, le=1.0, unit="sine", help="a convex corner whose signed sine ends below -fold is dented"),
     "strip_parallel": dict(ge=1e-12, le=1.0, unit="sine", help="rulings of a strip closer than this are parallel"),

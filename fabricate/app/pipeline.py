@@ -150,7 +150,8 @@ def run_stages(config: RunConfig, workdir: Path, progress=None, t_start: float |
     tol = config.tolerances
     measures = collect_measures(config, inp, opt, off)
     measures.update({k: dict(v) for k, v in statics.measures.items()})
-    measures = apply_requirements(measures, off.structure, tol.requirements, inp.target, tol.beam_twist_mm)
+    measures = apply_requirements(measures, off.structure, tol.requirements, inp.target, tol.beam_twist_mm,
+                                  tol.closeness_mm)
     limits = built.parts.report.get("limits") if built.parts is not None else None
     result = outcome(measures, files.check, built.skipped, limits)
     timings["before_report"] = time.perf_counter() - t_start
@@ -186,14 +187,19 @@ def outcome(measures: Mapping[str, Mapping], check: Mapping | None = None, skipp
     check_failed = [k for k, v in check.get("checks", {}).items()
                     if isinstance(v, Mapping) and v.get("pass") is False]
     found, parts = [], []
-    if check_failed or check.get("pass") is False:
+    not_written = [k for k in check_failed if k.startswith("export ")]
+    checked = [k for k in check_failed if k not in not_written]
+    if not_written:
         found.append("export_failed")
-        parts.append("output check failed: " + (", ".join(check_failed) or "see report.json"))
+        parts.append("export failed: " + "; ".join(check["checks"][k].get("why") or k for k in not_written))
+    if checked or (check.get("pass") is False and not not_written):
+        found.append("export_failed")
+        parts.append("output check failed: " + (", ".join(checked) or "see report.json"))
     if tol_failed:
         found.append("tolerance_not_reached")
         shown = [k for k in tol_failed if k in measures]
-        parts.append("tolerance not reached: " + (", ".join(
-            f"{k} {measures[k]['max']:.3g} > {measures[k]['tolerance']:.3g}" for k in shown) or "no parts built"))
+        parts.append("tolerance not reached: " + (", ".join(_exceeds(k, measures[k]) for k in shown)
+                                                  or "no parts built"))
         if skipped:
             parts.append(skipped)
     status = worst(found)
@@ -203,8 +209,31 @@ def outcome(measures: Mapping[str, Mapping], check: Mapping | None = None, skipp
         warn = warnings(measures, limits)
         message = "every requirement met" + (f"; {len(warn)} warning(s): " + "; ".join(warn)
                                              if warn else ", every tolerance reached")
+    moved = moved_sentence(measures)
+    if moved:
+        message += f"; {moved}"
     failed = tuple(tol_failed + [f"check:{k}" for k in check_failed])
     return Outcome(status=status, exit_code=EXIT_CODES[status], failed=failed, message=message)
+
+
+def _exceeds(name: str, m: Mapping) -> str:
+    """``closeness 312 mm > 100 mm`` for a limit in mm, ``planarity 0.002 > 1e-06`` otherwise."""
+    if m.get("tolerance_mm") is not None and m.get("max_mm") is not None:
+        return f"{name} {m['max_mm']:,.1f} mm > {m['tolerance_mm']:g} mm"
+    return f"{name} {m['max']:.3g} > {m['tolerance']:.3g}"
+
+
+def moved_sentence(measures: Mapping[str, Mapping]) -> str:
+    """How far the design moved and how much rougher it became, for every headline:
+    ``design moved up to 77.9 mm (0.45 % of the bounding-box diagonal), 1.3 x the input's roughness``
+    ('' when the run did not optimize)."""
+    close, rough = measures.get("closeness"), measures.get("roughness")
+    if not close or close.get("max_mm") is None:
+        return ""
+    text = f"design moved up to {close['max_mm']:,.1f} mm ({100 * close['max']:.2f} % of the bounding-box diagonal)"
+    if rough and rough.get("max") is not None:
+        text += f", {rough['max']:.2g} x the input's roughness"
+    return text
 
 
 def _summary(run: RunRecord, target: Path, timings: dict[str, float]) -> RunSummary:

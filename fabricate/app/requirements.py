@@ -24,13 +24,15 @@ from fabricate.app.config import MEASURE_NAMES as MEASURES  # noqa: F401  (the n
 from fabricate.report.measures import warnings  # noqa: F401 - re-exported (the headline's warning lines)
 
 
-def default_requirements(target: str) -> tuple[str, ...]:
-    """The shop defaults for a run with optimization ``target``."""
+def default_requirements(target: str, closeness_mm: float | None = None) -> tuple[str, ...]:
+    """The shop defaults for a run with optimization ``target``; ``closeness`` too when the config
+    gives a limit in mm (``tolerances.closeness_mm``)."""
     extra = {"conical": ("conical", "beam_planarity"), "circular": ("circular",)}.get(target, ())
-    return ("planarity", "folded", "beam_twist") + extra
+    return ("planarity", "folded", "beam_twist") + extra + (("closeness",) if closeness_mm is not None else ())
 
 
-def apply_requirements(measures: dict, structure, requirements, target: str, beam_twist_mm: float) -> dict:
+def apply_requirements(measures: dict, structure, requirements, target: str, beam_twist_mm: float,
+                       closeness_mm: float | None = None) -> dict:
     """``measures`` with ``beam_twist`` added and ``enforced`` / ``role`` set from ``requirements``
     (a list of names, or None for :func:`default_requirements`); a measure that ``requirements``
     cannot name keeps the ``enforced`` its stage gave it.  Returns the same dict."""
@@ -41,7 +43,9 @@ def apply_requirements(measures: dict, structure, requirements, target: str, bea
         measures["beam_twist"] = entry(twist, beam_twist_mm, "mm", "beam", extra={"mm": twist},
                                        what="twist of every beam (boundary ones too): how far a corner of its "
                                             "quad is off the plane of the other three, mm")
-    wanted = set(default_requirements(target) if requirements is None else requirements)
+    wanted = set(default_requirements(target, closeness_mm) if requirements is None else requirements)
+    if closeness_mm is not None:  # a limit in mm is asked for: always a requirement
+        wanted.add("closeness")
     other_target = {"conical", "circular"} - {target}
     for name, m in measures.items():
         if name not in MEASURES:  # a measure with its own rule (offset_turned_over; the structure

@@ -188,9 +188,10 @@ def stage_cad(cfg, opt: OptimizeRecord, off: OffsetRecord) -> PartsRecord:
     """Panels, beams and nodes as data (``fabricate.cad.build_parts``).
 
     An optimization that ended ``folded`` (dented or flipped panels: no glass can be cut from
-    them) builds no parts: the run goes on to write the mesh, the layers and the report, marked
-    as a missed tolerance (exit 3), so the result can be inspected.  A part that cannot be built
-    from a converged mesh is bad input (:class:`fabricate.cad.PartError`, exit 2)."""
+    them) builds no parts, nor does a mesh from which a part cannot be built with the config's part
+    settings (:class:`fabricate.cad.PartError`, naming the part and what to change): either way the
+    run goes on to write the mesh, the layers and the report, marked as a missed requirement (exit 3),
+    so the result can be inspected and no converged work is lost."""
     from fabricate.cad import build_parts
 
     spec = part_spec(cfg)
@@ -212,12 +213,15 @@ def stage_cad(cfg, opt: OptimizeRecord, off: OffsetRecord) -> PartsRecord:
     try:
         parts = build_parts(off.structure, spec)
     except (ConfigError, MeshError) as exc:
-        if result is None or result.success:
-            raise  # the design or the part settings: bad input
-        # the optimizer did not reach its target and no parts can be cut from its mesh: write what
-        # there is (mesh, layers, report) and end marked as a missed tolerance (exit 3)
-        return skipped(f"no panels or beams built from the unconverged mesh (optimization {result.status}: "
-                       f"{result.message}): {exc}", f"skipped: optimization {result.status}, parts cannot be built")
+        # no parts can be cut from this mesh with these part settings: the optimized mesh, the layers
+        # and the report are still written, marked as a missed requirement (exit 3) with the reason,
+        # so converged work is never lost (the message names the part and what to change)
+        if result is not None and not result.success:
+            return skipped(f"no panels or beams built from the unconverged mesh (optimization {result.status}: "
+                           f"{result.message}): {exc}",
+                           f"skipped: optimization {result.status}, parts cannot be built")
+        return skipped(f"no panels or beams built from the optimized mesh: {exc}; the mesh, the layers and "
+                       "the report are written", "skipped: parts cannot be built")
     from ..cad.parts import unit_id
 
     counts = {k: len({unit_id(i) for g in parts.of_kind(k) for i in g.ids}) for k in ("panel", "beam", "node")}
@@ -273,6 +277,7 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
     files: dict[str, dict] = {}
 
     cut_batches = None
+    export_failed: dict[str, dict] = {}  # file name -> {"pass": False, "why": ...}: an exporter that raised
 
     def done(check: dict, line: str) -> ExportsRecord:
         return ExportsRecord(files=frozen(files), check=frozen(check), line=line, cut_batches=cut_batches)
@@ -303,10 +308,13 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
             extra = {"rhino": {"structure": structure}, "nc1": {"order": cfg.name or "roof"},
                      "step": {"schema": cfg.outputs.step_schema}}.get(key, {})
             facts = getattr(export, fn)(built, out / fname, **extra)
-        except ExportError:
-            raise
         except Exception as exc:  # an exporter bug or an OCC failure: exit 4, with the file named
-            raise ExportError(f"{fname}: export failed: {type(exc).__name__}: {exc}") from exc
+            if _write_failed(exc):
+                raise  # the disk (full, read-only): nothing more can be written, the report neither
+            msg = str(exc) if isinstance(exc, ExportError) else f"{fname}: export failed: {type(exc).__name__}: {exc}"
+            log.warning("%s", msg)
+            export_failed[fname] = {"pass": False, "why": msg}
+            continue
         files[fname] = dict(facts or {})
         if key == "bom" and statics.check is not None:  # the structure's columns on the beam rows
             from fabricate.structure.outputs import add_bom_columns
@@ -320,6 +328,11 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
     if cfg.outputs.stl_parts:  # one STL per part (a welding viewer fuses the touching parts of model.stl)
         progress.advance("exports", 1, "one STL per part")
         files["stl/"] = export.write_stl_parts(built, out / "stl")
+    if export_failed:  # the other files and the report are written; the run ends 4, marked, naming them
+        names = ", ".join(export_failed)
+        return done({"pass": False, "mode": "off", "checks": {f"export {k}": v for k, v in export_failed.items()},
+                     "skipped": f"not checked: {names} could not be written"},
+                    f"{len(files)} files, EXPORT FAILED: {names}")
     if not cfg.outputs.bom:  # the checks compare every file with the bill of materials
         return done({"pass": None, "mode": "off", "checks": {},
                      "skipped": "bom.csv was not written (outputs.bom: false)"}, f"{len(files)} files, not checked")
@@ -336,6 +349,18 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
     failed = [k for k, v in check.get("checks", {}).items() if isinstance(v, dict) and v.get("pass") is False]
     return done(check, f"{len(files)} files, " + (f"{mode} check FAILED: {', '.join(failed)}" if failed
                                                   else f"{mode} check passed"))
+
+
+def _write_failed(exc: BaseException) -> bool:
+    """Whether ``exc`` (or what it was raised from) is the file system refusing a write (a full disk,
+    a read-only folder): then no later file can be written either."""
+    from .cli.exits import WRITE_FAILED
+
+    while exc is not None:
+        if isinstance(exc, OSError) and exc.errno in WRITE_FAILED:
+            return True
+        exc = exc.__cause__
+    return False
 
 
 # -- report ----------------------------------------------------------------------------

@@ -92,11 +92,23 @@ def collect_measures(cfg, inp, opt, off) -> dict[str, dict]:
     result = opt.result
     if result is not None:
         diag = inp.mesh.bbox_diagonal()  # the reference: the input in mm
+        moved_mm = float(result.max_distance * diag)
         out["closeness"] = {
-            "what": "max distance of a vertex to the reference surface / its bounding-box diagonal",
+            "what": "max distance of a vertex to the reference surface / its bounding-box diagonal "
+                    "(how far the design moved)",
             "unit": "relative", "count": mesh.n_vertices, "tolerance": tol.closeness, "enforced": False,
-            "max": float(result.max_distance), "mean": None, "max_mm": float(result.max_distance * diag),
+            "max": float(result.max_distance), "mean": None, "max_mm": moved_mm, "diagonal_mm": float(diag),
             "worst": [], "pass": bool(result.max_distance <= tol.closeness)}
+        if tol.closeness_mm is not None:  # a limit in mm: closeness is then a requirement (apply_requirements)
+            out["closeness"].update(tolerance_mm=float(tol.closeness_mm), **{"pass": moved_mm <= tol.closeness_mm})
+        fair = (result.defects or {}).get("fairness")
+        if fair is not None:
+            out["roughness"] = {
+                "what": "roughness of the result over the input's (mean second difference along the mesh lines "
+                        "over the mean edge; 1 = as fair as the design, above 1 rougher)",
+                "unit": "ratio", "count": mesh.n_vertices, "tolerance": tol.roughness, "enforced": False,
+                "max": float(fair["ratio"]), "mean": None, "input": float(fair["input"]),
+                "result": float(fair["result"]), "worst": [], "pass": bool(fair["ratio"] <= tol.roughness)}
         folded = (result.defects or {}).get("folded")
         if folded is not None:
             count = int(folded["count"])

@@ -1,0 +1,75 @@
+"""A user's own roof (#30): converged work is never lost, how far the design moved is in every
+headline, and a limit in mm on it is a requirement when asked for."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from _pipeline_fixtures import tiny_config
+from fabricate.app.pipeline import moved_sentence, outcome, run_pipeline
+
+MESH_ONLY = {"step": False, "stl": False, "3mf": False, "dxf": False, "svg": False, "bom": False,
+             "pictures": False, "html": False}
+
+
+def test_a_converged_mesh_whose_parts_cannot_be_built_is_written_and_ends_3(tmp_path, monkeypatch):
+    """The CAD stage refuses a converged mesh (a tee web folds at one node): the optimized mesh, the
+    layers and the report are written with the reason, marked, exit 3 (it used to end 2 with nothing)."""
+    import fabricate.cad as cad
+    from fabricate.cad.errors import PartError
+
+    def folds(structure, spec):
+        raise PartError("beam B0012 (edge 11): the tee web folds at node N0004; reduce parts.beam_depth",
+                        "B0012", 11)
+
+    monkeypatch.setattr(cad, "build_parts", folds)
+    summary = run_pipeline(tiny_config(tmp_path, "refused", outputs=dict(MESH_ONLY, step=True)), tmp_path / "out")
+    out = tmp_path / "out" / "refused"
+    assert (summary.status, summary.exit_code) == ("tolerance_not_reached", 3)
+    assert "no panels or beams built from the optimized mesh" in summary.message and "B0012" in summary.message
+    assert "reduce parts.beam_depth" in summary.message
+    assert (out / "mesh.obj").is_file() and (out / "layer_1.obj").is_file()
+    assert (out / "TOLERANCE_NOT_REACHED.txt").is_file() and not (out / "model.step").exists()
+    report = json.loads((out / "report.json").read_text())
+    assert report["exit_code"] == 3 and "B0012" in report["message"]
+    assert report["optimization"]["status"] == "converged"
+
+
+def test_every_headline_says_how_far_the_design_moved(tmp_path):
+    summary = run_pipeline(tiny_config(tmp_path, "moved", outputs=MESH_ONLY), tmp_path / "out")
+    report = json.loads((tmp_path / "out" / "moved" / "report.json").read_text())
+    close, rough = report["measures"]["closeness"], report["measures"]["roughness"]
+    assert close["max_mm"] == pytest.approx(close["max"] * close["diagonal_mm"])
+    assert close["max_mm"] > 0 and rough["input"] > 0 and rough["result"] > 0
+    assert rough["max"] == pytest.approx(rough["result"] / rough["input"])
+    said = f"design moved up to {close['max_mm']:,.1f} mm ({100 * close['max']:.2f} % of the bounding-box diagonal)"
+    assert said in summary.message and said in report["message"]
+    assert f"{rough['max']:.2g} x the input's roughness" in summary.message
+
+
+def test_a_limit_in_mm_on_how_far_the_design_moves_is_a_requirement(tmp_path):
+    free = run_pipeline(tiny_config(tmp_path, "free", outputs=MESH_ONLY), tmp_path / "out")
+    moved = json.loads((tmp_path / "out" / "free" / "report.json").read_text())["measures"]["closeness"]["max_mm"]
+    assert free.exit_code == 0 and moved > 1.0
+    tight = run_pipeline(tiny_config(tmp_path, "tight", outputs=MESH_ONLY, tolerances={"closeness_mm": moved / 2}),
+                         tmp_path / "out")
+    assert (tight.status, tight.exit_code) == ("tolerance_not_reached", 3) and "closeness" in tight.failed
+    assert f"closeness {moved:,.1f} mm > {moved / 2:g} mm" in tight.message
+    loose = run_pipeline(tiny_config(tmp_path, "loose", outputs=MESH_ONLY, tolerances={"closeness_mm": moved * 2}),
+                         tmp_path / "out")
+    assert loose.exit_code == 0
+    report = json.loads((tmp_path / "out" / "loose" / "report.json").read_text())
+    assert report["measures"]["closeness"]["role"] == "requirement"
+    assert report["measures"]["closeness"]["tolerance_mm"] == pytest.approx(moved * 2)
+
+
+def test_a_rougher_result_than_the_roughness_tolerance_is_a_warning_not_ok_silently():
+    measures = {"planarity": {"enforced": True, "pass": True, "max": 0.0, "tolerance": 1e-6},
+                "roughness": {"enforced": False, "pass": False, "max": 3.2, "tolerance": 2.0, "unit": "ratio"},
+                "closeness": {"enforced": False, "pass": True, "max": 0.004, "max_mm": 120.0, "tolerance": 0.005}}
+    out = outcome(measures)
+    assert out.exit_code == 0 and "1 warning(s): roughness 3.2 ratio" in out.message
+    assert out.message.endswith("design moved up to 120.0 mm (0.40 % of the bounding-box diagonal), "
+                                "3.2 x the input's roughness")
+    assert moved_sentence({}) == ""
