@@ -352,6 +352,51 @@ def test_malformed_input(tmp_path, case):
         assert fact in msg, (fact, msg)
 
 
+def _grid_off(drop_at_line=None, wrap=False) -> str:
+    """OFF of a 5 x 4 vertex grid (20 vertices, lines 3-22; 12 quads, lines 23-34); the face on line
+    ``drop_at_line`` loses its last index; ``wrap`` splits every face record over two lines."""
+    m = shapes.grid(5, 4, size=(3.0, 2.0))
+    lines = ["OFF", "20 12 0"] + ["%g %g %g" % tuple(v) for v in m.V]
+    for f in m.F.tolist():
+        rec = ["4"] + [str(i) for i in f]
+        if len(lines) + 1 == drop_at_line:
+            rec = rec[:-1]
+        lines += [" ".join(rec[:3]), "  " + " ".join(rec[3:])] if wrap else [" ".join(rec)]
+    return "\n".join(lines) + "\n"
+
+
+@pytest.mark.parametrize("line", [23, 28])
+def test_off_short_face_is_named_on_its_own_line(tmp_path, line):
+    """A face record with too few indices takes the next face's count as its last index; the
+    file then ends early.  The message names the short record's line, not the file's end."""
+    path = tmp_path / "short.off"
+    path.write_text(_grid_off(drop_at_line=line))
+    with pytest.raises(MeshError) as err:
+        read_mesh(path)
+    msg = str(err.value)
+    assert msg.startswith(f"{path}:{line}: face {line - 23} "), msg
+    assert "3 of its 4 indices" in msg and f"line {line + 1}" in msg and "11 of 12 faces" in msg, msg
+    assert "\n" not in msg
+
+
+def test_off_short_last_face_is_named_where_it_starts(tmp_path):
+    path = tmp_path / "last.off"
+    text = _grid_off(wrap=True)  # every record over two lines; the last one loses an index
+    text = text[: text.rstrip().rindex(" ")] + "\n"
+    path.write_text(text)
+    with pytest.raises(MeshError) as err:
+        read_mesh(path)
+    msg = str(err.value)
+    assert msg.startswith(f"{path}:45: face 11 "), msg  # lines 45-46 hold face 11
+    assert "file ends" in msg and "11 of 12 faces" in msg
+
+
+def test_off_wrapped_faces_still_read(tmp_path):
+    path = tmp_path / "wrapped.off"
+    path.write_text(_grid_off(wrap=True))
+    assert read_mesh(path).faces_list() == shapes.grid(5, 4).faces_list()
+
+
 def test_missing_file(tmp_path):
     with pytest.raises(MeshError, match=r"nothing\.obj: no such file"):
         read_mesh(tmp_path / "nothing.obj")

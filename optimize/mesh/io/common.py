@@ -198,13 +198,22 @@ class Tokens:
             return self._line_list[i]
         return self._line_list[-1] if self.tokens else self.first_line
 
+    def after_line(self, line: int) -> int:
+        """Index of the first token after line ``line`` (1-based)."""
+        return self._after[line - self.first_line]
+
+    def tokens_on_line(self, line: int) -> int:
+        """How many tokens line ``line`` (1-based) holds."""
+        return self.after_line(line) - (self.after_line(line - 1) if line > self.first_line else 0)
+
     def records(self, start: int, n: int, size: int | None) -> tuple[list[int], int, int]:
         """Walk ``n`` records from token ``start``; a record is ``size`` tokens, or (size None)
         a count token followed by that many tokens.  The rest of the line holding a
         record's last token is skipped (colours, normals), so records may wrap lines.
 
         Returns (starts, end, done): token index of each record start, the token after
-        the last record, and how many records were complete (``done < n`` means the
+        the last complete record (when the tokens ran out inside a record: where that
+        record starts), and how many records were complete (``done < n`` means the
         tokens ran out).  Raises :class:`BadToken` for a count that is not a
         non-negative integer.
         """
@@ -224,7 +233,7 @@ class Tokens:
             else:
                 last = p + size - 1
             if last >= nt:
-                return starts, nt, len(starts)
+                return starts, p, len(starts)
             starts.append(p)
             p = after[line[last] - first]
         return starts, p, len(starts)

@@ -22,6 +22,7 @@ from .common import (
     Tokens,
     face_lists,
     fail,
+    is_count,
     one_line,
     show,
     to_floats,
@@ -66,8 +67,7 @@ def parse_off(text: str, path: str) -> Parsed:
         raise fail(path, tk.line_of(bad.index), f"'{toks[bad.index]}' starts face {bad.done}, "
                                                 "expected its vertex count (an integer >= 0)") from None
     if done < nf:
-        raise fail(path, tk.line_of(len(toks)), f"file ends after {done} of {nf} faces, "
-                                                f"expected {declared}")
+        raise _faces_run_out(tk, path, fstart, p, nf, declared)
     if p < len(toks):
         raise fail(path, tk.line_of(p), f"'{show(toks[p])}' after the last face, expected the end of "
                                         f"the file ({declared}: is a count too small?)")
@@ -78,6 +78,37 @@ def parse_off(text: str, path: str) -> Parsed:
     flat = to_ints([toks[i] for i in fidx],
                    lambda i: (where(path, tk.line_of(fidx[i])), ""), "a vertex index")
     return Parsed(V, flat, sizes, tk.line[vstart], tk.line[fstart], "line", 0)
+
+
+def _faces_run_out(tk: Tokens, path: str, fstart: list[int], p: int, nf: int, declared: str):
+    """The error when the tokens run out before ``nf`` face records (``fstart``: the complete
+    ones; ``p``: where the incomplete one starts, or the end).  A record with too few indices
+    takes the next record's count as its last index and the file ends early, far from the
+    mistake: so name the first record that wraps onto a line that holds a face record of its own
+    (a record legitimately wrapped over lines continues with indices only); else the record
+    the file ends inside; else the last line."""
+    toks, done = tk.tokens, len(fstart)
+    ends = f"the file ends after {done} of {nf} faces ({declared})"
+    if done:
+        s = np.asarray(fstart, dtype=np.int64)
+        k = np.asarray([int(toks[i]) for i in fstart], dtype=np.int64)
+        start_line, last_line = tk.line[s], tk.line[s + k]
+        for f in np.nonzero(last_line > start_line)[0].tolist():  # error path only
+            nxt = tk.after_line(int(start_line[f]))  # the first token of the next line that has any
+            line2 = tk.line_of(nxt)
+            n2 = tk.tokens_on_line(line2)
+            if is_count(toks[nxt]) and n2 >= 1 + int(toks[nxt]):
+                own = nxt - int(s[f]) - 1
+                return fail(path, int(start_line[f]),
+                            f"face {f} ('{show(' '.join(toks[s[f]: nxt]))}') has {own} of its {k[f]} indices on "
+                            f"its line and takes the rest from line {line2} "
+                            f"('{show(' '.join(toks[nxt: nxt + n2]))}', which reads as a face of its own); "
+                            f"then {ends}: expected {k[f]} indices after the count {k[f]}")
+    if p < len(toks):  # the file ends inside a record
+        k, rec = int(toks[p]), show(" ".join(toks[p: p + 12]))
+        return fail(path, tk.line_of(p), f"face {done} ('{rec}') has {len(toks) - p - 1} of its {k} indices "
+                                         f"when {ends}: expected {k} indices after the count")
+    return fail(path, tk.line_of(len(toks)), f"file ends after {done} of {nf} faces, expected {declared}")
 
 
 def _header(tk: Tokens, path: str) -> int:
