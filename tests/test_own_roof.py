@@ -42,7 +42,7 @@ def test_every_headline_says_how_far_the_design_moved(tmp_path):
     close, rough = report["measures"]["closeness"], report["measures"]["roughness"]
     assert close["max_mm"] == pytest.approx(close["max"] * close["diagonal_mm"])
     assert close["max_mm"] > 0 and rough["input"] > 0 and rough["result"] > 0
-    assert rough["max"] == pytest.approx(rough["result"] / rough["input"])
+    assert rough["max"] == pytest.approx((rough["result"] + 0.01) / (rough["input"] + 0.01))
     said = f"design moved up to {close['max_mm']:,.1f} mm ({100 * close['max']:.2f} % of the bounding-box diagonal)"
     assert said in summary.message and said in report["message"]
     assert f"{rough['max']:.2g} x the input's roughness" in summary.message
@@ -73,3 +73,14 @@ def test_a_rougher_result_than_the_roughness_tolerance_is_a_warning_not_ok_silen
     assert out.message.endswith("design moved up to 120.0 mm (0.40 % of the bounding-box diagonal), "
                                 "3.2 x the input's roughness")
     assert moved_sentence({}) == ""
+
+
+def test_a_design_of_straight_lines_has_a_finite_roughness_ratio_and_a_report():
+    """A hyperbolic paraboloid's rulings are exactly straight and evenly spaced (roughness 0): the ratio
+    stays finite (it was inf, written as null, and the report's warnings then raised TypeError)."""
+    from fabricate.report.measures import roughness_ratio, warnings
+
+    assert roughness_ratio(0.0, 0.0) == 1.0 and roughness_ratio(0.0, 0.03) == pytest.approx(4.0)
+    assert roughness_ratio(0.2, 0.2) == 1.0
+    lines = warnings({"roughness": {"enforced": False, "pass": False, "max": None, "tolerance": 2.0, "unit": "ratio"}})
+    assert lines == ["roughness nan ratio (max nan ratio > tolerance 2)"]

@@ -68,6 +68,18 @@ def entry(values: np.ndarray, tolerance: float | None, unit: str, element: str, 
     return out
 
 
+ROUGHNESS_FLOOR = 0.01
+"""Roughness (second difference over the mean edge) below which lines count as straight and evenly
+spaced: added to both sides of :func:`roughness_ratio`, so a design of exactly straight lines (a
+hyperbolic paraboloid's rulings) gives a finite ratio."""
+
+
+def roughness_ratio(before: float, after: float) -> float:
+    """How much rougher the result is than the input: ``(after + f) / (before + f)``,
+    ``f`` = :data:`ROUGHNESS_FLOOR` (1: as fair as the design)."""
+    return float((after + ROUGHNESS_FLOOR) / (before + ROUGHNESS_FLOOR))
+
+
 def collect_measures(cfg, inp, opt, off) -> dict[str, dict]:
     """All measures of a run: ``cfg`` its RunConfig, ``inp``, ``opt``, ``off`` the records of its input,
     optimize and offset stages (:mod:`fabricate.app.records`)."""
@@ -103,12 +115,14 @@ def collect_measures(cfg, inp, opt, off) -> dict[str, dict]:
             out["closeness"].update(tolerance_mm=float(tol.closeness_mm), **{"pass": moved_mm <= tol.closeness_mm})
         fair = (result.defects or {}).get("fairness")
         if fair is not None:
+            ratio = roughness_ratio(fair["input"], fair["result"])
             out["roughness"] = {
                 "what": "roughness of the result over the input's (mean second difference along the mesh lines "
-                        "over the mean edge; 1 = as fair as the design, above 1 rougher)",
+                        f"over the mean edge, each plus {ROUGHNESS_FLOOR:g}; 1 = as fair as the design, above 1 "
+                        "rougher)",
                 "unit": "ratio", "count": mesh.n_vertices, "tolerance": tol.roughness, "enforced": False,
-                "max": float(fair["ratio"]), "mean": None, "input": float(fair["input"]),
-                "result": float(fair["result"]), "worst": [], "pass": bool(fair["ratio"] <= tol.roughness)}
+                "max": ratio, "mean": None, "input": float(fair["input"]),
+                "result": float(fair["result"]), "worst": [], "pass": bool(ratio <= tol.roughness)}
         folded = (result.defects or {}).get("folded")
         if folded is not None:
             count = int(folded["count"])
@@ -189,9 +203,11 @@ def warnings(measures: dict, limits: dict | None = None) -> list[str]:
             continue
         mm = next((m[k] for k in ("max_mm", "max_twist_mm") if m.get(k) is not None), None)
         deg = m.get("max_deg")
+        top = m.get("max")
+        top = float("nan") if top is None else top  # a non-finite figure reads back from JSON as null
         value = (f"{mm:.3g} mm" if mm is not None else f"{deg:.3g} deg" if deg is not None
-                 else f"{m['max']:.3g} {m.get('unit', '')}".strip())
-        out.append(f"{name} {value} (max {m['max']:.3g} {m.get('unit', '')} > tolerance {m['tolerance']:.3g})")
+                 else f"{top:.3g} {m.get('unit', '')}".strip())
+        out.append(f"{name} {value} (max {top:.3g} {m.get('unit', '')} > tolerance {m['tolerance']:.3g})")
     for key, v in (limits or {}).items():
         if v.get("count"):
             ids = ", ".join(v["ids"][:12]) + (" ..." if v["count"] > 12 else "")
