@@ -165,8 +165,8 @@ class InputSection(Section):
                                           {"key": key})
         if self.surface is None and self.radius is not None:
             raise PydanticCustomError("radius", "radius applies only to a surface input")
-        if isinstance(self.side, tuple) and not (all(math.isfinite(c) for c in self.side) and any(self.side)):
-            raise PydanticCustomError("side", "side {side} is not a nonzero finite vector, expected "
+        if isinstance(self.side, tuple) and not 0 < sum(c * c for c in self.side) < math.inf:
+            raise PydanticCustomError("side", "side {side} is not a nonzero vector of finite length, expected "
                                       "[x, y, z] toward the inside or 'keep'", {"side": list(self.side)})
         return self
 
@@ -336,7 +336,7 @@ def parse_config(data: dict[str, Any], *, source: str | Path = "<config>", base_
     try:
         cfg = RunConfig.model_validate(data, context={"base_dir": base})
     except ValidationError as exc:
-        raise ConfigError(format_errors(exc, source, lines or {}, overrides or {}, RunConfig)) from None
+        raise ConfigError(format_errors(exc, source, lines or {}, overrides or {}, RunConfig, data)) from None
     if cfg.name is None:
         cfg.name = _safe_name(source.stem)
     cfg._source = source

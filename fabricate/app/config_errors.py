@@ -41,10 +41,24 @@ def did_you_mean(word: str, allowed) -> str:
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
-def _clean_loc(loc: tuple) -> tuple:
-    """Drop pydantic's union tags (``'list[int]'``, ``'literal[...]'``, ``'str'``) from a location."""
+def _clean_loc(loc: tuple, data: Any = None) -> tuple:
+    """Drop pydantic's union tags (``'list[int]'``, ``'literal[...]'``, ``'str'``) from a location.
+
+    A part is a key of the file when ``data`` (the validated input) has it at that place: a key
+    written ``foo[1]`` or ``str`` stays; a part that is no key there is a tag."""
     tags = {"str", "int", "float", "bool", "none"}
-    return tuple(p for p in loc if isinstance(p, int) or ("[" not in p and p not in tags))
+    out, node = [], data
+    for p in loc:
+        if isinstance(node, dict) and p in node:
+            node = node[p]
+        elif isinstance(node, (list, tuple)) and isinstance(p, int) and -len(node) <= p < len(node):
+            node = node[p]
+        elif isinstance(p, int) or ("[" not in p and p not in tags):
+            node = None  # beyond the data (a key pydantic adds, a default): the old rule
+        else:
+            continue
+        out.append(p)
+    return tuple(out)
 
 
 def _section_at(root: type[BaseModel], loc: tuple) -> type[BaseModel] | None:
@@ -74,10 +88,11 @@ def _sections_in(annotation) -> type[BaseModel] | None:
 
 
 def format_errors(exc: ValidationError, source: Path, lines: dict[tuple, int],
-                  overrides: dict[str, Any], root: type[BaseModel]) -> str:
-    """All problems, one per line: ``file:line: key.path: value ...: what is allowed``."""
+                  overrides: dict[str, Any], root: type[BaseModel], data: Any = None) -> str:
+    """All problems, one per line: ``file:line: key.path: value ...: what is allowed`` (``data``: the
+    input validated, which tells the file's keys from pydantic's tags in a location)."""
     messages, seen = [], set()
-    errors = [dict(e, loc=_clean_loc(e["loc"])) for e in exc.errors(include_url=False)]
+    errors = [dict(e, loc=_clean_loc(e["loc"], data)) for e in exc.errors(include_url=False)]
     for err in errors:
         loc = err["loc"]
         key = printable(".".join(str(p) for p in loc)) or "(top level)"
@@ -102,7 +117,7 @@ def format_errors(exc: ValidationError, source: Path, lines: dict[tuple, int],
 
 def _message(err: dict, loc: tuple, root: type[BaseModel]) -> str:
     kind, msg, value = err["type"], err["msg"], err.get("input")
-    if kind == "extra_forbidden":
+    if kind == "extra_forbidden" and loc:
         section = _section_at(root, loc[:-1])
         allowed = [f.alias or name for name, f in section.model_fields.items()] if section else []
         return (f"unknown key{did_you_mean(loc[-1], allowed)}"
@@ -121,7 +136,7 @@ def _message(err: dict, loc: tuple, root: type[BaseModel]) -> str:
     msg = re.sub(r" or instance of \w+", "", msg)  # pydantic's words for a section given as a value
     allowed = field_range(root, loc)
     if allowed and kind in _RANGE_ERRORS:
-        msg = f"expected {allowed}"
+        msg = f"expected {allowed}{field_unit(root, loc)}"
     if kind in ("int_type", "float_type", "bool_type") and isinstance(value, (bool, str)):
         msg += f" (YAML reads {short(value)} as a {'string' if isinstance(value, str) else 'boolean'}" + (
             ")" if kind == "bool_type" else ", not a number)")
@@ -136,14 +151,7 @@ _RANGE_ERRORS = {"greater_than", "greater_than_equal", "less_than", "less_than_e
 
 def field_range(root: type[BaseModel], loc: tuple) -> str | None:
     """``"6..256"`` / ``"(0, 200]"`` for the number key at ``loc`` (a list item: its list's items), or None."""
-    keys = tuple(p for p in loc if isinstance(p, str))
-    if not keys:
-        return None
-    section = _section_at(root, keys[:-1])
-    field = None
-    if section is not None:
-        field = section.model_fields.get(keys[-1]) or next(
-            (f for f in section.model_fields.values() if f.alias == keys[-1]), None)
+    field = _field_at(root, loc)
     if field is None:
         return None
     metadata = list(field.metadata)
@@ -162,6 +170,23 @@ def field_range(root: type[BaseModel], loc: tuple) -> str | None:
     left = f"{lo[1]}{number(lo[0])}" if lo else "(-inf"
     right = f"{number(hi[0])}{hi[1]}" if hi else "inf)"
     return f"{'an integer' if integer else 'a number'} in {left}, {right}"
+
+
+def field_unit(root: type[BaseModel], loc: tuple) -> str:
+    """``" mm"`` for a key at ``loc`` whose field names its unit (``json_schema_extra``), else ``""``."""
+    field = _field_at(root, loc)
+    extra = getattr(field, "json_schema_extra", None)
+    return f" {extra['unit']}" if isinstance(extra, dict) and extra.get("unit") else ""
+
+
+def _field_at(root: type[BaseModel], loc: tuple):
+    """The schema field of the key at ``loc`` (list indices skipped), or None."""
+    keys = tuple(p for p in loc if isinstance(p, str))
+    section = _section_at(root, keys[:-1]) if keys else None
+    if section is None:
+        return None
+    return section.model_fields.get(keys[-1]) or next(
+        (f for f in section.model_fields.values() if f.alias == keys[-1]), None)
 
 
 def number(x: float) -> str:

@@ -1,9 +1,9 @@
 """Config sections of the parts: dimensions, shop limits, stock sheets for the nested cut files."""
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
-from pydantic import Field, model_serializer, model_validator
+from pydantic import Field, ValidationInfo, field_validator, model_serializer, model_validator
 from pydantic_core import PydanticCustomError
 
 from ..cad.glass import BOUNDS, GASES, INTERLAYER_DENSITY, TYPES
@@ -64,7 +64,14 @@ class GlassSection(Section):
         return self
 
 
-class LimitsSection(section_base(Limits)):
+MAX_SHEET_MM = 100_000.0
+"""Longest side of a stock sheet (mm): 100 m; a jumbo glass sheet is 6 m, a steel plate 12-18 m."""
+
+_SHEET_SIDE = dict(gt=0, le=MAX_SHEET_MM)
+_Side = Annotated[float, Field(**_SHEET_SIDE)]
+
+
+class LimitsSection(section_base(Limits, meta={"sheet_mm": {"items": _SHEET_SIDE}})):
     """What the shops can make; parts beyond it are flagged by id (defaults, bounds:
     :class:`fabricate.cad.spec.Limits`)."""
 
@@ -110,22 +117,39 @@ class PartsSection(section_base(PartSpec, extra=_NESTED)):
         return data
 
 
+_MM = {"unit": "mm"}
+
+
 class SheetSection(Section):
     """Stock sheets of one material for the nested cut files (mm)."""
 
-    sheet_mm: tuple[float, float]
-    margin_mm: float = Field(default=10.0, ge=0, le=1000.0)
-    kerf_mm: float = Field(default=3.0, ge=0, le=100.0)
+    sheet_mm: tuple[_Side, _Side] = Field(json_schema_extra=_MM)
+    margin_mm: float = Field(default=10.0, ge=0, le=1000.0, json_schema_extra=_MM)
+    kerf_mm: float = Field(default=3.0, ge=0, le=100.0, json_schema_extra=_MM)
     rotation: bool = True
 
     _sheet_list = tuples("sheet_mm")
 
 
+SHEETS = {"glass": {"sheet_mm": (6000.0, 3210.0), "margin_mm": 20.0, "kerf_mm": 10.0, "rotation": True},
+          "steel": {"sheet_mm": (12000.0, 2500.0), "margin_mm": 10.0, "kerf_mm": 3.0, "rotation": True}}
+"""The stock sheet of each material when the config does not say (README: outputs.nesting)."""
+
+
 class NestingSection(Section):
     """Stock sheets per material: glass (jumbo 6000 x 3210, trimmed edges, room to grind between parts)
-    and steel plate (12000 x 2500, plasma or laser kerf)."""
+    and steel plate (12000 x 2500, plasma or laser kerf).  A material's section gives only the keys
+    it changes: the others keep that material's defaults (:data:`SHEETS`)."""
 
-    glass: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(6000.0, 3210.0), margin_mm=20.0,
-                                                                     kerf_mm=10.0))
-    steel: SheetSection = Field(default_factory=lambda: SheetSection(sheet_mm=(12000.0, 2500.0), margin_mm=10.0,
-                                                                     kerf_mm=3.0))
+    glass: SheetSection = Field(default_factory=lambda: SheetSection(**SHEETS["glass"]))
+    steel: SheetSection = Field(default_factory=lambda: SheetSection(**SHEETS["steel"]))
+
+    @field_validator("glass", "steel", mode="before")
+    @classmethod
+    def _defaults(cls, value, info: ValidationInfo):
+        """The material's defaults under the keys given (a key's ``null``, or the section's: its default)."""
+        if value is None:
+            return dict(SHEETS[info.field_name])
+        if isinstance(value, dict):
+            return {**SHEETS[info.field_name], **{k: v for k, v in value.items() if v is not None}}
+        return value

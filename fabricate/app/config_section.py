@@ -72,6 +72,7 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
         if annotation is not hints[f.name] and isinstance(default, tuple):
             default = list(default)  # the default of a YAML list
         fields[f.name] = (annotation, Field(default=default, description=help_ or None,
+                                            json_schema_extra={"unit": md["unit"]} if md.get("unit") else None,
                                             **{k: md[k] for k in _BOUNDS if k in md}))
     fixed = [f.name for f in dataclasses.fields(options) if _fixed_tuple(hints[f.name]) and f.name not in (extra or {})]
     fields.update(extra or {})
@@ -84,13 +85,16 @@ def section_base(options: type, *, meta: dict[str, dict] | None = None, extra: d
 
 
 def _schema_type(annotation, items: dict | None):
-    """``tuple[X, ...]`` -> ``list[X]`` (YAML lists; ``items`` bounds on X), elsewhere unchanged."""
+    """``tuple[X, ...]`` -> ``list[X]`` (YAML lists; ``items`` bounds on X); ``items`` bounds each
+    item of a fixed ``tuple[X, Y]`` too; elsewhere unchanged."""
     origin, args = get_origin(annotation), get_args(annotation)
     if origin in (typing.Union, types.UnionType):
         return typing.Union[tuple(_schema_type(a, items) for a in args)]
     if origin is tuple and len(args) == 2 and args[1] is Ellipsis:
         item = Annotated[args[0], Field(**items)] if items else args[0]
         return list[item]
+    if origin is tuple and items:
+        return tuple[tuple(Annotated[a, Field(**items)] for a in args)]
     return annotation
 
 

@@ -4,6 +4,8 @@ strict types, lists for tuples, and the checks that name a key.  :meth:`Structur
 gives the :class:`~fabricate.structure.options.StructureOptions` the stage takes."""
 from __future__ import annotations
 
+import math
+
 from pydantic import Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
@@ -14,11 +16,24 @@ from ..structure.options import (
     SizingOptions,
     StructureOptions,
 )
-from .config_section import section_base
+from .config_section import MAX_MM, section_base
 
 
-class SectionOption(section_base(SectionOptions)):
-    """A beam section (mm); defaults and bounds: :class:`fabricate.structure.options.SectionOptions`."""
+_SIZES = {k: {"le": MAX_MM} for k in ("depth", "width", "web", "flange")}
+"""The plausibility bound of a section's dimensions (MAX_MM, 10 m; past it the section properties overflow)."""
+MAX_AREA_LOAD = 100.0
+"""Largest area load (kN/m2): ten times a heavy design snow load."""
+MAX_UNIT_WEIGHT = 1000.0
+"""Largest unit weight (kN/m3): steel is 78.5, the densest metal about 220."""
+MAX_FACTOR = 10.0
+"""Largest factor of a load case in a combination (EN 1990's are at most 1.5)."""
+_LOADS = {"steel_unit_weight": {"le": MAX_UNIT_WEIGHT}, "glass_unit_weight": {"le": MAX_UNIT_WEIGHT},
+          **{k: {"le": MAX_AREA_LOAD} for k in ("finishes", "snow", "wind_pressure", "wind_suction")}}
+
+
+class SectionOption(section_base(SectionOptions, meta=_SIZES)):
+    """A beam section (mm); defaults and bounds: :class:`fabricate.structure.options.SectionOptions`
+    (upper bounds: the config's plausibility limit :data:`MAX_MM`)."""
 
     @model_validator(mode="after")
     def _valid(self) -> SectionOption:
@@ -31,8 +46,9 @@ class SectionOption(section_base(SectionOptions)):
         return self
 
 
-class LoadsOption(section_base(LoadsOptions)):
-    """The ``structure.loads`` section (defaults: :class:`fabricate.structure.options.LoadsOptions`)."""
+class LoadsOption(section_base(LoadsOptions, meta=_LOADS)):
+    """The ``structure.loads`` section (defaults: :class:`fabricate.structure.options.LoadsOptions`;
+    upper bounds :data:`MAX_AREA_LOAD`, :data:`MAX_UNIT_WEIGHT`)."""
 
 
 class CombinationOption(section_base(CombinationOptions)):
@@ -41,11 +57,11 @@ class CombinationOption(section_base(CombinationOptions)):
     @field_validator("factors")
     @classmethod
     def _factors(cls, v):
-        bad = {k: f for k, f in v.items() if not (f >= 0)}
+        bad = {k: f for k, f in v.items() if not (0 <= f <= MAX_FACTOR)}
         if bad:
             k, f = next(iter(bad.items()))
-            raise PydanticCustomError("factor", "factor {k} = {f}: expected a number >= 0 (a partial factor times "
-                                      "a combination factor)", {"k": k, "f": f})
+            raise PydanticCustomError("factor", "factor {k} = {f}: expected a number in [0, {top}] (a partial factor "
+                                      "times a combination factor)", {"k": k, "f": f, "top": f"{MAX_FACTOR:g}"})
         if not v:
             raise PydanticCustomError("factor", "no factors, expected at least one load case")
         return v
@@ -82,7 +98,8 @@ class StructureSection(section_base(StructureOptions, extra=_NESTED)):
     @field_validator("up")
     @classmethod
     def _up(cls, v):
-        if sum(c * c for c in v) <= 0:
-            raise PydanticCustomError("up", "up {v} is not a nonzero vector, expected [x, y, z]", {"v": list(v)})
+        if not 0 < sum(c * c for c in v) < math.inf:
+            raise PydanticCustomError("up", "up {v} is not a nonzero vector of finite length, expected "
+                                      "[x, y, z] such as [0, 0, 1]", {"v": list(v)})
         return v
 

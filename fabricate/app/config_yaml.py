@@ -35,7 +35,7 @@ from yaml.resolver import Resolver
 
 from optimize.errors import ConfigError
 
-from .config_errors import printable
+from .config_errors import printable, short
 
 MAX_BYTES = 1 << 20
 """Largest config file read (1 MiB; the longest shipped config is about 6 kB)."""
@@ -88,6 +88,32 @@ class _Loader(yaml.reader.Reader, yaml.scanner.Scanner, yaml.parser.Parser, yaml
             return super().compose_node(parent, index)
         finally:
             self._depth -= 1
+
+    def construct_object(self, node, deep=False):
+        """A node's value; a scalar its explicit tag cannot take (``!!timestamp foo``, ``!!bool maybe``)
+        is a ConfigError naming its line, tag and value (PyYAML raises anything from ValueError to
+        AttributeError for them)."""
+        try:
+            return super().construct_object(node, deep)
+        except (yaml.YAMLError, ConfigError, RecursionError, MemoryError):
+            raise
+        except Exception as exc:  # noqa: BLE001 - every constructor failure is a bad value in the file
+            raise ConfigError(_tag_message(node, self._where, exc)) from None
+
+
+_TAG_EXPECTS = {"timestamp": "a date such as 2024-05-01 or 2024-05-01T12:30:00Z", "bool": "true or false",
+                "int": "an integer", "float": "a number", "binary": "base64 text", "null": "null or ~"}
+
+
+def _tag_message(node, where: str, exc: Exception) -> str:
+    """``file:line: not valid YAML: !!timestamp 'foo' cannot be read ...; expected ...`` (a node its tag
+    cannot build)."""
+    tag = str(node.tag).rsplit(":", 1)[-1]
+    value = short(node.value) if isinstance(node, yaml.ScalarNode) else type(node).__name__
+    expect = _TAG_EXPECTS.get(tag, f"a value the !!{tag} tag reads")
+    reason = f" ({_one_line(str(exc))})" if isinstance(exc, (ValueError, OverflowError)) and str(exc) else ""
+    return printable(f"{where}:{node.start_mark.line + 1}: not valid YAML: !!{tag} {value} cannot be read as "
+                     f"a {tag}{reason}; expected {expect}, or the value without the tag")
 
 
 def decode(raw: bytes, where: str) -> str:
