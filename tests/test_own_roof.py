@@ -46,6 +46,10 @@ def test_every_headline_says_how_far_the_design_moved(tmp_path):
     said = f"design moved up to {close['max_mm']:,.1f} mm ({100 * close['max']:.2f} % of the bounding-box diagonal)"
     assert said in summary.message and said in report["message"]
     assert f"{rough['max']:.2g} x the input's roughness" in summary.message
+    named = [(w, k) for m in report["measures"].values() for w in m.get("worst") or ()
+             for k in ("face", "beam", "vertex") if k in w]
+    assert {k for _, k in named} == {"face", "beam", "vertex"}  # the measures name parts by their file ids
+    assert all(w["id"] == f"{dict(face='P', beam='B', vertex='N')[k]}{w[k] + 1:04d}" for w, k in named)
 
 
 def test_a_limit_in_mm_on_how_far_the_design_moves_is_a_requirement(tmp_path):

@@ -32,7 +32,7 @@ from .config import RunConfig
 from .options import COMMAND
 from .progress import NullProgress
 from .records import Outcome, RunRecord, frozen
-from ..report.measures import collect_measures
+from ..report.measures import collect_measures, name_worst
 from .requirements import apply_requirements, warnings
 
 log = logging.getLogger(__name__)
@@ -152,6 +152,7 @@ def run_stages(config: RunConfig, workdir: Path, progress=None, t_start: float |
     measures.update({k: dict(v) for k, v in statics.measures.items()})
     measures = apply_requirements(measures, off.structure, tol.requirements, inp.target, tol.beam_twist_mm,
                                   tol.closeness_mm)
+    name_worst(measures, opt.mesh)
     limits = built.parts.report.get("limits") if built.parts is not None else None
     result = outcome(measures, files.check, built.skipped, limits)
     timings["before_report"] = time.perf_counter() - t_start

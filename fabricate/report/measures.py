@@ -137,6 +137,24 @@ def collect_measures(cfg, inp, opt, off) -> dict[str, dict]:
     return out
 
 
+ID_KINDS = {"face": "panel", "beam": "beam", "vertex": "node"}
+"""The part kind whose id names a worst element of each kind (face -> P0007, beam -> B0226, vertex -> N0012)."""
+
+
+def name_worst(measures: dict, mesh: Mesh) -> dict:
+    """Add the part id (``P0007``, ``B0226``, ``N0012``: the ids of every file) to each worst element
+    of ``measures`` (face, beam (edge) or vertex index of ``mesh``), as ``id``.  Returns ``measures``."""
+    from fabricate.cad.parts import part_ids
+
+    counts = {"face": mesh.n_faces, "beam": len(mesh.topology.edges), "vertex": mesh.n_vertices}
+    for m in measures.values():
+        for w in m.get("worst") or ():
+            elem = next((k for k in ID_KINDS if k in w), None)
+            if elem is not None and "id" not in w:
+                w["id"] = part_ids(ID_KINDS[elem], np.array([int(w[elem]), counts[elem] - 1]))[0]
+    return measures
+
+
 def _turned_entry(t: dict) -> dict:
     """Faces of an offset layer that turn over (``fabricate.offset.turnover``): enforced, none allowed."""
     worst = [{"face": f, "value": 1.0, "distance_mm": L["distance_mm"]}
