@@ -88,3 +88,16 @@ def test_a_design_of_straight_lines_has_a_finite_roughness_ratio_and_a_report():
     assert roughness_ratio(0.2, 0.2) == 1.0
     lines = warnings({"roughness": {"enforced": False, "pass": False, "max": None, "tolerance": 2.0, "unit": "ratio"}})
     assert lines == ["roughness nan ratio (max nan ratio > tolerance 2)"]
+
+
+@pytest.mark.parametrize("connection", ["hub", "none", "mitre"])
+def test_the_advice_for_a_short_beam_never_names_what_is_set_and_gives_the_sizes(connection):
+    from fabricate.cad.diagnose import beam_hint
+
+    hint = beam_hint(0.0, 60.0, 1.0, 200.0, length_mm=242.0, setback_mm=80.0 if connection == "hub" else 0.0,
+                     connection=connection)
+    assert "242 mm" in hint
+    assert ("parts.node.connection: mitre" in hint) == (connection != "mitre")
+    assert ("parts.node.connection: hub" in hint) == (connection == "mitre")
+    if connection == "hub":
+        assert "stand 80 mm off each node axis" in hint and "to below 109 mm" in hint

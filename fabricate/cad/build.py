@@ -104,8 +104,10 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
         others = [b for b in beams["neighbour_beams"][i].ravel().tolist() if b != i]
         nb.append(tuple(pid[sorted({fp, fm})]) + tuple(bid[sorted(set(others))])
                   + (tuple(nid[topo.edges[i]]) if with_nodes else ()))
+    edge_mm = np.sqrt(dot(Qb[:, 1] - Qb[:, 0], Qb[:, 1] - Qb[:, 0]))
     hint = lambda i: beam_hint(float(beams["planarity_mm"][i]), web, float(shrink[i]),  # noqa: E731
-                               abs(d[-1] - d[0]))
+                               abs(d[-1] - d[0]), length_mm=float(edge_mm[i]), setback_mm=spec.end_setback,
+                               connection=spec.connection)
     centre = X[:, :4].copy()
     plates = []
     if section != "rhs":  # the plate, or the web of a tee / I

@@ -109,10 +109,13 @@ def panel_failure(ids, faces_index, face_name: str, turn: float, P: np.ndarray, 
                      int(faces_index[0]))
 
 
-def beam_hint(planarity_mm: float, width: float, shrink: float = 1.0, depth: float = 0.0) -> str:
+def beam_hint(planarity_mm: float, width: float, shrink: float = 1.0, depth: float = 0.0, *,
+              length_mm: float | None = None, setback_mm: float = 0.0, connection: str = "hub") -> str:
     """What to change for a beam that folds, given how far its quad is off its plate's mid-plane,
-    ``shrink`` (its edge at the last layer over its edge at the first, negative when reversed) and
-    ``depth`` (mm, first to last layer)."""
+    ``shrink`` (its edge at the last layer over its edge at the first, negative when reversed),
+    ``depth`` (mm, first to last layer), its edge ``length_mm`` at the glass, how far its square ends
+    stand off the node axes (``setback_mm``, :attr:`fabricate.cad.PartSpec.end_setback`) and the node
+    ``connection`` (advice never names what is already set)."""
     if shrink < 0.25 and depth > 0:  # the node axes of its ends meet within the beam's depth
         zero = depth / (1.0 - shrink) if shrink < 1.0 else depth
         what = "reversed" if shrink < 0 else f"{shrink:.0%} of its length"
@@ -123,6 +126,19 @@ def beam_hint(planarity_mm: float, width: float, shrink: float = 1.0, depth: flo
         return (f"its quad twists: corners up to {planarity_mm:.1f} mm off the plate's mid-plane (beam width "
                 f"{width:g} mm), the mesh is not conical there; optimize.target: conical makes the beams "
                 "planar, or use a wider parts.beam_width (parts.beam.web_mm for a section)")
-    return ("the beam may be shorter than its end trims: reduce parts.beam_width (a section: "
-            "parts.beam.flange_width_mm) or the hub (parts.node.radius_mm, parts.node_radius), or use "
-            "parts.node.connection: mitre")
+    size = f" (its edge is {length_mm:.0f} mm long" if length_mm is not None else ""
+    if size and setback_mm > 0:
+        size += f", its square ends stand {setback_mm:g} mm off each node axis"
+    size += ")" if size else ""
+    if connection == "mitre":  # mitred in the bisector planes: the end planes cross within the beam
+        return (f"its mitred ends cross within the beam{size}: a neighbouring beam meets it at a sharp angle; "
+                "reduce parts.beam_width (a section: parts.beam.flange_width_mm), or use hubs "
+                "(parts.node.connection: hub) with a radius that clears the sharpest angle")
+    fixes = ["reduce parts.beam_width (a section: parts.beam.flange_width_mm)"]
+    if connection == "hub":
+        fixes.append("the hub (parts.node.radius_mm, parts.node_radius)"
+                     + (f" to below {0.45 * length_mm:.0f} mm" if length_mm is not None else ""))
+    elif connection == "none":
+        fixes.append("the gap at the nodes (parts.node.gap_mm)")
+    return (f"the beam may be shorter than its end trims{size}: " + " or ".join(fixes)
+            + ", or use parts.node.connection: mitre")
