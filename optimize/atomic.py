@@ -15,6 +15,7 @@ import contextlib
 import ctypes
 import ctypes.util
 import json
+import logging
 import os
 import shutil
 import socket
@@ -24,6 +25,8 @@ from pathlib import Path
 from typing import Iterator
 
 from . import jsontext
+
+log = logging.getLogger(__name__)
 
 PART_OWNER = ".conical-fab-part.json"
 """The owner record inside a temporary folder (removed when the folder is published)."""
@@ -139,24 +142,42 @@ def stale_parts(folder: str | os.PathLike) -> list[tuple[Path, dict | None, bool
     return out
 
 
-def remove_part(folder: Path) -> None:
+def remove_part(folder: Path) -> OSError | None:
     """Remove a temporary folder, its owner record last: a removal cut short (the process killed)
-    leaves a folder that still says whose it was, so the next clean-up finishes it."""
-    owner = folder / PART_OWNER
-    with contextlib.suppress(OSError):
-        for child in folder.iterdir():
-            if child.name != PART_OWNER:
-                if child.is_dir() and not child.is_symlink():
-                    shutil.rmtree(child, ignore_errors=True)
-                else:
-                    with contextlib.suppress(OSError):
-                        child.unlink()
-    with contextlib.suppress(OSError):
-        owner.unlink()
-    with contextlib.suppress(OSError):
+    leaves a folder that still says whose it was, so the next clean-up finishes it.
+
+    Returns None when the folder is gone, else the error that kept something in it (permission, an
+    immutable file, ...): all else is removed and the owner record stays."""
+    error = None
+    try:
+        children = [c for c in folder.iterdir() if c.name != PART_OWNER]
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        children, error = [], exc
+    for child in children:
+        try:
+            if child.is_dir() and not child.is_symlink():
+                shutil.rmtree(child, ignore_errors=True)   # all that can go, then why the rest cannot
+                if os.path.lexists(child):
+                    shutil.rmtree(child)
+            else:
+                child.unlink()
+        except FileNotFoundError:
+            pass
+        except OSError as exc:
+            error = error or exc
+    if error is not None:
+        return error
+    with contextlib.suppress(FileNotFoundError):
+        (folder / PART_OWNER).unlink()
+    try:
         folder.rmdir()
-    if folder.exists():
-        shutil.rmtree(folder, ignore_errors=True)
+    except FileNotFoundError:
+        return None
+    except OSError as exc:
+        return exc
+    return None
 
 
 def folder_size(folder: Path) -> int:
@@ -196,18 +217,20 @@ def exchange(a: str | os.PathLike, b: str | os.PathLike) -> bool:
     raise OSError(err, os.strerror(err), str(b))
 
 
-def publish_dir(tmp: Path, target: Path) -> None:
+def publish_dir(tmp: Path, target: Path) -> tuple[Path, OSError] | None:
     """Put the complete folder ``tmp`` at ``target``, replacing what is there in one rename.
 
     The replaced folder is swapped into ``tmp`` (an owned temporary folder, so that a crash
     while removing it leaves a leftover :func:`stale_parts` recognises) and removed.
+    Returns None, or when the replaced folder could not be removed: where it is (a temporary
+    folder) and why, for the caller to tell (``target`` holds the new folder all the same).
     """
     with contextlib.suppress(FileNotFoundError):
         (tmp / PART_OWNER).unlink()
     public_mode(tmp, folder=True)
     if not os.path.lexists(target):
         os.rename(tmp, target)
-        return
+        return None
     if exchange(tmp, target):
         old = tmp
     else:
@@ -216,7 +239,8 @@ def publish_dir(tmp: Path, target: Path) -> None:
         os.rename(tmp, target)
     with contextlib.suppress(OSError):
         _write_owner(old)
-    remove_part(old)
+    exc = remove_part(old)
+    return None if exc is None else (old, exc)
 
 
 @contextlib.contextmanager
@@ -232,7 +256,10 @@ def atomic_dir(target: str | os.PathLike) -> Iterator[Path]:
     tmp = part_dir(target)
     try:
         yield tmp
-        publish_dir(tmp, target)
+        leftover = publish_dir(tmp, target)
     except BaseException:
         remove_part(tmp)
         raise
+    if leftover is not None:
+        log.warning("%s: replaced, but the old folder could not be deleted (%s); it is left in %s",
+                    target, leftover[1], leftover[0])

@@ -19,6 +19,13 @@ exclusive ``flock`` on ``<out>/.<name>.lock`` from the first check to the
 final rename; a second run ends at once with a message naming the first.
 Temporary folders of dead runs (owner process gone) are removed and named by
 :func:`clean_stale_parts`.
+
+A run deletes only what it made: a lock file is removed only when it holds a
+record this tool wrote (:func:`lock_is_ours`) and neither a run (``flock``) nor
+another program (``lockf``) holds it; a user's ``.notes.lock`` is never
+touched, and one in the way of a run's lock stops the run (exit 2).  An earlier
+run that is replaced but cannot be deleted is moved beside the new one as
+``<name>.old-<UTC time>/`` and named (:func:`publish_run`).
 """
 from __future__ import annotations
 
@@ -132,9 +139,9 @@ def check_target(target: Path, force: bool, flag: str = "--force (or outputs.ove
     return marker
 
 
-def beside_name(target: Path) -> Path:
-    """``<name>.failed-<UTC time>`` beside ``target`` (``-2``, ``-3``, ... when taken)."""
-    stem = f"{target.name}.failed-{time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())}"
+def beside_name(target: Path, what: str = "failed") -> Path:
+    """``<name>.<what>-<UTC time>`` beside ``target`` (``-2``, ``-3``, ... when taken)."""
+    stem = f"{target.name}.{what}-{time.strftime('%Y%m%dT%H%M%SZ', time.gmtime())}"
     path, k = target.with_name(stem), 2
     while os.path.lexists(path):
         path, k = target.with_name(f"{stem}-{k}"), k + 1
@@ -143,21 +150,65 @@ def beside_name(target: Path) -> Path:
 
 def publish_run(tmp: Path, target: Path, previous: dict | None, exit_code: int) -> tuple[Path, str]:
     """Publish the finished run folder ``tmp``: at ``target``, or beside a passing result
-    that a failing one must not replace.  Returns where it went and a note (empty if at target)."""
+    that a failing one must not replace.  Returns where it went and a note for the user (one line,
+    empty if at target and nothing is left over)."""
     if previous is not None and previous.get("exit_code") == 0 and exit_code != 0:
         dest = beside_name(target)
         publish_dir(tmp, dest)
         return dest, (f"the passing result in {target} was kept; this run (exit {exit_code}) was written "
                       f"beside it to {dest}")
-    publish_dir(tmp, target)
-    return target, ""
+    leftover = publish_dir(tmp, target)
+    return target, "" if leftover is None else _leftover_note(target, *leftover)
+
+
+def _leftover_note(target: Path, old: Path, exc: OSError) -> str:
+    """Move what is left of the replaced run at ``old`` (a temporary folder) beside ``target`` under a
+    visible name, and say so: which run, where it is now, why it is there."""
+    where = beside_name(target, "old")
+    try:
+        (old / PART_OWNER).unlink(missing_ok=True)      # no longer a temporary folder: the user's to delete
+        os.rename(old, where)
+    except OSError:
+        where = old
+    with contextlib.suppress(TypeError, ValueError):   # the file that stayed, under its new name
+        exc.filename = str(where / Path(exc.filename).relative_to(old))
+    return (f"the earlier run in {target} was replaced but could not be deleted ({_why(exc)}); "
+            f"what is left of it is in {where}: delete it when you can")
+
+
+def _why(exc: OSError) -> str:
+    return f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc.strerror or exc)
+
+
+LOCK_TOOL = "conical-fab-lock"
+"""The ``tool`` of the record in a lock file this tool wrote (:func:`lock_is_ours`)."""
+LOCK_MAX = 4096  # bytes: a lock record is about 150; a longer file is not one
+
+
+def lock_is_ours(text: bytes) -> bool:
+    """Whether ``text`` (a lock file's content) is a record this tool wrote: ``{"tool":
+    "conical-fab-lock", "pid", "host", ...}``, or the owner record alone of earlier versions
+    (exactly ``host``, ``pid``, ``start``, ``created_utc``)."""
+    try:
+        rec = jsontext.loads(text.decode())
+    except (UnicodeDecodeError, ValueError):
+        return False
+    if not isinstance(rec, dict):
+        return False
+    return ((rec.get("tool") == LOCK_TOOL and isinstance(rec.get("pid"), int) and "host" in rec)
+            or sorted(rec) == ["created_utc", "host", "pid", "start"])
+
+
+def _read_lock(fd: int) -> bytes:
+    return os.pread(fd, LOCK_MAX + 1, 0)
 
 
 @contextlib.contextmanager
 def run_lock(target: Path) -> Iterator[None]:
     """Hold an exclusive lock on writing ``target`` (``<parent>/.<name>.lock``, removed on release).
 
-    Raises ConfigError (exit 2) when another process holds it, naming that process."""
+    Raises ConfigError (exit 2) when another process holds it, naming that process, or when a file
+    of that name that this tool did not write is in the way (it is left as it is)."""
     try:
         import fcntl
     except ImportError:  # not a POSIX system: no lock
@@ -166,39 +217,78 @@ def run_lock(target: Path) -> Iterator[None]:
         return
 
     path = target.with_name(f".{target.name}.lock")
-    while True:
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:
-            os.close(fd)
-            if exc.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):  # a file system without locks
-                log.warning("%s: this file system cannot lock files (%s); runs into it are not kept apart",
-                            target.parent, exc.strerror)
-                with contextlib.suppress(OSError):
-                    os.unlink(path)
-                yield
-                return
-            if exc.errno not in (errno.EAGAIN, errno.EACCES):
-                raise
-            raise ConfigError(f"{target}: another fabricate run is writing this folder ({_holder(path)}); "
-                              "this run stopped before doing any work: wait for that one to finish, or "
-                              "choose another --out or name") from None
-        try:  # the file we locked must still be the one at the path (a releaser unlinks it)
-            same = os.path.samestat(os.fstat(fd), os.stat(path))
-        except FileNotFoundError:
-            same = False
-        if same:
-            break
-        os.close(fd)
+    fd = _take_lock(fcntl, path, target)
+    if fd is None:
+        yield
+        return
     try:
-        os.ftruncate(fd, 0)
-        os.write(fd, (json.dumps(owner_record()) + "\n").encode())
         yield
     finally:
         with contextlib.suppress(OSError):
-            os.unlink(path)
+            if os.path.samestat(os.fstat(fd), os.lstat(path)):
+                os.unlink(path)
         os.close(fd)
+
+
+def _take_lock(fcntl, path: Path, target: Path) -> int | None:
+    """The descriptor of the lock file ``path``, flocked by this process and holding its record; None
+    when the file system cannot lock.  Whatever stops it (ConfigError, Ctrl-C) leaves no file it made."""
+    record = (json.dumps({"tool": LOCK_TOOL, "run": target.name, **owner_record()}) + "\n").encode()
+    while True:
+        try:
+            fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o666)
+        except OSError as exc:
+            raise ConfigError(f"{path}: the lock file of this run cannot be created or opened ({exc.strerror}; "
+                              "expected a new name or a lock file of conical-fab); nothing was written: "
+                              "move that file away, or choose another --out or name") from None
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError as exc:
+                if exc.errno in (errno.ENOLCK, errno.EOPNOTSUPP, errno.ENOSYS):  # a file system without locks
+                    log.warning("%s: this file system cannot lock files (%s); runs into it are not kept apart",
+                                target.parent, exc.strerror)
+                    with contextlib.suppress(OSError):
+                        if not _read_lock(fd).strip():
+                            os.unlink(path)  # the empty file just made; anything else is not ours to remove
+                    os.close(fd)
+                    return None
+                if exc.errno not in (errno.EAGAIN, errno.EACCES):
+                    raise
+                raise ConfigError(f"{target}: another fabricate run is writing this folder ({_holder(path)}); "
+                                  "this run stopped before doing any work: wait for that one to finish, or "
+                                  "choose another --out or name") from None
+            try:  # the file we locked must still be the one at the path (a releaser unlinks it)
+                same = os.path.samestat(os.fstat(fd), os.lstat(path))
+            except FileNotFoundError:
+                same = False
+            if same:
+                text = _read_lock(fd)
+                if text.strip() and not lock_is_ours(text):
+                    raise ConfigError(f"{path}: a file of the name of this run's lock file, not written by "
+                                      f"conical-fab ({len(text)}{'+' if len(text) > LOCK_MAX else ''} bytes), is in "
+                                      "the way; it is left as it is and nothing was written: move it away, or "
+                                      "choose another --out or name")
+                os.ftruncate(fd, 0)
+                os.write(fd, record)
+                return fd
+        except BaseException:
+            _remove_if_free(fcntl, fd, path, empty=True)
+            os.close(fd)
+            raise
+        os.close(fd)
+
+
+def _remove_if_free(fcntl, fd: int, path: Path, empty: bool = False) -> None:
+    """Unlink the lock file ``path`` (open as ``fd``, read-write) when it holds a record this tool wrote
+    (or nothing, with ``empty``: one just made) and no run holds it (``flock``) nor another program
+    (a POSIX ``lockf`` / ``fcntl`` lock; such locks of this very process are not seen)."""
+    with contextlib.suppress(OSError):
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fcntl.lockf(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        text = _read_lock(fd)
+        if (lock_is_ours(text) or (empty and not text.strip())) and os.path.samestat(os.fstat(fd), os.lstat(path)):
+            os.unlink(path)
 
 
 def _holder(path: Path) -> str:
@@ -219,9 +309,11 @@ def clean_stale_parts(folder: Path, name: str | None = None) -> list[str]:
             continue
         if rec is not None and alive is not None and owner_gone(rec):
             size = folder_size(path)
-            remove_part(path)
-            notes.append(f"removed {path} ({size / 1e6:.1f} MB), left by a run that ended without cleaning "
-                         f"up (pid {rec.get('pid')}, started {rec.get('created_utc')})")
+            exc = remove_part(path)
+            left = (f"removed {path} ({size / 1e6:.1f} MB)" if exc is None else
+                    f"could not remove {path} ({folder_size(path) / 1e6:.1f} MB left: {_why(exc)})")
+            notes.append(f"{left}, left by a run that ended without cleaning up (pid {rec.get('pid')}, "
+                         f"started {rec.get('created_utc')})")
         elif rec is None and name is not None and path.name.startswith(f".{name}.") and read_owner(path) is None:
             notes.append(f"left alone: {path} ({folder_size(path) / 1e6:.1f} MB), a temporary folder with no "
                          "owner record (an older version's?); remove it when no run is writing there")
@@ -259,8 +351,7 @@ def remove_dead_parts(folder: Path, wait: float = 0.0) -> list[str]:
         deadline = time.monotonic() + wait
         while not owner_gone(rec) and time.monotonic() < deadline:
             time.sleep(0.02)
-        if owner_gone(rec):
-            remove_part(path)
+        if owner_gone(rec) and remove_part(path) is None:
             removed.append(str(path))
     _drop_free_locks(folder)
     return removed
@@ -274,18 +365,20 @@ def _empty_and_old(path: Path, age: float = 60.0) -> bool:
 
 
 def _drop_free_locks(folder: Path) -> None:
-    """Remove lock files in ``folder`` that no process holds (left by a killed run)."""
+    """Remove the lock files in ``folder`` that killed runs left, and only those: files holding a
+    record this tool wrote (:func:`lock_is_ours`) that no process holds (:func:`_remove_if_free`)."""
     try:
         import fcntl
     except ImportError:
         return
 
     for path in sorted(folder.glob(".*.lock")):
+        if path.is_symlink() or not path.is_file():
+            continue
         with contextlib.suppress(OSError):
-            fd = os.open(path, os.O_RDWR)
+            fd = os.open(path, os.O_RDWR | os.O_NOFOLLOW | os.O_NONBLOCK)
             try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-                os.unlink(path)
+                _remove_if_free(fcntl, fd, path)
             finally:
                 os.close(fd)
 
