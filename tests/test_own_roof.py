@@ -101,3 +101,34 @@ def test_the_advice_for_a_short_beam_never_names_what_is_set_and_gives_the_sizes
     assert ("parts.node.connection: hub" in hint) == (connection == "mitre")
     if connection == "hub":
         assert "stand 80 mm off each node axis" in hint and "to below 109 mm" in hint
+
+
+REPO = __import__("pathlib").Path(__file__).resolve().parents[1]
+NO_CAD_FILES = {f"outputs.{k}": v for k, v in MESH_ONLY.items()}
+
+
+def test_the_shipped_rhino_roof_in_metres_builds_and_warns_how_far_it_moved(tmp_path):
+    """configs/own_roof.yaml: a quad roof nobody here made (COMPAS, MIT), just input and units."""
+    from fabricate.app.config import load_config
+
+    cfg = load_config(REPO / "configs" / "own_roof.yaml", overrides=NO_CAD_FILES)
+    summary = run_pipeline(cfg, tmp_path / "out")
+    assert (summary.status, summary.exit_code) == ("ok", 0)
+    report = json.loads((tmp_path / "out" / "own_roof" / "report.json").read_text())
+    close = report["measures"]["closeness"]
+    assert report["input"]["mm_per_unit"] == 1000.0 and 7000 < close["diagonal_mm"] < 7600
+    assert "1 warning(s): closeness" in summary.message and "design moved up to" in summary.message
+    assert close["pass"] is False and close["role"] == "information" and close["max_mm"] > 50
+    assert report["measures"]["planarity"]["max"] <= 1e-6 and report["measures"]["folded"]["max"] == 0
+
+
+def test_the_shipped_tube_shell_that_cannot_be_built_says_why_and_keeps_the_mesh(tmp_path):
+    from fabricate.app.config import load_config
+
+    cfg = load_config(REPO / "configs" / "own_roof_tube.yaml", overrides=NO_CAD_FILES)
+    summary = run_pipeline(cfg, tmp_path / "out")
+    out = tmp_path / "out" / "own_roof_tube"
+    assert (summary.status, summary.exit_code) == ("tolerance_not_reached", 3)
+    assert "no panels or beams built from the optimized mesh: beam B" in summary.message
+    assert "reduce parts.beam_depth" in summary.message and "design moved up to" in summary.message
+    assert (out / "mesh.obj").is_file() and (out / "TOLERANCE_NOT_REACHED.txt").is_file()
