@@ -13,10 +13,14 @@
   and two 20-gon caps, exactly planar and conical).
 - ``rotation``: ``rotation(seed)`` gives a seeded (3, 3) rotation matrix.
 
+Every test, whatever ran before it in the process: ifcopenshell's process-wide feature switch is
+as a test found it when it ends (:func:`_ifcopenshell_as_found`), or that test fails.
+
 Nothing here reads outside the repository.
 """
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -79,3 +83,27 @@ def rotation():
         q = q * np.sign(np.diag(r))
         return q if np.linalg.det(q) > 0 else -q
     return make
+
+
+IFC_DERIVED = "use_attribute_value_derived"
+
+
+def _ifc_derived() -> bool | None:
+    """ifcopenshell's ``use_attribute_value_derived`` (None while ifcopenshell is not imported)."""
+    wrapper = getattr(sys.modules.get("ifcopenshell"), "ifcopenshell_wrapper", None)
+    return None if wrapper is None else bool(wrapper.get_feature(IFC_DERIVED))
+
+
+@pytest.fixture(autouse=True)
+def _ifcopenshell_as_found():
+    """A test that leaves ifcopenshell's ``use_attribute_value_derived`` switched (``ifcopenshell.validate``
+    switches it on while it runs, for the whole process) fails, and the switch is put back: the tests
+    after it read derived attributes as None (``get_info``), as they would alone, instead of failing
+    far from the cause."""
+    before = _ifc_derived()
+    yield
+    after = _ifc_derived()
+    if after is not None and after != bool(before):
+        sys.modules["ifcopenshell"].ifcopenshell_wrapper.set_feature(IFC_DERIVED, bool(before))
+        pytest.fail(f"ifcopenshell's {IFC_DERIVED} was {bool(before)} before this test and {after} after it; "
+                    "use fabricate.export.ifc.ifcopenshell_alone around ifcopenshell work", pytrace=False)

@@ -160,7 +160,16 @@ def face_set_volumes(f) -> dict[str, float]:
 
 def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False, tol: Tolerances = DEFAULT) -> dict:
     """``full``: schema validation and volumes (``kernel``: ifcopenshell's geometry kernel, else the
-    face sets' own coordinates as parsed, about 20x faster)."""
+    face sets' own coordinates as parsed, about 20x faster).  The whole check holds ifcopenshell
+    (:func:`fabricate.export.ifc.ifcopenshell_alone`): two runs' checks in threads of one process
+    take turns."""
+    from .ifc import ifcopenshell_alone
+
+    with ifcopenshell_alone():
+        return _check_ifc(path, bom, full, kernel, tol)
+
+
+def _check_ifc(path: Path, bom, full: bool, kernel: bool, tol: Tolerances) -> dict:
     import ifcopenshell
 
     from fabricate.cad.parts import unit_id

@@ -34,10 +34,19 @@ their ids continuing the skeleton's (one template per group of solids of the
 same topology), about ten times faster than creating each entity through
 ifcopenshell.  ifcopenshell is imported here only: the rest of the pipeline
 starts without it.
+
+Threads: ifcopenshell keeps process-wide state that one call changes for all threads
+(``ifcopenshell.validate`` switches the feature ``use_attribute_value_derived`` on and back to what
+it found, so two validations at once leave it on, or switch it off under the other one, whose
+file then fails with "Attribute is derived in subtype"; its log is one per process too).  Every
+use of ifcopenshell in this package runs under :func:`ifcopenshell_alone`: a batch's jobs in the
+threads of one Dask worker write and check their IFC files one at a time.
 """
 from __future__ import annotations
 
+import contextlib
 import os
+import threading
 import time
 from pathlib import Path
 
@@ -50,6 +59,28 @@ PSET = "Pset_ConicalFabFabrication"
 CLASS = {"panel": ("IfcPlate", "CURTAIN_PANEL", None),
          "beam": ("IfcMember", "MULLION", None),
          "node": ("IfcMember", "USERDEFINED", "NODE")}
+DERIVED = "use_attribute_value_derived"
+"""ifcopenshell's process-wide feature that ``ifcopenshell.validate`` switches on while it runs
+(off: an attribute a subtype derives (``*``) reads as None)."""
+_LOCK = threading.RLock()
+
+
+@contextlib.contextmanager
+def ifcopenshell_alone():
+    """Hold ifcopenshell for this thread: every other thread's ifcopenshell work in this package
+    waits (re-entrant: a check that opens the file through :func:`open_ifc` holds it once more).
+    Hold it as long as the files it made or opened are read, not only while they are parsed: their
+    attributes read through the same process-wide switches.  On leaving, :data:`DERIVED` is as it
+    was on entering, even when ifcopenshell raised half-way (``validate`` restores it only when it
+    returns)."""
+    with _LOCK:
+        from ifcopenshell import ifcopenshell_wrapper
+
+        before = ifcopenshell_wrapper.get_feature(DERIVED)
+        try:
+            yield
+        finally:
+            ifcopenshell_wrapper.set_feature(DERIVED, before)
 
 
 def _skeleton(name: str, grade: str, spec):
@@ -136,10 +167,11 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
     grade = grade or getattr(parts.spec, "steel_grade", "S355")
     path = Path(path)
     try:
-        f, refs = _skeleton(project, grade, parts.spec)
+        with ifcopenshell_alone():
+            f, refs = _skeleton(project, grade, parts.spec)
+            head, first_id = f.to_string(), max(e.id() for e in f) + 1
     except ImportError as exc:  # a declared dependency; only a broken install lands here
         raise ExportError(f"{path}: ifcopenshell is not available ({exc}); expected it installed") from None
-    head = f.to_string()
     end = head.rindex("ENDSEC;", 0, head.rindex("END-ISO-10303-21;"))
     groups = list(parts.groups)
     index = {id(g): k for k, g in enumerate(groups)}
@@ -148,8 +180,7 @@ def write_ifc(parts, path, *, grade: str | None = None, project: str = "conical-
     try:
         with atomic_open(path, "w", encoding="utf-8") as fh:
             fh.write(head[:end])
-            write_body(fh, groups, [_faces(g) for g in groups], units, refs,
-                       max(e.id() for e in f) + 1, PSET)
+            write_body(fh, groups, [_faces(g) for g in groups], units, refs, first_id, PSET)
             fh.write(head[end:])
     except OSError as exc:
         raise ExportError(f"{path}: cannot write the IFC file ({exc.strerror or exc})") from None
@@ -257,11 +288,13 @@ def _faces(group) -> tuple:
 
 def open_ifc(path):
     """``ifcopenshell.open`` of ``path``; a file it cannot read or parse is an :class:`ExportError`
-    naming it (ifcopenshell's own errors are not)."""
+    naming it (ifcopenshell's own errors are not).  Call it, and read the file it returns, inside
+    :func:`ifcopenshell_alone`."""
     import ifcopenshell
 
     try:
-        return ifcopenshell.open(str(path))
+        with ifcopenshell_alone():
+            return ifcopenshell.open(str(path))
     except (OSError, ifcopenshell.Error) as exc:
         raise ExportError(f"{path}: not a readable IFC file ({exc}); expected the model.ifc of a run") from None
 
@@ -272,6 +305,11 @@ def read_ifc(path) -> dict[str, dict]:
     The volume comes from ifcopenshell's own geometry kernel (the triangulated
     face set), so it checks the file independently of the writer.
     """
+    with ifcopenshell_alone():
+        return _read_ifc(path)
+
+
+def _read_ifc(path) -> dict[str, dict]:
     import ifcopenshell
     import ifcopenshell.geom
     import ifcopenshell.util.shape
