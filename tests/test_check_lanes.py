@@ -1,6 +1,7 @@
 """The full check's lanes (the STEP read, the IFC check in child processes) give the same results as one
 lane, fall back to one lane when the child fails, and leave no child behind; the STEP reader's
 reals near the end of a file; numpy's huge-page advice restored after the check."""
+import contextlib
 import os
 import shutil
 import sys
@@ -117,3 +118,70 @@ def test_heap_reuse_restores_numpys_huge_page_advice():
         assert _set_madvise_hugepage(True) is True                     # back on afterwards
     finally:
         _set_madvise_hugepage(before)
+
+
+KILLED_CHECK = """
+import sys, time
+import fabricate.check_lanes as lanes
+
+class Slow:
+    \"\"\"Unpickled by each child as it starts: it then works on for two minutes, like a big model's check.\"\"\"
+    def __reduce__(self):
+        return time.sleep, (120,)
+
+real_start = lanes.start
+lanes.lanes_for = lambda paths, skip, reader: [names for names, _ in lanes.LANES]
+lanes.start = lambda outdir, names, skip, tol: real_start(outdir, names, skip, Slow())
+from fabricate.app.cli import main
+sys.argv = ["fabricate", "check", sys.argv[1]]
+sys.exit(main())
+"""
+
+
+def _children(pid: int) -> list[int]:
+    try:
+        return [int(c) for t in os.listdir(f"/proc/{pid}/task")
+                for c in open(f"/proc/{pid}/task/{t}/children").read().split()]
+    except OSError:
+        return []
+
+
+def _running(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[-1].split()[0] not in ("Z", "X")
+    except OSError:
+        return False
+
+
+def test_kill_9_of_check_ends_its_child_processes(run_dir):
+    """``kill -9`` of ``fabricate check`` (its supervisor) takes the working process and both lanes'
+    children with it: none goes on checking unwatched."""
+    import signal
+    import subprocess
+    import time
+
+    from _pipeline_fixtures import REPO
+
+    proc = subprocess.Popen([sys.executable, "-c", KILLED_CHECK, str(run_dir)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL, env=dict(os.environ, PYTHONPATH=str(REPO)))
+    family: list[int] = []
+    try:
+        deadline = time.monotonic() + 120          # a hang guard, not a timing: they start, at any load
+        while len(family) < 3:                     # the working process and its two lanes
+            assert proc.poll() is None and time.monotonic() < deadline, "the check's lanes never started"
+            family = [c for w in _children(proc.pid) for c in [w, *_children(w)]]
+            time.sleep(0.02)
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+        deadline = time.monotonic() + 60           # they end at once; the sleep is 120 s
+        while any(_running(p) for p in family) and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert [p for p in family if _running(p)] == []
+    finally:
+        for p in family:
+            with contextlib.suppress(OSError):
+                os.kill(p, signal.SIGKILL)
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
