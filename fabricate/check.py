@@ -46,15 +46,24 @@ with it:
   every element's face set, as ifcopenshell reads it, equal to the BOM's (with ``--occ``: from
   ifcopenshell's geometry kernel; not in the fast check: ``skip`` ``ifc_geometry``).
 
+- ``files``: every file the run lists as written (its marker :data:`fabricate.app.runfolder.MARKER`,
+  written last, else ``report.json``'s ``files``) is there, a regular file, of the size the run wrote;
+  a marker or ``report.json`` that does not read fails.  Without either (the check inside a run, files
+  written by the library) the row is left out.
+
 A check whose file was not written is reported with ``pass: None`` and the
-reason, never silently left out; a file the run wrote (listed in its
-``report.json``) that is gone fails, ``missing``.  Every failed check carries
-``why``: the plain reasons, from its figures.
+reason, never silently left out; a file the run wrote (listed by its marker or
+``report.json``) that is gone fails, ``missing``.  A file that is not a regular file (a named pipe,
+a folder, a device) is refused unopened (it might never end): its check fails.  Every failed check
+carries ``why``: the plain reasons, from its figures.
 """
 from __future__ import annotations
 
 import logging
+import os
+import stat
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -67,6 +76,7 @@ from .check_cut import check_cut_files
 from .check_heap import heap_reuse
 from .check_mesh import check_3mf as _check_3mf
 from .check_mesh import check_stl as _check_stl
+from .export.verify import not_regular
 
 log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
@@ -111,9 +121,15 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     paths = {k: out / v for k, v in FILES.items()}
     if not paths["bom"].exists():
         raise ExportError(f"{paths['bom']}: missing; the checks compare every file with the bill of materials")
+    if (what := not_regular(paths["bom"])) is not None:
+        raise ExportError(f"{paths['bom']}: {what}, not a file; the checks compare every file with the bill "
+                          "of materials")
     bom = read_bom(paths["bom"])
-    written = written_files(out)
+    listing = run_listing(out)
+    written = listing.files
     checks: dict[str, dict] = {"bom": _check_bom(bom)}
+    if only is None and listing.sources + listing.problems:
+        checks["files"] = _check_files(out, listing)
     read: dict[str, object] = {}  # what one check read and the next ones use: STEP solids, 3MF meshes
     table = (
         ("step", "step", None, lambda: (_check_step if step_reader == "occ" else _check_step_text)(
@@ -123,7 +139,7 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
         ("intersections", "3mf", "3mf", lambda: (_check_intersections(read["3mf"], tol), None)),
         ("bearing", "3mf", "3mf", lambda: (_check_bearing(read["3mf"], bom, tol), None)),
         ("flat", "flat", None, lambda: (_check_flat(paths["flat"], bom, read), None)),
-        ("dxf", "dxf", None, lambda: _check_dxf_keep(paths["dxf"], bom, paths["flat"],
+        ("dxf", "dxf", None, lambda: _check_dxf_keep(paths["dxf"], bom, _readable(paths["flat"]),
                                                      None if step_reader == "occ" else "text", tol)),
         ("cut", "dxf", "dxf", lambda: (check_cut_files(out, bom, read["dxf"], written, tol), None)),
         ("svg", "svg", None, lambda: (_check_svg(paths["svg"], bom), None)),
@@ -156,7 +172,7 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     finally:
         for _, child in children:
             check_lanes.stop(child)
-    checks = {k: checks[k] for k in ["bom"] + [t[0] for t in table] if k in checks}
+    checks = {k: checks[k] for k in ["bom", "files"] + [t[0] for t in table] if k in checks}
     failed = [k for k, v in checks.items() if v.get("pass") is False]
     return {"outdir": str(out), "pass": not failed, "failed": failed, "checks": checks,
             "seconds": round(time.perf_counter() - t0, 3)}
@@ -168,11 +184,12 @@ def _one_check(name, key, needs, run, paths, skip, written, read) -> dict:
     if key in skip:
         return {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
     if not paths[key].exists():
-        if FILES[key] in written:
+        if FILES[key] in written or (key in FOLDERS and any(n.startswith(f"{FILES[key]}/") for n in written)):
             return {"pass": False, "missing": FILES[key],
-                    "why": [(f"{FILES[key]} is missing: the run wrote it "
-                             f"({written[FILES[key]]} bytes, listed in {REPORT})")]}
+                    "why": [f"{FILES[key]} is missing: the run wrote it ({_bytes(written.get(FILES[key]))})"]}
         return {"pass": None, "skipped": f"{FILES[key]} was not written"}
+    if (refused := _refused(paths[key], key in FOLDERS)) is not None:
+        return {"pass": False, "error": refused}
     if needs and read.get(needs) is None:
         return {"pass": None, "skipped": f"needs a readable {FILES[needs]}"}
     try:
@@ -186,17 +203,132 @@ def _one_check(name, key, needs, run, paths, skip, written, read) -> dict:
     return result
 
 
-def written_files(outdir: Path) -> dict[str, int]:
-    """``{file: bytes}`` the run says it wrote (``report.json``'s ``files``); empty without a report
-    (the check inside a run, or exports written by the library): then a file not there was not written."""
-    from optimize import jsontext
-
+FOLDERS = frozenset({"nc1"})
+"""Keys of :data:`FILES` that name a folder of files (one NC1 file per beam)."""
+def _refused(path: Path, folder: bool = False) -> str | None:
+    """Why the check does not open ``path`` (a file, or with ``folder`` a folder of files): not a
+    regular file (or folder), or a folder holding something that is not a regular file."""
+    what = not_regular(path)
+    if not folder:
+        return None if what is None else f"{path.name}: {what}, not a file; refused unopened"
+    if what != "a folder":
+        return f"{path.name}: {what or 'a file'}, not a folder of files"
     try:
-        report = jsontext.loads((outdir / REPORT).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    files = report.get("files") if isinstance(report, dict) else None
-    return {str(k): (v or {}).get("bytes") for k, v in files.items()} if isinstance(files, dict) else {}
+        inside = sorted(os.scandir(path), key=lambda e: e.name)
+    except OSError as exc:
+        return f"{path.name}: the folder cannot be listed ({exc.strerror or exc})"
+    odd = [f"{path.name}/{e.name} ({w})" for e in inside if (w := not_regular(e.path)) is not None]
+    return (f"{', '.join(odd[:5])}{', ...' if len(odd) > 5 else ''}: not a file; refused unopened"
+            if odd else None)
+
+
+def light_check(path: Path, check, *args) -> dict:
+    """``check(path, *args)`` (a check's dict), or its failure when ``path`` is not a regular file
+    (refused unopened) or does not read (:class:`ExportError`): the fast check's light rows."""
+    if (refused := _refused(path)) is not None:
+        return {"pass": False, "error": refused}
+    try:
+        return check(path, *args)
+    except ExportError as exc:
+        return {"pass": False, "error": str(exc)}
+
+
+def _readable(path: Path) -> Path | None:
+    """``path`` when it is a regular file, else None (what is not read as the file is not there)."""
+    return path if path.exists() and not_regular(path) is None else None
+
+
+def _bytes(n) -> str:
+    return f"{n} bytes" if isinstance(n, int) else "listed"
+
+
+@dataclass(frozen=True)
+class Listing:
+    """The files a run says it wrote: ``files`` ``{relative path: bytes or None}`` (the marker's, and
+    ``report.json``'s that the marker does not list), ``sources`` (the lists read) and ``problems`` (a
+    marker or report that is there and does not read: the folder is not as the run left it)."""
+
+    files: dict[str, int | None]
+    sources: list[str]
+    problems: list[str]
+
+
+def run_listing(outdir: Path) -> Listing:
+    """The :class:`Listing` of ``outdir``: its marker (:func:`fabricate.app.runfolder.read_marker`,
+    written last: every file but itself) and ``report.json``'s ``files``; neither is opened unless it
+    is a regular file."""
+    from optimize import jsontext
+    from optimize.atomic import PART_OWNER
+
+    from .app.runfolder import MARKER, read_marker
+
+    files: dict[str, int | None] = {}
+    sources: list[str] = []
+    problems: list[str] = []
+    path = outdir / MARKER
+    if os.path.lexists(path):
+        what = not_regular(path)
+        marker = read_marker(outdir) if what is None else None
+        listed = marker.get("files") if marker is not None else None
+        if isinstance(listed, dict):
+            sources.append(MARKER)
+            files.update((str(k), v[0] if isinstance(v, list) and v and type(v[0]) is int else None)
+                         for k, v in listed.items())
+        else:
+            problems.append(f"{MARKER}: {what + ', not a file' if what else 'not a readable run marker'}; the "
+                            "list of the files the run wrote is lost")
+    path = outdir / REPORT
+    if os.path.lexists(path):
+        what = not_regular(path)
+        try:
+            if what is not None:
+                raise ValueError(f"{what}, not a file")
+            report = jsontext.loads(path.read_text(encoding="utf-8"))
+            listed = report.get("files") if isinstance(report, dict) else None
+            if not isinstance(listed, dict):
+                raise ValueError("no 'files' object")
+        except (OSError, ValueError) as exc:
+            problems.append(f"{REPORT}: {getattr(exc, 'strerror', None) or exc}; expected the run's report")
+        else:
+            sources.append(REPORT)
+            for k, v in listed.items():   # the temporary folder's owner record is removed when it is published
+                if str(k) != PART_OWNER and str(k) not in files:
+                    n = v.get("bytes") if isinstance(v, dict) else None
+                    files[str(k)] = n if type(n) is int else None
+    return Listing(files, sources, problems)
+
+
+def written_files(outdir: Path) -> dict[str, int | None]:
+    """``{file: bytes}`` the run says it wrote (:func:`run_listing`: its marker and ``report.json``);
+    empty without either (the check inside a run, or exports written by the library): then a file not
+    there was not written."""
+    return run_listing(Path(outdir)).files
+
+
+def _check_files(outdir: Path, listing: Listing) -> dict:
+    """The ``files`` row: every listed file there, a regular file, of the size the run wrote."""
+    missing, odd, resized = [], [], []
+    for name, size in listing.files.items():
+        path = outdir / name
+        try:
+            st = os.stat(path)
+        except (OSError, ValueError):
+            missing.append(name)
+            continue
+        if not stat.S_ISREG(st.st_mode):
+            odd.append(f"{name} ({not_regular(path)})")
+        elif size is not None and st.st_size != size:
+            resized.append(f"{name}: {st.st_size} bytes, the run wrote {size}")
+    why = list(listing.problems)
+    for items, what in ((missing, "missing (the run wrote them)"), (odd, "not a file (refused unopened)"),
+                        (resized, "not of the size the run wrote")):
+        if items:
+            why.append(f"{len(items)} {what}: {', '.join(items[:5])}{', ...' if len(items) > 5 else ''}")
+    out = {"pass": not why, "listed": len(listing.files), "listed_by": " and ".join(listing.sources) or None,
+           "missing": missing[:20], "not_files": odd[:20], "resized": resized[:20]}
+    if why:
+        out["why"] = why
+    return out
 
 
 REASONS = {"missing": "missing from the file", "unexpected": "not in the BOM", "invalid": "invalid solids",
@@ -239,10 +371,14 @@ def failure_reasons(r: dict) -> list[str]:
 
 
 def _name(x) -> str:
+    """One failure of a list: its id (or pair, or file), its figures and its error."""
     if isinstance(x, dict):
-        who = x.get("id") or x.get("pair")
-        figs = ", ".join(f"{k} {v:.3g}" for k, v in x.items() if isinstance(v, float))
-        return f"{who} ({figs})" if figs else str(who)
+        who = str(next((x[k] for k in ("id", "pair", "file") if x.get(k) is not None), "?"))
+        if x.get("id") is not None and x.get("file") is not None:
+            who = f"{who} in {x['file']}"
+        figs = [f"{k} {v:.3g}" for k, v in x.items() if isinstance(v, float)]
+        figs += [str(x["error"])] if x.get("error") else []
+        return f"{who} ({', '.join(figs)})" if figs else who
     return str(x)
 
 

@@ -55,6 +55,7 @@ def check_cut_files(folder, bom, strip: dict[str, np.ndarray], written: dict,
     outlines as the DXF check read them; ``written``: the files the run lists (a cut file it wrote
     that is gone fails)."""
     from .export.dxf_text import read_outlines_text
+    from .export.verify import not_regular
 
     t0 = time.perf_counter()
     folder = Path(folder)
@@ -70,6 +71,10 @@ def check_cut_files(folder, bom, strip: dict[str, np.ndarray], written: dict,
     for path in files:
         m = CUT_FILE.fullmatch(path.name)
         key = (m.group(1), round(float(m.group(2)), 3))
+        covered[key] = None                                  # there; its sheet size from its labels
+        if (what := not_regular(path)) is not None:                 # a pipe or device may never end
+            failures.append({"file": path.name, "error": f"{what}, not a file; refused unopened"})
+            continue
         try:
             outlines, facts = read_outlines_text(path, sheets=True)
         except ExportError as exc:
@@ -80,7 +85,6 @@ def check_cut_files(folder, bom, strip: dict[str, np.ndarray], written: dict,
         bad = _file_errors(facts, len(outlines))
         failures += [{"file": path.name, "error": e} for e in bad]
         labels = [LABEL.search(t) for t in facts["sheet_labels"]]
-        covered[key] = None                                  # written; its sheet size from its labels
         if bad or not labels or not all(labels):
             if labels and not bad:
                 failures.append({"file": path.name, "error": "a sheet label without its size, margin and kerf"})

@@ -44,7 +44,7 @@ def run_check(outdir, mode: str, tol: Tolerances = DEFAULT) -> dict:
     ``failed``, ``checks``, ``seconds``) with ``mode`` added; for ``off``,
     ``pass`` is None with the reason in ``skipped``.
     """
-    from .check import check_outputs, failure_reasons, written_files
+    from .check import check_outputs, failure_reasons, light_check, written_files
 
     out = Path(outdir)
     if mode == "off":
@@ -64,7 +64,7 @@ def run_check(outdir, mode: str, tol: Tolerances = DEFAULT) -> dict:
     for name, fname, light in (("step", STEP_FILE, scan_step), ("dxf", DXF_FILE, dxf_against_bom)):
         if (out / fname).exists():
             t1 = time.perf_counter()
-            checks[name] = dict(light(out / fname, bom), seconds=round(time.perf_counter() - t1, 3))
+            checks[name] = dict(light_check(out / fname, light, bom), seconds=round(time.perf_counter() - t1, 3))
             if checks[name]["pass"] is False:
                 checks[name]["why"] = failure_reasons(checks[name])
         elif fname in written:

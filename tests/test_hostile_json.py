@@ -67,8 +67,10 @@ def test_check_of_a_folder_with_json_nested_too_deep(run_dir, tmp_path, capsys):
     shutil.copytree(run_dir, d)
     assert main(["check", str(d)]) == 0
     capsys.readouterr()
-    (d / "report.json").write_text(DEEP)               # no report: every file is checked as found
-    assert main(["check", str(d)]) == 0
+    (d / "report.json").write_text(DEEP)               # a report that does not read fails the files row
+    assert main(["check", str(d)]) == 4
+    out = capsys.readouterr()
+    assert "internal error" not in out.err and "FAIL files" in out.out and "report.json: JSON nested" in out.out
     (d / "flat.json").write_text(DEEP)
     assert main(["check", str(d)]) == 4
     out = capsys.readouterr()

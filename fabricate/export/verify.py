@@ -1,13 +1,33 @@
 """Geometry checks on files read back: OCC face polygons, overlapping parts, panels on beams.
 
 Used by :func:`fabricate.check.check_outputs`; every function takes data
-read from the files (never the in-memory parts).
+read from the files (never the in-memory parts).  :func:`not_regular` says which paths the
+check and its readers refuse to open.
 """
 from __future__ import annotations
+
+import os
+import stat
 
 import numpy as np
 
 from .separation import overlapping_boxes, separated
+
+KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a named pipe"), (stat.S_ISSOCK, "a socket"),
+         (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"))
+
+
+def not_regular(path) -> str | None:
+    """What ``path`` is when it is there and not a regular file (``"a named pipe"``, ``"a folder"``, ...),
+    from ``os.stat`` alone: it is never opened (a pipe or a device may never end).  None for a regular
+    file or nothing there."""
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    if stat.S_ISREG(mode):
+        return None
+    return next((what for test, what in KINDS if test(mode)), "not a regular file")
 
 
 def face_polygons(shape) -> list[np.ndarray]:
@@ -54,9 +74,10 @@ def outline_areas(outlines: list[np.ndarray]) -> np.ndarray:
     """``(m,)`` areas of planar 2D polygons ``[(k, 2), ...]`` (shoelace about each first corner, as
     :func:`polygon_measures`), all at once."""
     k = np.array([len(Q) for Q in outlines], dtype=np.int64)
-    if not (k > 0).all():
+    if not len(k) or not (k > 0).all():                                 # none, or some without corners: 0
         out = np.zeros(len(outlines))
-        out[k > 0] = outline_areas([Q for Q in outlines if len(Q)])
+        if (k > 0).any():
+            out[k > 0] = outline_areas([Q for Q in outlines if len(Q)])
         return out
     P = np.concatenate(outlines)
     first = np.concatenate([[0], np.cumsum(k)[:-1]])
