@@ -8,7 +8,9 @@ when numba is installed, through :func:`optimize.kernels.load`).
   then at least one digit.  The first line that is not so is returned instead (the caller then reads
   every line the slow way, as before);
 - :func:`intern`: values (entity types, layers, handles) as indices into their distinct values, so that
-  Python decodes each distinct one once, and whether all are plain hexadecimal (handles).
+  Python decodes each distinct one once, and whether all are plain hexadecimal (handles);
+- :func:`numbers`: the first value that is not a finite decimal number, as
+  :func:`fabricate.export.dxf_text._first_not_number` finds it with a regular expression and NumPy.
 """
 from __future__ import annotations
 
@@ -104,3 +106,77 @@ def intern(buf, vs, ve, rows):
                 return ids, first[:0], last[:0], False, hexadecimal
         ids[t] = j
     return ids, first[:k], last[:k], True, hexadecimal
+
+
+@njit(cache=True)
+def _blank(ch) -> bool:
+    return ch == 32 or ch == 9 or ch == 11 or ch == 12      # space \t \v \f (no \n, \r in a value)
+
+
+@njit(cache=True)
+def numbers(buf, vs, ve, rows):
+    """``(first, near)``: ``first`` the first ``t`` (or -1) whose value ``buf[vs[r]:ve[r]]``, ``r = rows[t]``,
+    is not a decimal number (blanks, a sign, digits with at most one point, at least one digit, an exponent
+    ``e``/``E`` with a sign and digits; :data:`fabricate.export.dxf_text.NUMBER`) or is one at least
+    ``1e309`` in size (not finite as a double); ``near`` the ``t`` before ``first`` of a size from ``1e308``
+    to ``1e309``, which only an exact reading tells finite or not (the caller's ``float``)."""
+    near = np.empty(len(rows), np.int64)
+    m = 0
+    for t in range(len(rows)):
+        a, b = vs[rows[t]], ve[rows[t]]
+        while a < b and _blank(buf[a]):
+            a += 1
+        while b > a and _blank(buf[b - 1]):
+            b -= 1
+        p = a
+        if p < b and (buf[p] == 43 or buf[p] == 45):
+            p += 1
+        digits = 0
+        lead = 0                      # the first nonzero digit's place: 10 ** (lead - 1) for 1..., 0: none yet
+        seen = False
+        while p < b and 48 <= buf[p] <= 57:
+            if seen:
+                lead += 1
+            elif buf[p] != 48:
+                seen, lead = True, 1
+            digits += 1
+            p += 1
+        if p < b and buf[p] == 46:
+            p += 1
+            zeros = 0
+            while p < b and 48 <= buf[p] <= 57:
+                if not seen:
+                    if buf[p] == 48:
+                        zeros += 1
+                    else:
+                        seen, lead = True, -zeros
+                digits += 1
+                p += 1
+        if digits == 0:
+            return t, near[:m]
+        exp = 0
+        if p < b and (buf[p] == 101 or buf[p] == 69):
+            p += 1
+            sign = 1
+            if p < b and (buf[p] == 43 or buf[p] == 45):
+                sign = -1 if buf[p] == 45 else 1
+                p += 1
+            e_digits = 0
+            while p < b and 48 <= buf[p] <= 57:
+                if exp < 100000000:
+                    exp = exp * 10 + (buf[p] - 48)
+                e_digits += 1
+                p += 1
+            if e_digits == 0:
+                return t, near[:m]
+            exp *= sign
+        if p != b:
+            return t, near[:m]
+        if seen:
+            size = lead - 1 + exp         # the value is in [10 ** size, 10 ** (size + 1))
+            if size >= 309:
+                return t, near[:m]
+            if size == 308:
+                near[m] = t
+                m += 1
+    return -1, near[:m]
