@@ -262,3 +262,59 @@ def test_shop_limits_flag_the_hub_cap_plates_by_hub_id(tmp_path):
     for h in hubs:
         assert f"edge >= {across + 0.1:g} mm" in rows[h]["flags"] and "corner >= 166 deg" in rows[h]["flags"]
         assert rows[h + ".1"]["flags"] == ""                        # the tube is a section: not held to them
+
+
+# -- hubs sized from the sharpest beam angle (#30 item 4) -------------------------------------------------
+from fabricate.offset import offset_structure  # noqa: E402
+def test_a_hub_without_a_radius_is_the_smallest_stock_tube_every_beam_end_meets():
+    from cad_fixtures import dome_mesh
+    from fabricate.cad.beams import angular_neighbours, beam_planes
+    from fabricate.cad.build import span_positions
+    from fabricate.cad.hubsize import CLEARANCE_MM, STOCK_CHS_MM, sharpest_gaps
+
+    s = offset_structure(dome_mesh(8, 4, radius_m=4, rise_m=1.6), (0.0, -200.0))
+    parts = build_parts(s, PartSpec(beam_width=60.0, node={"connection": "hub", "hub": "tube"}))
+    r = parts.spec.hub_radius
+    sizing = parts.report["nodes"]["sizing"]
+    assert sizing["sized"] and 2 * r in STOCK_CHS_MM and r == sizing["radius_mm"]
+    _, P0, _ = span_positions(s)
+    normal = beam_planes(s)["normal"]
+    gaps = angular_neighbours(s, P0, normal)["gap"]
+    need = (30.0 + CLEARANCE_MM) / np.tan(np.minimum(gaps, np.pi) / 2)
+    assert need.max() <= r < min(D for D in STOCK_CHS_MM if D / 2 >= need.max()) / 2 + 1e-9  # the smallest
+    assert sizing["needed_radius_mm"] == pytest.approx(need.max())
+    assert sharpest_gaps(s, P0, normal).min() == pytest.approx(gaps.min())
+    assert parts.report["limits"]["hub"]["count"] == 0  # every beam end meets the hub
+    nodes = [g for g in parts.of_kind("node")]
+    assert nodes and all(g.ids[0].startswith("N") for g in nodes)
+
+
+def test_a_hub_radius_given_below_what_the_angles_need_names_the_nodes_and_the_size():
+    from cad_fixtures import dome_mesh
+
+    s = offset_structure(dome_mesh(8, 4, radius_m=4, rise_m=1.6), (0.0, -200.0))
+    parts = build_parts(s, PartSpec(beam_width=60.0, node={"connection": "hub", "hub": "tube", "radius_mm": 40.0,
+                                                           "wall_mm": 5.0}))
+    hub = parts.report["limits"]["hub"]
+    assert parts.spec.hub_radius == 40.0 and hub["count"] > 0 and hub["worst_id"] in hub["ids"]
+    assert f"the beam angles need up to {np.ceil(hub['worst']):.0f} mm" in hub["limit"]
+    from fabricate.app.requirements import warnings
+
+    line = next(w for w in warnings({}, parts.report["limits"]) if "hub limit" in w)
+    assert hub["worst_id"] in line or hub["ids"][0] in line
+
+
+def test_a_hub_no_stock_tube_can_clear_is_refused_naming_the_node_and_angle():
+    from fabricate.cad.hubsize import size_hubs
+
+    from cad_fixtures import dome_mesh
+    from fabricate.cad.beams import beam_planes
+    from fabricate.cad.build import span_positions
+    from fabricate.cad.errors import PartError
+
+    s = offset_structure(dome_mesh(8, 4, radius_m=4, rise_m=1.6), (0.0, -200.0))
+    _, P0, _ = span_positions(s)
+    spec = PartSpec(beam_width=60.0, beam={"section": "tee", "flange_width_mm": 1500.0, "web_mm": 10.0},
+                    node={"connection": "hub", "hub": "tube"})
+    with pytest.raises(PartError, match=r"node N\d{4}: two of its beams are [\d.]+ deg apart .* hub of radius \d+ mm"):
+        size_hubs(s, spec, P0, beam_planes(s)["normal"])

@@ -225,7 +225,8 @@ def stage_cad(cfg, opt: OptimizeRecord, off: OffsetRecord) -> PartsRecord:
     from ..cad.parts import unit_id
 
     counts = {k: len({unit_id(i) for g in parts.of_kind(k) for i in g.ids}) for k in ("panel", "beam", "node")}
-    return PartsRecord(spec=spec, parts=parts, line=", ".join(f"{n} {k}s" for k, n in counts.items()))
+    return PartsRecord(spec=parts.spec, parts=parts,  # parts.spec: with a hub sized from the beam angles
+                       line=", ".join(f"{n} {k}s" for k, n in counts.items()))
 
 
 def count_parts(parts) -> int:

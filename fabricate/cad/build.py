@@ -22,6 +22,7 @@ from .flat import flat_data
 from .limits import check_limits
 from .geometry import dot, polygon_area_2d, unit, volumes
 from .hubs import tube_hubs
+from .hubsize import hub_limit, size_hubs
 from .nodes import node_solids
 from .sections import BOX_FACES, BOX_NAMES, BOX_RING, MEMBERS as SECTION_MEMBERS, flange_plates
 from .parts import PartGroup, Parts, part_ids, unit_id
@@ -52,6 +53,7 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
     nid = np.array(part_ids("node", np.arange(mesh.n_vertices)))
     with_nodes = spec.connection == "hub"
     bp = beam_planes(structure)
+    spec, sizing = size_hubs(structure, spec, P0, bp["normal"])  # no radius given: sized from the beam angles
     from .panels import panel_solids
 
     layers = spec.glass.solids()                      # outside in; the last one bears on the beams
@@ -164,8 +166,12 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                       "height_mm_max": float(nodes["length"].max())}
         if spec.hub_kind == "tube":
             node_facts.update(wall_mm=spec.node.wall_mm, cap_mm=spec.node.cap_mm)
+        node_facts["sizing"] = sizing
     report = _report(groups, spec, mode, s_beam, d, beams, node_facts)
     report["limits"] = check_limits(groups, spec)
+    hub = hub_limit(structure, spec, sizing, P0, bp["normal"])
+    if hub is not None:
+        report["limits"]["hub"] = hub
     return Parts(groups=tuple(groups), spec=spec, edge_mode=mode, report=report, mesh=mesh)
 
 

@@ -49,14 +49,18 @@ class NodeSpec:
         connects them), or None: ``hub`` when ``parts.node_radius`` > 0, else ``mitre``.
     hub : ``tube`` (a steel tube with a top and a bottom cap plate, three parts) or ``solid``
         (a solid polygonal hub, one part).
-    radius_mm : hub outside radius (circumradius of its ``sides``-gon); None: ``node_radius``.
+    radius_mm : hub outside radius (circumradius of its ``sides``-gon); None: ``node_radius``, and when
+        that is 0 the smallest stock tube on which the beams of the sharpest node clear each other
+        (sized by ``build_parts``, :mod:`fabricate.cad.hubsize`).
     wall_mm : tube wall; cap_mm : cap plate thickness; gap_mm : ``none``: end distance from the axis.
     """
 
     connection: Literal["hub", "mitre", "none"] | None = option(
         None, help="hub, mitre or none (null: hub when node_radius > 0)")
     hub: Literal["tube", "solid"] = option("tube", help="a tube with cap plates, or a solid polygonal hub")
-    radius_mm: float | None = option(None, gt=0, le=5000.0, unit="mm", help="hub outside radius (null: node_radius)")
+    radius_mm: float | None = option(None, gt=0, le=5000.0, unit="mm",
+                                     help="hub outside radius (null: node_radius; with node_radius 0, the smallest "
+                                          "stock tube that clears the sharpest beam angle at every node)")
     wall_mm: float = option(10.0, gt=0, le=1000.0, unit="mm", help="tube wall")
     cap_mm: float = option(15.0, gt=0, le=1000.0, unit="mm", help="cap plate thickness")
     gap_mm: float = option(20.0, ge=0, le=5000.0, unit="mm", help="connection none: end distance from the axis")
@@ -154,10 +158,10 @@ class PartSpec:
         if b.section == "rhs" and b.flange_width_mm <= 2 * self.web:
             raise ConfigError(f"parts.beam.flange_width_mm = {b.flange_width_mm:g} mm: expected more than two "
                               f"webs ({2 * self.web:g} mm) for an rhs section")
-        if self.connection == "hub" and self.hub_radius <= 0:
-            raise ConfigError("parts.node.connection = 'hub': expected parts.node.radius_mm (or "
-                              "parts.node_radius) > 0 (mm)")
-        if self.connection == "hub" and self.node.hub == "tube" and self.node.wall_mm >= self.hub_radius:
+        # a hub without a radius (radius_mm: null, node_radius: 0) is sized by build_parts from the sharpest
+        # beam angle (fabricate.cad.hubsize); a radius given must leave room for the tube's wall
+        if self.connection == "hub" and self.node.hub == "tube" and self.hub_radius > 0 \
+                and self.node.wall_mm >= self.hub_radius:
             raise ConfigError(f"parts.node.wall_mm = {self.node.wall_mm:g} mm: expected less than the hub "
                               f"radius {self.hub_radius:g} mm")
         if isinstance(self.glass, dict) and all(v is None for v in self.glass.values()):
