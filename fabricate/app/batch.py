@@ -10,6 +10,10 @@ planarity, conical defect, parts and time, on the terminal and as CSV.
 
 A job that fails (bad config, bad mesh, failed export, a bug, a dead worker)
 becomes a row with its status and message; the others carry on.
+
+A worker process runs at most :data:`JOBS_PER_WORKER` jobs, then a fresh one takes its place, so
+that what native libraries keep after a run (the C heap's fragments, a library's caches) cannot
+add up over a long batch.
 """
 from __future__ import annotations
 
@@ -45,6 +49,12 @@ MAX_JOBS = 10_000
 """A batch of more jobs is refused before any config is read: each job's config is validated before the
 first run (about 4 ms each), so 8 million combinations of five swept keys would take nine hours and
 their memory before anything ran; split the sweep."""
+JOBS_PER_WORKER = 8
+"""Jobs a worker process runs before a fresh one replaces it (its imports: about a second).  Workers
+that ran every job of a 50-job batch grew from 267 to 415 MB; memory a run's native code keeps grows
+a worker for 8 jobs at most.  The batch replaces them itself: Python 3.11's
+``ProcessPoolExecutor(max_tasks_per_child=...)`` hangs once a worker retires while jobs wait (CPython
+gh-115634)."""
 COLUMNS = ("name", "status", "faces", "planarity", "conical", "parts", "seconds", "message", "out_dir")
 
 
@@ -164,10 +174,11 @@ def run_job(job: Job, out_root: str, force: bool = False) -> RunSummary:
                           message=line.removeprefix("error: "))
 
 
-def make_executor(workers: int, scheduler: str | None = None, *,
-                  timeout: float = COMMAND.connect_timeout_s) -> tuple[cf.Executor, Callable[[], None]]:
+def make_executor(workers: int, scheduler: str | None = None, *, timeout: float = COMMAND.connect_timeout_s,
+                  share: int | None = None) -> tuple[cf.Executor, Callable[[], None]]:
     """A concurrent.futures executor and its closer: worker processes, or a Dask cluster's
-    (``timeout`` seconds to connect)."""
+    (``timeout`` seconds to connect); ``share``: the processes the cores are shared among (default
+    ``workers``: one executor per worker passes the batch's count)."""
     if scheduler:
         try:
             from distributed import Client
@@ -181,7 +192,7 @@ def make_executor(workers: int, scheduler: str | None = None, *,
         executor = client.get_executor(pure=False)
         return executor, client.close
     executor = cf.ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                      initializer=_worker_init, initargs=(workers,))
+                                      initializer=_worker_init, initargs=(share or workers,))
     return executor, lambda: executor.shutdown(wait=True, cancel_futures=True)
 
 
@@ -200,8 +211,10 @@ def run_batch(jobs: list[Job], out_root: str | Path, *, workers: int | None = No
 
     A job whose worker process dies (killed, out of memory, a crash in native code) is run once
     more, alone in a fresh worker so that it cannot take healthy jobs down with it; lost twice, it
-    ends ``lost`` (exit 1).  Jobs that were only waiting or running beside it are run again
-    without counting as an attempt of theirs.  Temporary folders of dead workers are removed.
+    ends ``lost`` (exit 1).  Each local worker has an executor of its own (:func:`_workers`), so a
+    death fails that worker's job only; a job that failed only beside one (a Dask executor's) is
+    run again without counting as an attempt of its own.  Temporary folders of dead workers are
+    removed.
     """
     out_root = str(Path(out_root).resolve())
     results: dict[int, RunSummary] = {}
@@ -234,8 +247,10 @@ def run_batch(jobs: list[Job], out_root: str | Path, *, workers: int | None = No
         return True
 
     try:
-        if todo:
+        if todo and scheduler:
             _round(todo, jobs, out_root, force, scheduler, n, finish)
+        elif todo:  # local workers, each replaced after JOBS_PER_WORKER jobs
+            _workers(todo, jobs, out_root, force, None, n, finish, JOBS_PER_WORKER)
         again = [i for i in todo if i not in results]
         if again:  # alone, in fresh workers, at most n at a time
             for note in _sweep(out_root, jobs):
@@ -278,24 +293,42 @@ def _round(indices, jobs, out_root, force, scheduler, n, finish) -> None:
 
 def _isolated(indices, jobs, out_root, force, scheduler, n, finish) -> None:
     """Each of ``indices`` on an executor of its own (one worker), at most ``n`` at a time."""
-    pending, running = list(indices), {}
+    _workers(indices, jobs, out_root, force, scheduler, n, finish, 1)
+
+
+def _workers(indices, jobs, out_root, force, scheduler, n, finish, per_worker: int) -> None:
+    """``indices`` on at most ``n`` executors of one worker each: a worker runs up to ``per_worker``
+    jobs one after the other, then its executor is closed and the next job starts a fresh one (as
+    after a worker that died: a dead worker fails its own job alone)."""
+    pending = list(indices)
+    idle: list[tuple[Callable, Callable[[], None], int]] = []   # (submit, close, jobs run)
+    running: dict[cf.Future, tuple[int, Callable, Callable[[], None], int]] = {}
     try:
         while pending or running:
             while pending and len(running) < n:
                 i = pending.pop(0)
-                executor, close = make_executor(1, scheduler)
+                if idle:
+                    submit, close, done_jobs = idle.pop()
+                else:
+                    executor, close = make_executor(1, scheduler, share=n)
+                    submit, done_jobs = executor.submit, 0
                 with _workers_ignore_sigint():
-                    running[executor.submit(run_job, jobs[i], out_root, force)] = (i, close)
+                    running[submit(run_job, jobs[i], out_root, force)] = (i, submit, close, done_jobs + 1)
             done, _ = cf.wait(running, return_when=cf.FIRST_COMPLETED)
             for fut in done:
-                i, close = running.pop(fut)
-                close()
+                i, submit, close, done_jobs = running.pop(fut)
+                if done_jobs < per_worker and not fut.cancelled() and fut.exception() is None:
+                    idle.append((submit, close, done_jobs))
+                else:
+                    close()
                 finish(i, fut)
     except BaseException:
         _stop_workers()
         raise
     finally:
-        for _, close in running.values():
+        for _, _, close, _ in running.values():
+            close()
+        for _, close, _ in idle:
             close()
 
 
