@@ -4,7 +4,7 @@ import json
 import numpy as np
 import pytest
 
-from optimize import Mesh
+from optimize import Mesh, MeshError
 from optimize.modelling import shapes
 from optimize.mesh import measures as M
 from optimize.mesh.io import read_mesh
@@ -158,3 +158,88 @@ def test_summary_is_json_ready(tunnel_path):
         assert set(back[key]) >= {"max", "mean", "count", "worst", "tolerance", "ok"}
     assert back["mesh"]["vertices"] == 807 and back["mesh"]["face_sizes"] == {"4": 784}
     assert back["planarity"]["ok"] is False and back["conical"]["count"] > 0
+
+
+# -- degenerate faces: shrunk edges and straight corners, apart from folds ---------------------------
+def test_clean_meshes_have_no_degenerate_faces(perturbed_revolution, tunnel_path, cylinder_path):
+    for m in (perturbed_revolution, read_mesh(tunnel_path), read_mesh(cylinder_path), shapes.grid(4, 4)):
+        d = M.degenerate(m, m.V, m.V)
+        assert d["shrunk_edges"] == {"count": 0, "edges": 0, "faces": []}, m.name
+        assert d["straight_corners"] == {"count": 0, "corners": 0, "faces": []}, m.name
+
+
+@pytest.mark.parametrize("side,short", [(1.5e-9, True), (1.4e-6, True), (1.5e-6, False), (1e-3, False)])
+def test_a_side_below_short_edge_of_its_face_has_shrunk(side, short):
+    """A quad whose fourth corner sits ``side`` from the first: a triangle when that is below 1e-6 of
+    its longest side (sqrt 2, from corner 2 to corner 3)."""
+    m = Mesh([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, side, 0]], [[0, 1, 2, 3]])
+    bad = M.shrunk_edges(m)
+    assert bad.tolist() == [False, False, False, short]  # the side from corner 3 to corner 0
+    assert M.summary(m)["shrunk_edges"]["count"] == int(short)
+
+
+@pytest.mark.parametrize("kept,shrunk", [(0.005, True), (0.02, False)])
+def test_a_side_below_shrunk_of_its_input_length_has_shrunk(grid3x3, kept, shrunk):
+    """Vertex 5 slides toward vertex 6 until their edge keeps ``kept`` of its length: below 1%
+    it is shrunk (issue 31: stalled runs left edges at 0.1-0.5%); above 0.1% no fold sees it."""
+    V = grid3x3.V.copy()
+    V[5] = V[6] + kept * (V[5] - V[6])
+    d = M.degenerate(grid3x3, V, grid3x3.V)
+    assert d["shrunk_edges"]["edges"] == int(shrunk)
+    assert d["shrunk_edges"]["faces"] == ([1, 4] if shrunk else [])
+    assert not M.folded_faces(grid3x3, V).any()
+    assert M.degenerate(grid3x3, V)["shrunk_edges"]["count"] == 0  # without the input: 0.5% is a side
+
+
+@pytest.mark.parametrize("corner,straight", [((2, 0, 0), True), ((-1, 0, 0), True), ((2, 1e-5, 0), False),
+                                             ((2, -1e-5, 0), False)])
+def test_a_quad_corner_at_180_or_0_degrees_is_straight(corner, straight):
+    """Quad (0, 1, 2, 3) with corner 1 on the line through corners 0 and 2 (180 degrees, or 0: a
+    spike back over corner 0); 1e-5 off the line is a corner (sine 1e-5), on either side."""
+    m = Mesh([[0, 0, 0], [1, 0, 0], corner, [1, 1, 0]], [[0, 1, 2, 3]])
+    m = Mesh([[0, 0, 0], corner, [3, 0, 0], [1, 1, 0]], [[0, 1, 2, 3]]) if corner[0] == 2 else m
+    assert M.straight_corners(m)[1] == straight
+    assert M.degenerate(m)["straight_corners"]["count"] == int(straight)
+
+
+def test_straight_corners_of_larger_polygons_are_allowed():
+    pent = Mesh([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0]], [[0, 1, 2, 3, 4]])
+    assert not M.straight_corners(pent).any()
+    quad = Mesh([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0]], [[0, 1, 2, 3]])
+    assert M.straight_corners(quad).tolist() == [False, True, False, False]
+
+
+@pytest.mark.parametrize("scale,shift", [(1e-200, 0.0), (1.0, 0.0), (1e200, 0.0), (1.0, 1e6)])
+def test_degenerate_is_scale_free(scale, shift):
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1.5e-9, 0]])
+    m = Mesh(V * scale + shift, [[0, 1, 2, 3]])
+    assert M.shrunk_edges(m).tolist() == [False, False, False, True]
+
+
+# -- range: coordinates float64 cannot measure or build ------------------------------------------------
+def test_range_problem_names_overflow_and_resolution(grid3x3):
+    assert M.range_problem(grid3x3.V) is None and M.range_problem(grid3x3.V / 3 * 1e150) is None
+    why = M.range_problem(grid3x3.V / 3 * 1e307)
+    assert why.startswith("coordinates up to 1e+307 mm: their squared lengths and areas overflow float64")
+    assert "expected |x| <= 1e+150 mm" in why
+    assert M.range_problem(grid3x3.V * 1e12, resolution=1e-3) is None  # 3e12 mm: held to 4.9e-4 mm
+    why = M.range_problem(grid3x3.V * 1e15, resolution=1e-3, needs="the CAD tolerance")
+    assert "float64 holds them only to 0.5 mm, coarser than the CAD tolerance 0.001 mm" in why
+    assert "expected |x| < 4.5e+12 mm" in why
+    with pytest.raises(MeshError, match=r"^roof\.obj: coordinates up to 1e\+307 mm"):
+        M.check_range(grid3x3.with_vertices(grid3x3.V / 3 * 1e307), "roof.obj")
+
+
+def test_relative_resolution_far_from_the_origin(grid3x3):
+    assert M.relative_resolution(grid3x3) == pytest.approx(np.spacing(3.0) / 1.0)
+    far = grid3x3.with_vertices(grid3x3.V * 1000 + 1e14)  # 1 m edges, 1e14 mm out: 1/64 mm
+    assert M.relative_resolution(far) == pytest.approx(0.015625 / 1000)
+    assert M.relative_resolution(far) == M.relative_resolution(far, far.V)
+
+
+def test_summary_lengths_do_not_overflow_where_float64_holds_them(grid3x3):
+    m = grid3x3.with_vertices(grid3x3.V / 3 * 1.5e308)
+    with np.errstate(all="raise"):
+        s = M.summary(m)
+    assert s["edge_length"]["mean"] == pytest.approx(5e307)
+    assert s["face_area"]["mean"] == np.inf and s["mesh"]["bbox_diagonal"] == np.inf

@@ -13,7 +13,15 @@ Definitions shared by the whole package (code, reports, tests):
   normals around the vertex) relative to the star orientation: elliptic (+),
   hyperbolic (-), parabolic (below tolerance);
 - fairness: second differences ``a - 2 v + b`` along mesh polylines, divided
-  by the mean edge length.
+  by the mean edge length;
+- folded face (of a result against its input): a face convex in the input
+  with a reflex corner, a flipped normal or a collapsed edge in the result
+  (:func:`folded_faces`);
+- degenerate face, counted apart from folds (:func:`degenerate`): a shrunk
+  edge (shorter than ``SHORT_EDGE`` of its face's longest edge, or in a
+  result than ``SHRUNK`` of its input length) or a straight corner of a
+  triangle or quad (its two edges on one line: ``|sine| <= STRAIGHT``, 180
+  degrees or a 0 degree spike): either way the quad is a triangle.
 
 Scale-free by construction: every function first scales the positions by a
 power of two (exact, :func:`optimize.mesh.core.unit_exponent`) so that they lie in
@@ -26,6 +34,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import MeshError
 from ..tolerances import DEFAULT, Tolerances
 from .core import Mesh, unit_exponent
 from .corners import angle_values, corner_vertices
@@ -175,6 +184,108 @@ def folded_faces(mesh: Mesh, V: np.ndarray, V0: np.ndarray | None = None,
     return bad | flipped
 
 
+SHORT_EDGE = 1e-6
+"""A face side shorter than this fraction of the longest side of its face has shrunk: the face
+lost a corner (a quad with one is a triangle; a 1 m panel with a 1 um side)."""
+SHRUNK = 1e-2
+"""A side of a result shorter than this fraction of its length in the input has shrunk (a vertex
+slid toward its neighbour; below ``COLLAPSED`` the face also counts as folded)."""
+STRAIGHT = 1e-6
+"""A corner whose sine (:func:`corner_turns`) is at most this in size is straight (the default
+``Tolerances.fold``, about 6e-5 degrees: inside it a corner is neither convex nor folded).  Fixed,
+not the run's fold tolerance: a fold tolerance loosened to let dents pass does not make a
+corner of 60 degrees straight."""
+
+
+def shrunk_edges(mesh: Mesh, V: np.ndarray | None = None, V0: np.ndarray | None = None) -> np.ndarray:
+    """(c,) bool, topology corner order: the face side from each corner to the next is shorter
+    than ``SHORT_EDGE`` x the longest side of its face at ``V (n, 3)`` (default ``mesh.V``), or,
+    given start positions ``V0 (n, 3)``, than ``SHRUNK`` x its length at ``V0``."""
+    V = mesh.V if V is None else V
+    t = mesh.topology
+    e = unit_exponent(V) if V0 is None else max(unit_exponent(V), unit_exponent(V0))  # one scale: compared
+    W = np.ldexp(V, -e)
+    side = np.linalg.norm(W[t.corner_next_vertex] - W[t.corner_vertex], axis=1)
+    longest = np.zeros(mesh.n_faces)
+    np.maximum.at(longest, t.corner_face, side)
+    bad = side < SHORT_EDGE * longest[t.corner_face]
+    if V0 is not None:
+        W0 = np.ldexp(V0, -e)
+        bad |= side < SHRUNK * np.linalg.norm(W0[t.corner_next_vertex] - W0[t.corner_vertex], axis=1)
+    return bad
+
+
+def straight_corners(mesh: Mesh, V: np.ndarray | None = None, tol: float = STRAIGHT) -> np.ndarray:
+    """(c,) bool, topology corner order: corners of triangles and quads whose two sides lie on one
+    line, ``|corner_turns| <= tol`` (``STRAIGHT``): 180 degrees (the quad is a triangle with a
+    vertex on a side) or a 0 degree spike.  Inside the fold tolerance, so never folded, yet no
+    panel.  Corners of larger polygons are left alone (a vertex on a side of a cap is
+    allowed)."""
+    t = mesh.topology
+    return (np.abs(corner_turns(mesh, V)) <= tol) & (mesh.face_sizes[t.corner_face] <= 4)
+
+
+def degenerate(mesh: Mesh, V: np.ndarray | None = None, V0: np.ndarray | None = None,
+               tol: float = STRAIGHT) -> dict:
+    """The degenerate faces of ``mesh`` at ``V (n, 3)`` (default ``mesh.V``; ``V0 (n, 3)``: the
+    input positions of a result, for shrinking) as JSON-ready entries, apart from folds:
+
+    ``{"shrunk_edges": {"count": faces, "edges": mesh edges, "faces": first 20},
+    "straight_corners": {"count": faces, "corners": corners, "faces": first 20}}``
+    (:func:`shrunk_edges`, :func:`straight_corners`)."""
+    t = mesh.topology
+    short, straight = shrunk_edges(mesh, V, V0), straight_corners(mesh, V, tol)
+    out = {}
+    for key, bad, what, n in (("shrunk_edges", short, "edges", np.unique(t.corner_edge[short]).size),
+                              ("straight_corners", straight, "corners", int(straight.sum()))):
+        faces = np.unique(t.corner_face[bad])
+        out[key] = {"count": int(faces.size), what: int(n), "faces": faces[:20].tolist()}
+    return out
+
+
+#: Largest coordinate (in the mesh's units) taken: squared lengths, areas and their sums of larger
+#: coordinates overflow float64 (largest 1.8e308).
+MAX_COORDINATE = 1e150
+
+
+def range_problem(V: np.ndarray, resolution: float | None = None, unit: str = "mm",
+                  needs: str = "") -> str | None:
+    """Why positions ``V (..., 3)`` are out of range, or None: a coordinate beyond
+    ``MAX_COORDINATE``, or (``resolution`` given, in ``unit``) one so large that float64 holds it
+    more coarsely than ``resolution`` (``needs``: what needs it, for the sentence)."""
+    top = float(np.abs(V).max(initial=0.0))
+    if top > MAX_COORDINATE:
+        return (f"coordinates up to {top:.3g} {unit}: their squared lengths and areas overflow float64 "
+                f"(largest {np.finfo(float).max:.2g}); expected |x| <= {MAX_COORDINATE:.0e} {unit} (is the unit "
+                "right?)")
+    if resolution is not None and np.spacing(top) > resolution:
+        limit = resolution / np.finfo(float).eps
+        return (f"coordinates up to {top:.3g} {unit}: float64 holds them only to {np.spacing(top):.3g} {unit}, "
+                f"coarser than {needs + ' ' if needs else ''}{resolution:g} {unit}; expected |x| < {limit:.2g} "
+                f"{unit} (is the unit right? else move the design near the origin)")
+    return None
+
+
+def check_range(mesh: Mesh, where: str, resolution: float | None = None, unit: str = "mm",
+                needs: str = "") -> None:
+    """Raise :class:`MeshError` ``"where: ..."`` when :func:`range_problem` finds one."""
+    why = range_problem(mesh.V, resolution, unit, needs)
+    if why:
+        raise MeshError(f"{where}: {why}")
+
+
+def relative_resolution(mesh: Mesh, V: np.ndarray | None = None) -> float:
+    """The float64 spacing at the largest coordinate of ``V (n, 3)`` (default ``mesh.V``) over the
+    mean edge length: below about this no relative measure (planarity ...) of the stored
+    positions can go (a mesh 1e14 mm from the origin with 1 m edges: 1.6e-5)."""
+    V = mesh.V if V is None else V
+    W, k = _unit(V)
+    e = mesh.topology.edges
+    mean = float(np.linalg.norm(W[e[:, 1]] - W[e[:, 0]], axis=1).mean())
+    top = float(np.abs(V).max(initial=0.0))
+    return float(np.spacing(top) / np.ldexp(mean, k)) if mean > 0 else float("inf")
+
+
 def face_areas(mesh: Mesh, V: np.ndarray | None = None) -> np.ndarray:
     """(m,) float: vector area of each face (exact for planar faces)."""
     n, e = _scaled_areas(mesh, V)
@@ -245,8 +356,13 @@ def summary(mesh: Mesh, tol: Tolerances = DEFAULT) -> dict:
     con = conical_defect(mesh)
     cir = circular_defect(mesh)
     ang = corner_angles(mesh)
-    el = edge_lengths(mesh)
-    area = face_areas(mesh)
+    W, k = _unit(mesh.V)  # lengths and areas: statistics in [-1, 1], scaled back once (no overflow
+    el = edge_lengths(mesh, W)  # of a sum of finite values; an area beyond float64 is inf)
+    area = face_areas(mesh, W)
+    with np.errstate(over="ignore"):
+        diagonal = mesh.bbox_diagonal()
+        lengths = {s: float(np.ldexp(getattr(el, s)(), k)) for s in ("min", "max", "mean")}
+        areas = {s: float(np.ldexp(getattr(area, s)(), 2 * k)) for s in ("min", "max", "mean")}
     kinds = vertex_types(mesh)
     fair = fairness(mesh)
     con_s = _stats(con, tol.conical)
@@ -263,15 +379,16 @@ def summary(mesh: Mesh, tol: Tolerances = DEFAULT) -> dict:
             "edges": int(len(t.edges)), "boundary_loops": len(t.boundary_loops),
             "components": t.n_components, "orientable": t.orientable,
             "irregular_vertices": int(t.interior_irregular.size),
-            "bbox_diagonal": mesh.bbox_diagonal(),
+            "bbox_diagonal": diagonal,
         },
         "planarity": _stats(plan, tol.planarity),
         "conical": con_s,
         "circular": cir_s,
         "vertex_types": {k: int(np.sum(kinds == k)) for k in ("elliptic", "hyperbolic", "parabolic")},
         "fairness": _stats(fair),
-        "edge_length": {"min": float(el.min()), "max": float(el.max()), "mean": float(el.mean())},
+        "edge_length": lengths,
         "angle_deg": {"min": float(np.degrees(ang.min())), "max": float(np.degrees(ang.max())),
                       "mean": float(np.degrees(ang.mean()))},
-        "face_area": {"min": float(area.min()), "max": float(area.max()), "mean": float(area.mean())},
+        "face_area": areas,
+        **degenerate(mesh),
     }
