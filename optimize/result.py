@@ -16,7 +16,13 @@ from .errors import ConvergenceError
 from .mesh import Mesh, measures
 from .tolerances import DEFAULT
 
-STATUSES = ("converged", "folded", "stalled", "max_iter", "diverged")
+STATUSES = ("converged", "folded", "degenerate", "stalled", "max_iter", "diverged")
+TARGET_MEASURES = {"pq": ("planarity",), "conical": ("planarity", "conical"),
+                   "circular": ("planarity", "circular"), "strip": ("planarity", "det")}
+"""The measured defects (keys of ``OptimizeResult.defects``) each target must meet: a run is a
+success only when every one is within its tolerance on the result as returned (in its own
+coordinates, not the solver's scaled ones)."""
+DEGENERATE = {"shrunk_edges": "with a shrunk edge", "straight_corners": "with a straight corner"}
 
 
 @dataclass
@@ -30,8 +36,11 @@ class OptimizeResult:
     status : str
         ``"converged"`` | ``"folded"`` (every tolerance reached, but faces that
         were convex became dented or flipped: ``defects["folded"]`` lists them) |
-        ``"stalled"`` (no progress) | ``"max_iter"`` | ``"diverged"`` (the last
-        good iterate is returned).
+        ``"degenerate"`` (every tolerance reached, no fold, but faces with a shrunk
+        edge or a straight corner: ``defects["shrunk_edges"]``,
+        ``defects["straight_corners"]``) | ``"stalled"`` (no progress, or the solver's
+        scaled iterate met the tolerances and the returned mesh does not) |
+        ``"max_iter"`` | ``"diverged"`` (the last good iterate is returned).
     message : str
         One sentence saying why the run stopped, with the figures.
     nit : int
@@ -41,7 +50,8 @@ class OptimizeResult:
         (max defects), ``fairness``, ``closeness`` (energies), ``step``,
         ``residual`` and solver details.
     defects : dict
-        Final measures (``measures.summary``-like).
+        Final measures of ``mesh`` (``measures.summary``), with ``folded``,
+        ``shrunk_edges`` and ``straight_corners`` against the input (:func:`check_folds`).
     max_distance : float
         Max distance of a vertex to the reference surface / bbox diagonal of
         the reference.
@@ -93,12 +103,27 @@ class OptimizeResult:
         defect over its tolerance, for callers that want an exception rather than a status."""
         if self.success:
             return self
-        over = [f"{k} {v['max']:.3g} > {v['tolerance']:.3g}" for k, v in self.defects.items()
-                if isinstance(v, dict) and v.get("ok") is False and "max" in v and "tolerance" in v]
-        folded = self.defects.get("folded", {}).get("count", 0)
-        facts = ", ".join(over + ([f"{folded} folded face(s)"] if folded else [])) or "no defect over tolerance"
+        facts = ", ".join(self.missed() + self.bad_faces()) or "no defect over tolerance"
         raise ConvergenceError(f"{self.mesh.name}: {self.method}/{self.target} ended {self.status} after "
                                f"{self.nit} iteration(s) ({facts}): {self.message}")
+
+    def missed(self) -> list[str]:
+        """``"planarity 6.4e-06 > 1e-06"`` for every measure of the target (:data:`TARGET_MEASURES`)
+        over its tolerance in ``defects``: the one test of the tolerances a status, a message and
+        a command's exit code are taken from."""
+        out = []
+        for key in TARGET_MEASURES.get(self.target, ("planarity",)):
+            d = self.defects.get(key)
+            if isinstance(d, dict) and d.get("ok") is False:
+                out.append(f"{key} {d['max']:.3g} > {d['tolerance']:.3g}")
+        return out
+
+    def bad_faces(self) -> list[str]:
+        """``"2 folded face(s)"``, ``"1 face(s) with a shrunk edge"``, ... for every non-zero count."""
+        n = self.defects.get("folded", {}).get("count", 0)
+        out = [f"{n} folded face(s)"] if n else []
+        return out + [f"{self.defects[k]['count']} face(s) {what}" for k, what in DEGENERATE.items()
+                      if self.defects.get(k, {}).get("count")]
 
     def report(self) -> dict:
         """A JSON-ready summary (no arrays): how the run ended, defects, timings, history."""
@@ -117,19 +142,55 @@ class OptimizeResult:
 
 def check_folds(result: OptimizeResult, V0: np.ndarray, advice: str = "",
                 fold: float = DEFAULT.fold) -> OptimizeResult:
-    """The one fold check of every method: record ``defects["folded"]`` (faces convex at
-    ``V0 (n, 3)``, the input positions, that are dented, flipped or collapsed in
-    ``result.mesh``: :func:`optimize.mesh.measures.folded_faces`) and turn a ``converged``
-    run with any of them into ``folded`` (not a success); ``advice`` ends the message;
-    ``fold`` is ``Tolerances.fold``.
+    """The one final check of every method, on the mesh as returned: record
+    ``defects["folded"]`` (faces convex at ``V0 (n, 3)``, the input positions, that are dented,
+    flipped or collapsed in ``result.mesh``: :func:`optimize.mesh.measures.folded_faces`) and the
+    degenerate faces ``defects["shrunk_edges"]``, ``defects["straight_corners"]``
+    (:func:`optimize.mesh.measures.degenerate`, against ``V0``); then a ``converged`` run
+    becomes ``stalled`` when a measure of the target misses its tolerance on the returned mesh
+    (:meth:`OptimizeResult.missed`: the solver measured its scaled iterate; far from the
+    origin float64 may not hold what it reached), else ``folded`` with any fold, else
+    ``degenerate`` with any degenerate face (none a success).  ``advice`` ends a fold's
+    message; ``fold`` is ``Tolerances.fold``.
     Returns ``result`` (updated in place; calling it twice changes nothing more)."""
-    folded = np.nonzero(measures.folded_faces(result.mesh, result.mesh.V, V0, fold))[0]
+    mesh = result.mesh
+    folded = np.nonzero(measures.folded_faces(mesh, mesh.V, V0, fold))[0]
     result.defects["folded"] = {"count": int(len(folded)), "faces": folded[:20].tolist()}
-    if len(folded) and result.status == "converged":
+    result.defects.update(measures.degenerate(mesh, mesh.V, V0))
+    if result.status != "converged":
+        return result
+    missed = result.missed()
+    if missed:
+        result.status, result.success = "stalled", False
+        result.message = (f"the mesh as returned misses {', '.join(missed)}, though the solver's scaled iterate "
+                          f"met the tolerances after {result.nit} iteration(s)" + _resolution_note(mesh, result))
+    elif len(folded):
         result.status, result.success = "folded", False
         result.message = (f"{result.message}, but {len(folded)} face(s) that were convex became dented, "
                           f"flipped or collapsed (first: {folded[:5].tolist()})" + (f"; {advice}" if advice else ""))
+    elif any(result.defects[k]["count"] for k in DEGENERATE):
+        result.status, result.success = "degenerate", False
+        d = result.defects
+        result.message = (f"{result.message}, but {' and '.join(result.bad_faces())} (first: "
+                          f"{sorted(set(d['shrunk_edges']['faces'][:5] + d['straight_corners']['faces'][:5]))[:5]}): "
+                          f"a side below {measures.SHORT_EDGE:g} of its face's longest or {measures.SHRUNK:g} of its "
+                          f"input length, or a corner whose sine is within {measures.STRAIGHT:g} of 0 (0 or 180 degrees); "
+                          "such a quad is a triangle, no panel")
     return result
+
+
+def _resolution_note(mesh: Mesh, result: OptimizeResult) -> str:
+    """Why the returned mesh may miss what the scaled iterate met: its coordinates are too far
+    from the origin for float64 to hold the tolerance (empty when they are not)."""
+    rel = measures.relative_resolution(mesh)
+    tol = min(result.defects[k]["tolerance"] for k in TARGET_MEASURES.get(result.target, ("planarity",))
+              if isinstance(result.defects.get(k), dict) and "tolerance" in result.defects[k])
+    if not rel > 0.01 * tol:
+        return ""
+    top = float(np.abs(mesh.V).max())
+    return (f"; coordinates up to {top:.3g} are stored to {np.spacing(top):.3g} (float64), {rel:.2g} of the mean "
+            f"edge, too coarse for the tolerance {tol:g}: move the mesh near the origin (its centre is at "
+            f"{', '.join(f'{c:.6g}' for c in mesh.V.mean(axis=0))}) and optimize again")
 
 
 def record_shape(result: OptimizeResult, mesh0: Mesh, distance: np.ndarray, diagonal: float) -> None:

@@ -74,7 +74,10 @@ def test_reaches_tolerance_on_perturbed_surface_of_revolution(method, target, ex
 def test_penalty_angle_sum_alone_on_pq_halves_weights():
     _, m = perturbed_dome(0.05)
     res = run_paper_method(m, "pq", "penalty", fixed="boundary")
-    assert res.success, res.message
+    # planar, but the edges of faces 4, 9, 14 at the top ring shrink to 0.3-0.5% of their length:
+    # degenerate quads, no success (the default method keeps them)
+    assert not res.missed() and res.status == "degenerate", res.message
+    assert res.defects["shrunk_edges"]["faces"] == [4, 9, 14]
     w = [h["w_fair"] for h in res.history]
     assert np.allclose(w[1:], np.array(w[:-1]) / 2)
     assert all(h["phase"] == "penalty" for h in res.history)

@@ -7,11 +7,15 @@ no glass can be cut.  :func:`panel_failure` names every such panel, how
 narrow its face is, and the largest ``parts.joint_gap`` (and the other
 ``parts.edge`` option) with which it builds, so the message says what to
 change: the gap, the edge option, or, when not even a zero gap works, the
-design (see the design's own parameters and ``optimize.fairness``).
+design (see the design's own parameters and ``optimize.fairness``).  Panels far beyond any
+building (coordinates so large that float64 cannot hold the CAD tolerance) are said to be that.
 """
 from __future__ import annotations
 
 import numpy as np
+
+from optimize.mesh.measures import range_problem
+from optimize.tolerances import DEFAULT
 
 from .errors import PartError
 
@@ -77,8 +81,12 @@ def panel_failure(ids, faces_index, face_name: str, turn: float, P: np.ndarray, 
     P : (1, k, 3) the worst panel's face polygon at the glass layer (mm); normal : (3,) its unit normal;
     build : ``build(gap, mode, faces)`` as in :func:`largest_gap`.
     """
-    own = max(float(convexity(P, normal[None])[0]), float(convexity(P, -normal[None])[0]))  # either way round
     listed = f"{', '.join(ids[:8])}{', ...' if len(ids) > 8 else ''}"
+    far = range_problem(P, resolution=DEFAULT.cad_linear_mm, needs="the CAD tolerance")
+    if far:  # the glass thickness and the joint gap are lost in rounding: no face is too narrow
+        return PartError(f"panel {ids[0]} (face {int(faces_index[0])}): no part can be built, {far}; "
+                         f"{len(ids)} panel(s) fail ({listed})", str(ids[0]), int(faces_index[0]))
+    own = max(float(convexity(P, normal[None])[0]), float(convexity(P, -normal[None])[0]))  # either way round
     if not own >= CONVEX_MIN:  # the mesh face itself turns inside out: no setting of the parts helps
         return PartError(
             f"panel {ids[0]} (face {int(faces_index[0])}): the mesh face itself is folded (a self-intersecting "

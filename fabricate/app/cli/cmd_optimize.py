@@ -67,6 +67,8 @@ def run(args) -> int:
     from optimize import ConfigError, Tolerances, optimize_mesh
     from optimize.atomic import atomic_open
     from optimize.mesh.io import write_mesh
+    from optimize.mesh.measures import check_range
+    from optimize.result import TARGET_MEASURES
 
     from ..quads import CLI_HINT, require_quads
     from .units import read_mm, to_file_units
@@ -79,8 +81,11 @@ def run(args) -> int:
             raise ConfigError(f"--tol: {args.tol!r}, expected a positive number")
         tol = tol.replace(planarity=args.tol, conical=args.tol, circular=args.tol)
     mesh = read_mm(args.mesh, args.units)
+    check_range(mesh, str(args.mesh))
     require_quads(mesh, str(args.mesh), hint=CLI_HINT)
     reference = read_mm(args.reference, args.units) if args.reference else None
+    if reference is not None:
+        check_range(reference, str(args.reference))
     if args.target != "strip":  # said before optimizing: is a fold-free mesh likely near?
         from optimize.remesh.conjugacy import net_defect
 
@@ -106,12 +111,12 @@ def run(args) -> int:
     d = res.defects
     print(f"{mesh.name} -> {args.output}: {res.status} after {res.nit} iterations "
           f"({res.timings.get('total', 0.0):.2f} s, {res.method}/{res.target})")
-    shown = {"conical": ("planarity", "conical"), "circular": ("planarity", "circular")}
-    for key in shown.get(args.target, ("planarity",)):
+    for key in TARGET_MEASURES[args.target]:  # the measures res.success was decided on (res.missed)
         if key in d:
             s = d[key]
             mark = "ok" if s.get("ok") else "NOT reached"
-            print(f"  {key:10s} max {s['max']:.3g}  mean {s['mean']:.3g}  tolerance {s.get('tolerance')}  {mark}")
+            mean = f"  mean {s['mean']:.3g}" if "mean" in s else ""
+            print(f"  {key:10s} max {s['max']:.3g}{mean}  tolerance {s.get('tolerance')}  {mark}")
     for line in _other_defects(res, tol):
         print(line)
     dist, fair = d.get("distance"), d.get("fairness")
@@ -127,6 +132,9 @@ def run(args) -> int:
               f"result {fair['result']:.3g} (x{fair['ratio']:.2f})")
     fold = d.get("folded", {})
     print(f"  folded faces: {fold.get('count', 0)}" + (f" (first {fold['faces'][:5]})" if fold.get("count") else ""))
+    short, straight = d.get("shrunk_edges", {}), d.get("straight_corners", {})
+    print(f"  degenerate faces: {short.get('count', 0)} with a shrunk edge, {straight.get('count', 0)} with a "
+          "straight corner" + "".join(f" (first {e['faces'][:5]})" for e in (short, straight) if e.get("count")))
     print(f"  {res.message}")
     for route in routes:
         print(f"  {route.line()}" + ("  <- written" if route.result is res else ""))
