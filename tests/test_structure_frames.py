@@ -171,3 +171,71 @@ def test_plane_grid_under_uniform_load_matches_pynite_within_one_percent():
     Mp = np.array([max(abs(m.members[f"M{j}"].max_moment("My", "Combo 1")),
                        abs(m.members[f"M{j}"].min_moment("My", "Combo 1"))) for j in range(fr.n_elements)])
     np.testing.assert_allclose(moments(fr, sol), Mp, rtol=0.01, atol=0.01 * Mp.max())
+
+
+def _truss(a=2000.0, h=1500.0):
+    """A two-panel Warren truss in the x-z plane: bottom nodes 0, 1, 2 (a pin at 0, a roller at 2), top
+    nodes 3, 4; every node held out of its plane (y), members pinned at both ends."""
+    X = [[0, 0, 0], [2 * a, 0, 0], [4 * a, 0, 0], [a, 0, h], [3 * a, 0, h]]
+    members = [[0, 1], [1, 2], [3, 4], [0, 3], [3, 1], [1, 4], [4, 2]]
+    fixed = {i: (1,) for i in range(5)}
+    fixed[0], fixed[2] = (0, 1, 2), (1, 2)
+    return frame(X, members, fixed, pinned=True)
+
+
+def test_a_pinned_triangulated_truss_carries_the_member_forces_of_the_method_of_joints():
+    a, h, P = 2000.0, 1500.0, 30000.0
+    fr = _truss(a, h)
+    sol = run(fr, case(fr, nodal={1: (0, 0, -P)}))
+    F = sol.end_forces["c"]
+    N = -F[:, 0]                                   # + tension
+    sin = h / np.hypot(a, h)
+    expected = [P * a / (2 * h), P * a / (2 * h), -P * a / h,       # bottom chord, top chord
+                -P / (2 * sin), P / (2 * sin), P / (2 * sin), -P / (2 * sin)]   # diagonals
+    np.testing.assert_allclose(N, expected, rtol=1e-6)
+    assert np.abs(F[:, [4, 5, 10, 11]]).max() < 1e-6 * P * a    # no end moments: pinned
+    # a line load on the top chord: the member spans simply between its pins, w L^2 / 8 at midspan
+    w = 2.0
+    line = np.zeros((fr.n_elements, 3))
+    line[2] = (0.0, 0.0, -w)
+    sol = run(fr, LoadCase("c", np.zeros((fr.n_nodes, 6)), line))
+    assert moments(fr, sol)[2] == pytest.approx(w * (2 * a) ** 2 / 8, rel=1e-6)
+    assert np.abs(sol.end_forces["c"][:, [4, 5, 10, 11]]).max() < 1e-6 * w * a * a
+
+
+def test_a_pinned_quad_grid_is_named_a_mechanism_by_counting_its_members():
+    fr, _ = _grid()
+    import dataclasses
+
+    fr = dataclasses.replace(fr, pinned=True)
+    with pytest.raises(MechanismError, match=r"pin-jointed.*mechanism.*31 beams for 48 free node translations"):
+        solve(fr, {"c": case(fr, line=(0, 0, -1.0))})
+
+
+def test_the_section_class_turns_the_moment_to_the_top_fibre():
+    """A tee cantilever (the flange on top) under a tip load down: hogging all along, so its stem's free
+    tip is compressed (class 4 for a T 200x100x10/12); told that the top is the other way, it would be
+    sagging (class 1).  Local y of a beam along x with the normal y points down (OpenSees: y = vecxz x x)."""
+    import dataclasses
+
+    from fabricate.structure.results import evaluate
+    from fabricate.structure.sections import tee
+
+    T = tee(200.0, 100.0, 10.0, 12.0)
+    fr = dataclasses.replace(frame([[0, 0, 0], [L, 0, 0]], [[0, 1]], {0: FIX}), sections=(T,))
+    assert fr.local_axes()[0, 1] @ [0, 0, 1] == pytest.approx(-1.0)
+    c = case(fr, nodal={1: (0, 0, -1000.0)})
+    sol = run(fr, c)
+    uls = [("ULS", "uls", {"c": 1.0})]
+
+    def cls(top):
+        r = evaluate(dataclasses.replace(fr, top=top), {"c": c}, sol, uls, fy=355.0, deflection_limit=200.0,
+                     span_mm=L)
+        return r.section_class, r.class_M_kNm[0]
+
+    up, M = cls(np.array([-1.0]))      # local -y is the top: right
+    assert up.cls[0] == 4 and up.part[0] == "stem" and M == pytest.approx(-1000.0 * L * 1e-6)  # hogging at the root
+    down, M = cls(np.array([1.0]))
+    assert down.cls[0] < 4 and M > 0
+    unknown, _ = cls(None)             # both signs: the worse
+    assert unknown.cls[0] == 4

@@ -18,7 +18,7 @@ from _pipeline_fixtures import NO_FILES, REPO, tiny_config
 from fabricate.cad import PartSpec
 from fabricate.app.config import parse_config
 from fabricate.offset import offset_structure
-from fabricate.structure.check import check_structure, report
+from fabricate.structure.check import beam_table, check_structure, report
 from fabricate.structure.loads import panel_area_vectors
 from fabricate.structure.sizing import size_sections
 from optimize.modelling import shapes
@@ -94,6 +94,54 @@ def test_a_frame_on_pinned_joints_is_a_mechanism_naming_the_key(dome):
         check_structure(dome, options(connections="pinned"), SPEC)
 
 
+def test_a_triangulated_dome_on_pinned_joints_solves_and_its_members_span_simply():
+    from optimize.mesh import Mesh
+
+    quads = shapes.revolution(shapes.dome_profile(radius=10.0, rise=4.0, k=4), 8, name="dome")
+    tri = np.concatenate([quads.F[:, [0, 1, 2]], quads.F[:, [0, 2, 3]]])
+    s = offset_structure(Mesh(quads.V * 1000.0, tri), [0.0, -200.0])
+    chk = check_structure(s, options(connections="pinned"), SPEC)
+    assert max(chk.results.equilibrium.values()) < 1e-6
+    F, w = chk.solution.end_forces["glass"], chk.solution.line_local["glass"]
+    L = chk.frame.lengths()
+    scale = float((np.abs(w).max(axis=1) * L ** 2).max())
+    assert np.abs(F[:, [4, 5, 10, 11]]).max() < 1e-6 * scale         # no moment at a pinned end
+    from fabricate.structure.results import internal_forces
+
+    _, _, Ms, _, _ = internal_forces(F, w, L)
+    np.testing.assert_allclose(np.abs(Ms).max(axis=1), np.abs(w[:, 1]) * L ** 2 / 8, rtol=1e-6,
+                               atol=1e-9 * scale)                     # each member: w L^2 / 8
+    assert report(chk)["connections"] == "pinned"
+
+
+def test_the_frame_knows_which_side_of_each_beam_the_glass_is(dome):
+    from fabricate.structure.frame import frame_from_offset
+    from fabricate.structure.sections import tee
+
+    assert dome.layer_mesh(1).V[:, 2].mean() < dome.layer_mesh(0).V[:, 2].mean()   # the beams hang below
+    fr, _ = frame_from_offset(dome, tee(200, 100, 10, 12), E=210000.0, G=81000.0)
+    toward_glass = fr.local_axes()[:, 1] * fr.top[:, None]
+    assert (toward_glass[:, 2] > 0.5).all()                                          # up, on a dome
+
+
+def test_the_report_lists_the_beams_whose_section_is_class_4(dome):
+    thin = {"shape": "tee", "depth": 200, "width": 100, "web": 4, "flange": 12}   # stem c/t = 47
+    chk = check_structure(dome, options(section=thin), SPEC)
+    rep = report(chk)
+    c4 = rep["class_4"]
+    assert c4["count"] == chk.frame.n_elements and len(c4["beams"]) == c4["count"] and not rep["pass"]
+    w = c4["worst"][0]
+    assert w["part"] == "stem" and w["c_t"] == pytest.approx(47.0) and w["ratio"] > 1 and w["id"] in c4["beams"]
+    from fabricate.structure.outputs import html_section, structure_measures
+
+    assert "class 4" in html_section(dict(rep, notes=[])) and w["id"] in html_section(dict(rep, notes=[]))
+    m = structure_measures(chk)["structure_section_class"]
+    assert m["pass"] is False and m["max"] == pytest.approx(w["ratio"], rel=1e-4) and m["enforced"] is False
+    thick = {"shape": "rhs", "depth": 200, "width": 100, "web": 8}                   # web c/t = 22: class 1
+    ok = check_structure(dome, options(section=thick), SPEC)
+    assert report(ok)["class_4"]["count"] == 0 and {b["class"] for b in beam_table(ok)} <= {1, 2, 3}
+
+
 def test_a_run_writes_the_structure_table_columns_and_pictures(tmp_path):
     from fabricate.app.pipeline import run_pipeline
 
@@ -124,6 +172,38 @@ def test_enforce_with_a_section_far_too_small_is_exit_3(tmp_path):
                                                    "section": {"shape": "plate", "depth": 200, "width": 0.5}})
     summary = run_pipeline(cfg, tmp_path / "out")
     assert summary.exit_code == 3 and "structure_utilization" in summary.failed
+
+
+def test_enforce_fails_a_class_4_section_with_exit_3(tmp_path):
+    from fabricate.app.pipeline import run_pipeline
+
+    # strong enough (utilization about 0.4), but the stem (c/t 36) is class 4 wherever it is compressed
+    thin = {"shape": "tee", "depth": 200, "width": 200, "web": 5, "flange": 20}
+    cfg = tiny_config(tmp_path, "thin", structure={"check": "enforce", "section": thin})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    assert summary.exit_code == 3 and summary.failed == ["structure_section_class"]
+    assert "every requirement met" not in summary.message and "structure_section_class" in summary.message
+
+
+def test_the_bom_rows_of_welded_beams_carry_their_beams_figures(tmp_path):
+    from fabricate.app.pipeline import run_pipeline
+
+    tee = {"section": "tee", "web_mm": 10, "flange_mm": 12, "flange_width_mm": 100}
+    cfg = tiny_config(tmp_path, "tee", outputs=dict(NO_FILES, bom=True), parts={"beam": tee},
+                      structure={"check": "report"})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    assert summary.exit_code == 0, summary.message
+    rows = [r for r in csv.DictReader((tmp_path / "out" / "tee" / "bom.csv").open()) if r["kind"] == "beam"]
+    assert rows and rows[0]["id"] == "B0001.1"          # one row per plate, "unit" the beam
+    assert all(r["section"].startswith("tee ") and r["utilization"] for r in rows)
+    by_unit = {}
+    for r in rows:
+        by_unit.setdefault(r["unit"], set()).add((r["section"], r["N_kN"], r["utilization"]))
+    assert all(len(v) == 1 for v in by_unit.values())   # every plate of a beam states that beam's figures
+    import json
+
+    s = json.loads((tmp_path / "out" / "tee" / "report.json").read_text())["structure"]
+    assert max(float(r["utilization"]) for r in rows) == pytest.approx(s["utilization"]["max"], abs=1e-4)
 
 
 def _cli(tmp_path, *sets):
@@ -181,6 +261,7 @@ def test_fabricate_size_reports_the_lightest_passing_section_and_the_steel_saved
     cfg.write_text("input:\n  shape:\n    name: dome\n    params: {radius: 5000, rise: 2000, meridians: 6, rings: 3}\n"
                    "structure:\n  sizing:\n    group_by: all\n    sections:\n"
                    "      - {shape: plate, depth: 200, width: 1}\n      - {shape: rhs, depth: 200, width: 60, web: 4}\n"
+                   "      - {shape: rhs, depth: 200, width: 60, web: 6}\n"
                    "      - {shape: plate, depth: 200, width: 60}\n")
     proc = subprocess.run([sys.executable, "-m", "fabricate", "size", str(cfg), "--json", str(tmp_path / "s.json")],
                           cwd=REPO, capture_output=True, text=True, timeout=300)
@@ -188,6 +269,8 @@ def test_fabricate_size_reports_the_lightest_passing_section_and_the_steel_saved
     import json
 
     d = json.loads((tmp_path / "s.json").read_text())
-    assert d["chosen"] == {"all": "rhs 200x60x4"} and d["passes"]
+    # rhs 200x60x4 is lighter and strong enough, but its webs (c/t 47) are class 4 under the beams' N + M
+    assert d["chosen"] == {"all": "rhs 200x60x6"} and d["passes"]
+    assert "rhs 200x60x4" in d["class_4_under_the_final_forces"]
     assert d["configured_section"] == "plate 60x200" and d["saved_kg"] > 0
-    assert "rhs 200x60x4" in proc.stdout and "saved" in proc.stdout
+    assert "rhs 200x60x6" in proc.stdout and "saved" in proc.stdout

@@ -16,13 +16,17 @@ from .engine import MechanismError, solve
 from .frame import Frame, frame_from_offset
 from .loads import basic_cases
 from .options import ALPHA, GRADES
-from .results import Results, evaluate, worst
-from .sections import SectionProperties, built_section, slender_part
+from .results import N_WORST, Results, evaluate, worst
+from .sections import SectionProperties, built_section
 
 UTILIZATION_NOTE = ("max of the elastic cross-section check |N|/Npl + |My|/Mel,y + |Mz|/Mel,z (EN 1993-1-1 "
                     "6.2.1(7)) and the same with the compression over chi Npl (flexural buckling 6.3.1, "
                     "interaction factors 1); shear, torsion, lateral-torsional buckling and connections "
                     "are not checked")
+CLASS_NOTE = ("section class of EN 1993-1-1 Table 5.2 at every point of the ULS combinations from the beam's N and "
+              "strong-axis moment (webs internal parts, alpha plastic and psi elastic; tee stems and I flanges "
+              "outstands, k_sigma of EN 1993-1-5 Table 4.2; flanges as uniformly compressed wherever N + M, the "
+              "weak-axis moment included, compress them); class 4 fails: local buckling is not checked")
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,16 +51,15 @@ class StructureCheck:
         """(e,) float beam deflection / its limit."""
         return self.results.deflection_mm / self.results.deflection_limit_mm
 
-    def slender(self) -> list[str]:
-        """The sections in use with a class 4 part (local buckling is not checked: they fail)."""
-        fy = GRADES[self.options.grade]
-        used = sorted(set(np.unique(self.frame.section_of).tolist()))
-        return [m for m in (slender_part(self.frame.sections[i], fy) for i in used) if m]
+    def slender(self) -> np.ndarray:
+        """(k,) int the beams whose section is class 4 under their forces (local buckling is not
+        checked: they fail)."""
+        return np.nonzero(self.results.section_class.cls == 4)[0]
 
     def passes(self) -> bool:
         r = self.results
         return bool(self.max_utilization <= 1.0 and (self.deflection_ratio() <= 1.0).all()
-                    and r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm and not self.slender())
+                    and r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm and not self.slender().size)
 
 
 def configured_section(options, spec, structure) -> SectionProperties:
@@ -101,7 +104,7 @@ def solve_frame(frame, cases, options, structure) -> tuple:
     span = options.span or default_span(np.asarray(structure.mesh.V), options.up)
     results = evaluate(frame, cases, solution, options.combination_list(), fy=options.fy,
                        deflection_limit=options.deflection_limit, span_mm=span, alpha=ALPHA[options.buckling_curve],
-                       buckling_length_factor=options.buckling_length_factor)
+                       buckling_length_factor=options.buckling_length_factor, fy_class=GRADES[options.grade])
     return solution, results
 
 
@@ -169,17 +172,39 @@ def report(check: StructureCheck) -> dict:
                          "pass": bool(r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm),
                          "combination": r.governing_sls},
         "equilibrium": {"relative_residual": r.equilibrium, "max": max(r.equilibrium.values(), default=0.0)},
-        "class_4": check.slender(),
+        "class_4": class_4(check),
         "pass": check.passes(),
         "seconds": check.seconds,
     }
     return out
 
 
+def class_4(check: StructureCheck) -> dict:
+    """report.json's ``class_4``: how many beams of each class, the class 4 ones (ids) and the
+    :data:`N_WORST` nearest class 4 with their part, c/t, limit, alpha, psi and forces."""
+    r, fr = check.results, check.frame
+    sc = r.section_class
+    names = np.array([s.name for s in fr.sections], dtype=object)[fr.section_of]
+    uls = np.array(r.uls or ("",), dtype=object)[r.class_governing]
+    top = np.argsort(-sc.ratio, kind="stable")[:N_WORST]
+    worst_ = [{"id": fr.ids[i], "section": names[i], "class": int(sc.cls[i]), "part": sc.part[i],
+               "c_t": round(float(sc.ct[i]), 2), "limit": round(float(sc.limit[i]), 2),
+               "ratio": round(float(sc.ratio[i]), 4), "alpha": round(float(sc.alpha[i]), 4),
+               "psi": round(float(sc.psi[i]), 4), "N_kN": round(float(r.class_N_kN[i]), 3),
+               "M_top_kNm": round(float(r.class_M_kNm[i]), 4), "combination": uls[i]}
+              for i in top.tolist() if sc.ratio[i] > 0]
+    ids = check.slender()
+    return {"count": int(ids.size), "beams": [fr.ids[i] for i in ids.tolist()],
+            "classes": {str(c): int((sc.cls == c).sum()) for c in (1, 2, 3, 4)},
+            "max_ratio": float(sc.ratio.max(initial=0.0)), "worst": worst_, "method": CLASS_NOTE}
+
+
 def beam_table(check: StructureCheck) -> list[dict]:
-    """One row per beam: id, section, N, moments, utilization, governing combination, deflection."""
+    """One row per beam: id, section, N, moments, utilization, governing combination, deflection,
+    section class (and c/t over its limit)."""
     r, fr = check.results, check.frame
     names = [s.name for s in fr.sections]
+    sc = r.section_class
     out = []
     L = fr.lengths()
     for i in range(fr.n_elements):
@@ -188,5 +213,6 @@ def beam_table(check: StructureCheck) -> list[dict]:
                     "M_weak_kNm": round(float(r.M_weak_kNm[i]), 4), "utilization": round(float(r.utilization[i]), 4),
                     "combination": r.uls[int(r.governing[i])] if r.uls else "",
                     "deflection_mm": round(float(r.deflection_mm[i]), 3),
-                    "deflection_limit_mm": round(float(r.deflection_limit_mm[i]), 2)})
+                    "deflection_limit_mm": round(float(r.deflection_limit_mm[i]), 2),
+                    "class": int(sc.cls[i]), "class_ratio": round(float(sc.ratio[i]), 4)})
     return out

@@ -7,8 +7,14 @@ ordering, so the ``Plain`` numberer; it reports a singular stiffness, a mechanis
 step).  Measured on a 10,000-beam dome (first step, which factors): Mumps 2.1 s, SparseSYM 3.3 s
 (but it crashed the process after an MKL PARDISO optimization in the same run), SuperLU 6.3 s,
 BandSPD 12.6 s, UmfPack 15 s (and it does not report a singular matrix), ProfileSPD 37 s.
-Pinned joints (moments released at every element end) use BandSPD with RCM numbering: on a
-pin-jointed quad grid Mumps returned finite displacements where BandSPD reports the mechanism.
+Pinned joints: both bending moments released at every element end (``-releasey``/``-releasez``);
+a released end does not turn its node, so the node rotations would have no stiffness but the
+members' torsion (none at all where the members of a node lie in one plane): they are held (fixed)
+at every node, which changes no force (the rotations are uncoupled from the translations once the
+ends are released, and no load is a torque).  A pin-jointed frame needs at least one member per
+free node translation (Maxwell's count; a quad grid has about two per node): fewer is named a
+mechanism before solving.  Pinned frames use BandSPD with RCM numbering: on a pin-jointed quad grid
+Mumps returned finite displacements where BandSPD reports the mechanism.
 Every load case is a pattern switched on at its own step only (a ``Path``
 series 0-1-0), and the ``Linear`` algorithm factors the stiffness once for all of them.
 OpenSees is imported here only.
@@ -102,12 +108,29 @@ def _quiet_exit() -> None:
     _QUIET.append(hush)
 
 
+def pinned_count(frame: Frame) -> None:
+    """Raise MechanismError when a pin-jointed ``frame`` has fewer members than free node translations
+    (Maxwell's necessary count: each member holds one distance; a quad grid without diagonals has
+    about two members per node for three translations)."""
+    free = int(3 * frame.n_nodes - frame.fixed[:, :3].sum())
+    if frame.n_elements < free:
+        raise MechanismError(
+            f"the pin-jointed frame is a mechanism: {frame.n_elements} beams for {free} free node translations "
+            f"({frame.n_nodes} nodes, {int(frame.fixed[:, :3].any(axis=1).sum())} supported); a pinned member "
+            "holds one distance, so it needs at least as many members as free translations (a quad grid has "
+            "about two per node for three: it folds); expected a triangulated mesh, more supports, or "
+            "rigid connections")
+
+
 def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
     """Solve ``frame`` for each case in ``cases`` (linear elastic; superposition holds).
 
     Raises MechanismError when the stiffness is singular or the displacements are not finite
-    or larger than the frame itself.
+    or larger than the frame itself, or (pinned joints) when the members are fewer than the free
+    node translations.
     """
+    if frame.pinned:
+        pinned_count(frame)
     ops = _opensees()
     t0 = time.perf_counter()
     spent = {"build": 0.0, "solve": 0.0, "read": 0.0}
@@ -116,8 +139,11 @@ def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
     X = frame.X.tolist()
     El = (frame.elements + 1).tolist()
     vecxz = frame.vecxz.tolist()
-    fixed = frame.fixed.astype(int).tolist()
     supported = np.nonzero(frame.fixed.any(axis=1))[0]
+    held = frame.fixed.copy()
+    if frame.pinned:  # released ends leave the node rotations without stiffness: hold them (no force changes)
+        held[:, 3:] = True
+    fixed = held.astype(int).tolist()
     props = np.stack([A, Iy, Iz, J], axis=1).tolist()
     release = ["-releasez", 3, "-releasey", 3] if frame.pinned else []
     E, G = frame.E, frame.G
@@ -127,7 +153,7 @@ def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
     ops.model("basic", "-ndm", 3, "-ndf", 6)
     for i, (x, y, z) in enumerate(X):
         ops.node(i + 1, x, y, z)
-    for i in supported.tolist():
+    for i in np.nonzero(held.any(axis=1))[0].tolist():
         ops.fix(i + 1, *fixed[i])
     for k, ((a, b), v, (a_, iy, iz, j)) in enumerate(zip(El, vecxz, props)):
         ops.geomTransf("Linear", k + 1, *v)

@@ -29,6 +29,8 @@ class Frame:
     fixed : (n, 6) bool restrained dofs (ux uy uz rx ry rz).
     pinned : moments released at both ends of every element (pinned connections).
     ids : (e,) str element names (beam part ids); node_ids : (n,) str.
+    top : (e,) float, +1 where the element's local ``y`` points to the section's top fibre (the glass
+        side), -1 where it points away; None when unknown (the section class then takes both signs).
     """
 
     X: np.ndarray
@@ -42,6 +44,7 @@ class Frame:
     pinned: bool = False
     ids: tuple = ()
     node_ids: tuple = ()
+    top: np.ndarray | None = None
 
     @property
     def n_nodes(self) -> int:
@@ -168,4 +171,8 @@ def frame_from_offset(structure, section: SectionProperties, *, E: float, G: flo
                   pinned=bool(pinned), ids=part_ids("beam", np.arange(len(edges))),
                   node_ids=part_ids("node", np.arange(len(X))))
     check_frame(frame)
-    return frame, sup
+    # the top fibre lies toward the first layer (the glass): (d0 - d1) along the node axes
+    up_axis = (d0 - d1) * (np.asarray(structure.offset, dtype=float)[edges[:, 0]]
+                           + np.asarray(structure.offset, dtype=float)[edges[:, 1]])
+    y = frame.local_axes()[:, 1]
+    return replace(frame, top=np.where(np.einsum("ei,ei->e", y, up_axis) >= 0, 1.0, -1.0)), sup

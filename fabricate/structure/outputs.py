@@ -13,13 +13,14 @@ from optimize.errors import ExportError
 
 BOM_COLUMNS = ("section", "N_kN", "M_strong_kNm", "M_weak_kNm", "utilization", "combination", "deflection_mm",
                "deflection_limit_mm")
-"""Columns appended to the beam rows of bom.csv (empty on panels and nodes)."""
+"""Columns appended to the beam rows of bom.csv (empty on panels and nodes): the figures of the beam,
+on each of the rows of the plates it is welded from (their ``unit``)."""
 
 
 def structure_measures(check) -> dict[str, dict]:
     """``{name: entry}`` in the format of :func:`fabricate.report.measures.entry`: utilization
-    (limit 1), beam deflection / its limit, node displacement (mm, limit span / n); enforced when
-    ``structure.check`` is ``enforce``."""
+    (limit 1), beam deflection / its limit, node displacement (mm, limit span / n), section class (c/t
+    over the class limit, limit 1: above it class 4); enforced when ``structure.check`` is ``enforce``."""
     from fabricate.report.measures import entry
 
     r, opt = check.results, check.options
@@ -36,11 +37,16 @@ def structure_measures(check) -> dict[str, dict]:
                                         enforced=enforced, extra={"mm": r.displacement_mm},
                                         what=f"node displacement against span/{opt.deflection_limit:g} = "
                                              f"{r.span_mm:.0f}/{opt.deflection_limit:g} mm (SLS)"),
+        "structure_section_class": entry(r.section_class.ratio, 1.0, "ratio", "beam", ids=ids, enforced=enforced,
+                                         what="c/t of the beam's most slender plate over its class limit (EN 1993-1-1 "
+                                              "Table 5.2 under the beam's N + M, ULS); above 1: class 4, local "
+                                              "buckling is not checked"),
     }
 
 
 def add_bom_columns(path, check) -> dict:
-    """Rewrite ``bom.csv`` (atomically) with :data:`BOM_COLUMNS` filled on the beam rows."""
+    """Rewrite ``bom.csv`` (atomically) with :data:`BOM_COLUMNS` filled on the beam rows: a beam's figures
+    on every row whose ``unit`` is that beam (its own row, or each plate ``B0001.1 ...`` of a welded one)."""
     path = Path(path)
     r, fr = check.results, check.frame
     names = [s.name for s in fr.sections]
@@ -56,12 +62,13 @@ def add_bom_columns(path, check) -> dict:
         if not rows:
             raise ExportError(f"{path}: empty bill of materials, expected a header row")
         head, kind = rows[0], rows[0].index("kind")
+        unit = head.index("unit") if "unit" in head else 0
         filled = 0
         with atomic_open(path, "w", encoding="utf-8", newline="") as fh:
             w = csv.writer(fh)
             w.writerow(head + list(BOM_COLUMNS))
             for row in rows[1:]:
-                extra = by_id.get(row[0]) if row[kind] == "beam" else None
+                extra = by_id.get(row[unit]) if row[kind] == "beam" else None
                 filled += extra is not None
                 w.writerow(row + list(extra or ("",) * len(BOM_COLUMNS)))
     except OSError as exc:
@@ -89,8 +96,7 @@ def html_section(rep: dict | None) -> str:
     drows = "".join(
         f"<tr><td>{escape(w['id'])}</td><td class=num>{w['deflection_mm']:.2f}</td><td class=num>{w['limit_mm']:.1f}"
         f"</td><td class=num>{w['value']:.3f}</td></tr>" for w in d["worst"])
-    notes = "".join(f"<li>{escape(n)}</li>" for n in rep.get("notes", []) + [
-        f"class 4 section (local buckling is not checked, so it fails): {m}" for m in rep.get("class_4", [])])
+    notes = "".join(f"<li>{escape(n)}</li>" for n in rep.get("notes", []) + class_4_lines(rep.get("class_4")))
     return (f"<h2>Structure</h2><p>The steel frame <span class=\"{cls}\">{verdict}</span> the check "
             f"(structure.check: {escape(rep['check'])}; {escape(rep['engine'])}): max utilization "
             f"{_f(u['max'])} ({escape(str(rep['governing_combination']))}), beam deflection {_f(d['max_ratio'])} of "
@@ -104,3 +110,17 @@ def html_section(rep: dict | None) -> str:
             f"<th>M strong kNm</th><th>M weak kNm</th></tr>{rows}</table>"
             "<table><tr><th>beam</th><th>deflection mm</th><th>limit mm</th><th>ratio</th></tr>"
             f"{drows}</table>" + (f"<ul>{notes}</ul>" if notes else ""))
+
+
+def class_4_lines(c4: dict | None) -> list[str]:
+    """The report's lines on class 4 beams (``report.json["structure"]["class_4"]``): how many, the worst."""
+    if not c4 or not c4.get("count"):
+        return []
+    shown = [w for w in c4["worst"] if w["class"] == 4]
+    worst_ = "; ".join(f"{w['id']} {w['section']}: {w['part']} c/t {w['c_t']:.1f} > {w['limit']:.1f} "
+                       f"(alpha {w['alpha']:.2f}, psi {w['psi']:.2f}; N {w['N_kN']:.1f} kN, "
+                       f"M {w['M_top_kNm']:.2f} kNm, {w['combination']})" for w in shown)
+    more = c4["count"] - len(shown)
+    return [f"{c4['count']} beam(s) with a class 4 section under their N + M (EN 1993-1-1 Table 5.2; local "
+            f"buckling is not checked, so they fail): {worst_}" + (f"; and {more} more (report.json "
+                                                                   "structure.class_4.beams)" if more > 0 else "")]

@@ -13,6 +13,11 @@ length = the beam length times ``buckling_length_factor``, imperfection factor `
 interaction factors taken as 1); ``fy = f_y / gamma_M``; the max over the element and the ULS
 combinations.  Shear, torsion, lateral-torsional buckling and connections are not checked.
 
+Section class (EN 1993-1-1 Table 5.2, :func:`fabricate.structure.sections.classify`): at every
+point of every ULS combination, from ``N`` and the strong-axis moment (its sign turned to the
+section's top fibre, ``Frame.top``; both signs where that is unknown) with the weak-axis one on the
+flanges; a beam's class is its worst, and the point nearest class 4 is kept with its forces.
+
 Deflection of a beam relative to the chord between its nodes: ``EI v'' = M(x)`` with
 ``v(0) = v(L) = 0`` (exact for the end moments and the uniform load), both planes, the
 magnitude; against ``L / deflection_limit``.  Node displacements (the whole structure)
@@ -24,8 +29,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .sections import SectionClass, classify
+
 SAMPLES = 17
 N_WORST = 5
+ROUND_OFF = 1e-9
+"""Stresses below this fraction of a beam's largest (over its points, per combination) are round-off:
+no compression for the section class (where a moment passes zero)."""
 
 
 def internal_forces(F: np.ndarray, w: np.ndarray, L: np.ndarray, n: int = SAMPLES):
@@ -89,6 +99,9 @@ class Results:
     displacement_mm (e,) worst node displacement of the element's ends (SLS); node_displacement
     (n, 3) of the governing SLS combination; equilibrium {case: relative residual}; chi (e,)
     flexural buckling factors.
+    section_class : per element SectionClass (``cls`` the worst along the beam and over the ULS
+    combinations; the rest at the point nearest class 4), with that point's ``class_N_kN``,
+    ``class_M_kNm`` (strong axis, + compresses the top fibre) and ``class_governing`` (index into ``uls``).
     """
 
     N_kN: np.ndarray
@@ -108,6 +121,10 @@ class Results:
     displacement_limit_mm: float
     equilibrium: dict = field(default_factory=dict)
     chi: np.ndarray | None = None
+    section_class: SectionClass | None = None
+    class_N_kN: np.ndarray | None = None
+    class_M_kNm: np.ndarray | None = None
+    class_governing: np.ndarray | None = None
 
 
 def equilibrium(frame, cases, solution) -> dict[str, float]:
@@ -123,10 +140,12 @@ def equilibrium(frame, cases, solution) -> dict[str, float]:
 
 
 def evaluate(frame, cases, solution, combinations, *, fy: float, deflection_limit: float,
-             span_mm: float, alpha: float = 0.49, buckling_length_factor: float = 1.0) -> Results:
+             span_mm: float, alpha: float = 0.49, buckling_length_factor: float = 1.0,
+             fy_class: float | None = None) -> Results:
     """Combine the solved basic cases (superposition) and evaluate every element.
 
-    combinations : ``[(name, "uls" | "sls", {case: factor})]``; fy : design yield strength, MPa.
+    combinations : ``[(name, "uls" | "sls", {case: factor})]``; fy : design yield strength, MPa;
+    fy_class : the characteristic one of the section class's ``eps`` (default ``fy``).
     """
     L = frame.lengths()
     A, Wy, Wz = frame.prop("A"), frame.prop("Wy"), frame.prop("Wz")
@@ -144,6 +163,7 @@ def evaluate(frame, cases, solution, combinations, *, fy: float, deflection_limi
     gov = np.zeros(e, dtype=np.int64)
     N_g, Ms_g, Mw_g, T_g = (np.zeros(e) for _ in range(4))
     rows = np.arange(e)
+    sections = _Classes(frame, fy if fy_class is None else fy_class)
     for ci, (_, _, factors) in enumerate(uls):
         F, w = mix(solution.end_forces, factors), mix(solution.line_local, factors)
         x, N, Ms, Mw, T = internal_forces(F, w, L)
@@ -156,6 +176,7 @@ def evaluate(frame, cases, solution, combinations, *, fy: float, deflection_limi
         Ms_g = np.where(better, np.abs(Ms).max(axis=1), Ms_g)
         Mw_g = np.where(better, np.abs(Mw).max(axis=1), Mw_g)
         T_g = np.where(better, np.abs(T), T_g)
+        sections.add(ci, N, Ms, Mw)
     defl = np.zeros(e)
     disp = np.zeros(e)
     node_disp = np.zeros((frame.n_nodes, 3))
@@ -173,7 +194,52 @@ def evaluate(frame, cases, solution, combinations, *, fy: float, deflection_limi
                    deflection_limit_mm=L / deflection_limit, displacement_mm=disp, node_displacement=node_disp,
                    uls=tuple(c[0] for c in uls), sls=tuple(c[0] for c in sls), governing_sls=gov_sls,
                    span_mm=float(span_mm), displacement_limit_mm=float(span_mm / deflection_limit),
-                   equilibrium=equilibrium(frame, cases, solution), chi=chi)
+                   equilibrium=equilibrium(frame, cases, solution), chi=chi, section_class=sections.result(),
+                   class_N_kN=sections.N * 1e-3, class_M_kNm=sections.M * 1e-6, class_governing=sections.governing)
+
+
+class _Classes:
+    """The section class of every element over the points of the ULS combinations (:meth:`add` each)."""
+
+    def __init__(self, frame, fy: float):
+        e = frame.n_elements
+        self.frame, self.fy = frame, fy
+        self.top = np.ones(e) if frame.top is None else np.asarray(frame.top, dtype=float)
+        self.signs = (1.0,) if frame.top is not None else (1.0, -1.0)
+        self.groups = [(frame.sections[i], np.nonzero(frame.section_of == i)[0])
+                       for i in np.unique(frame.section_of).tolist()]
+        self.ratio, self.cls = np.full(e, -1.0), np.ones(e, dtype=np.int64)
+        self.N, self.M, self.Mw, self.floor = np.zeros(e), np.zeros(e), np.zeros(e), np.zeros(e)
+        self.governing = np.zeros(e, dtype=np.int64)
+
+    def add(self, ci: int, N: np.ndarray, Ms: np.ndarray, Mw: np.ndarray) -> None:
+        """Combination ``ci``'s internal forces ``(e, s)``: N (+ tension), strong and weak moments (N mm)."""
+        Mt = Ms * self.top[:, None]
+        for sec, ix in self.groups:
+            rows = np.arange(len(ix))
+            stress = np.abs(N[ix]) / sec.A + np.abs(Mt[ix]) * sec.h / sec.Iy + np.abs(Mw[ix]) * sec.b / sec.Iz
+            floor = ROUND_OFF * stress.max(axis=1, keepdims=True)   # below it a stress is the forces' round-off
+            for sg in self.signs:
+                got = classify(sec, self.fy, N[ix], sg * Mt[ix], Mw[ix], floor)
+                j = np.argmax(got.ratio, axis=1)
+                better = got.ratio[rows, j] > self.ratio[ix]
+                at = ix[better]
+                self.ratio[at] = got.ratio[rows, j][better]
+                self.N[at], self.M[at] = N[ix, j][better], sg * Mt[ix, j][better]
+                self.Mw[at], self.governing[at] = Mw[ix, j][better], ci
+                self.floor[at] = floor[better, 0]
+                self.cls[ix] = np.maximum(self.cls[ix], got.cls.max(axis=1))
+
+    def result(self) -> SectionClass:
+        """The details (part, ratio, c/t, limit, alpha, psi) at each element's point nearest class 4."""
+        e = self.frame.n_elements
+        out = SectionClass(self.cls, np.zeros(e), np.full(e, "", dtype=object), np.zeros(e), np.full(e, np.inf),
+                           np.zeros(e), np.ones(e))
+        for sec, ix in self.groups:
+            got = classify(sec, self.fy, self.N[ix], self.M[ix], self.Mw[ix], self.floor[ix])
+            for name in ("ratio", "part", "ct", "limit", "alpha", "psi"):
+                getattr(out, name)[ix] = getattr(got, name)
+        return out
 
 
 def worst(values: np.ndarray, ids, k: int = N_WORST, **columns) -> list[dict]:

@@ -34,6 +34,10 @@ def check_run(opt, structure, spec) -> tuple:
     if over and opt.check == "report":
         notes.append(f"{over} beam(s) exceed utilization 1 (max {chk.max_utilization:.3g}); not enforced "
                      "(structure.check: report)")
+    slender = chk.slender()
+    if slender.size and opt.check == "report":
+        notes.append(f"{slender.size} beam(s) have a class 4 section under their N + M (max c/t over its limit "
+                     f"{rep['class_4']['max_ratio']:.3g}); not enforced (structure.check: report)")
     rep["notes"] = notes
     rep["beams"] = beam_table(chk)
     u = rep["utilization"]

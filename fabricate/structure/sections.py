@@ -14,6 +14,8 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass
 
+import numpy as np
+
 from optimize.errors import ConfigError
 
 SHAPES = ("plate", "rhs", "tee", "i")
@@ -165,24 +167,203 @@ def built_section(spec, depth: float) -> SectionProperties:
     return SectionProperties(shape, depth, width, tw, tf, A, Iy, Iz, J, Iy / zmax, 2 * Iz / width, zc)
 
 
-def slender_part(sec: SectionProperties, fy: float) -> str | None:
-    """The part of ``sec`` beyond the class 3 width-to-thickness limit of EN 1993-1-1 Table 5.2
-    (local buckling, class 4, is not covered by the check), or None.
+@dataclass(frozen=True)
+class Part:
+    """A plate of a section as EN 1993-1-1 Table 5.2 classifies it: ``name``, ``kind`` (``internal``:
+    held on both long edges; ``outstand``: one edge free), its width ``c`` and thickness ``t`` (mm), and
+    where it lies along the depth (mm down from the top fibre): a web or stem spans ``z0`` (an outstand's
+    held edge) to ``z1`` (its free tip); a flange (``z0 == z1``) lies at one depth, across the beam."""
 
-    Limits with ``eps = sqrt(235 / fy)``: I and RHS webs (bending) ``c/t <= 124 eps``; RHS flanges
-    (the compressed wall in bending) ``42 eps``; I flange outstands and tee stems ``14 eps``; tee
-    flange outstands ``14 eps``.  Solid plates have no thin parts.  ``c`` as the clear width
-    (without radii: ``h - 3t`` for RHS walls).
-    """
-    eps = math.sqrt(235.0 / fy)
-    parts: list[tuple[str, float, float]] = []
+    name: str
+    kind: str
+    c: float
+    t: float
+    z0: float
+    z1: float
+
+    @property
+    def flange(self) -> bool:
+        return self.z0 == self.z1
+
+
+def parts(sec: SectionProperties) -> tuple[Part, ...]:
+    """The plates of ``sec`` that Table 5.2 classifies (none for a solid plate).  ``c`` as the clear
+    width without radii: RHS walls ``h - 2 tf - tw`` and ``b - 2 tw - tf`` (``h - 3t``, ``b - 3t`` of the
+    Table's note for one wall thickness), I web ``h - 2 tf``, I and tee flange outstands ``(b - tw) / 2``,
+    the tee stem ``h - tf`` (an outstand held by the flange)."""
+    h, b, tw, tf = sec.h, sec.b, sec.tw, sec.tf
     if sec.shape == "rhs":
-        parts = [("web", (sec.h - 3 * sec.tw) / sec.tw, 124 * eps), ("flange", (sec.b - 3 * sec.tw) / sec.tw, 42 * eps)]
-    elif sec.shape == "i":
-        parts = [("web", (sec.h - 2 * sec.tf) / sec.tw, 124 * eps), ("flange", (sec.b - sec.tw) / 2 / sec.tf, 14 * eps)]
-    elif sec.shape == "tee":
-        parts = [("stem", (sec.h - sec.tf) / sec.tw, 14 * eps), ("flange", (sec.b - sec.tw) / 2 / sec.tf, 14 * eps)]
-    for name, ct, limit in parts:
-        if ct > limit:
-            return f"{sec.name}: {name} c/t = {ct:.1f} > {limit:.1f} (class 4)"
-    return None
+        c = h - 2 * tf - tw
+        return (Part("web", "internal", c, tw, (h - c) / 2, (h + c) / 2),
+                Part("flange", "internal", b - 2 * tw - tf, tf, 0.0, 0.0),
+                Part("flange", "internal", b - 2 * tw - tf, tf, h, h))
+    if sec.shape == "i":
+        return (Part("web", "internal", h - 2 * tf, tw, tf, h - tf),
+                Part("flange", "outstand", (b - tw) / 2, tf, 0.0, 0.0),
+                Part("flange", "outstand", (b - tw) / 2, tf, h, h))
+    if sec.shape == "tee":
+        return (Part("stem", "outstand", h - tf, tw, tf, h), Part("flange", "outstand", (b - tw) / 2, tf, 0.0, 0.0))
+    return ()
+
+
+def _layers(sec: SectionProperties) -> tuple[tuple[float, float, float], ...]:
+    """``(z0, z1, width)`` bands of the section down its depth (for its plastic neutral axis)."""
+    h, b, tw, tf = sec.h, sec.b, sec.tw, sec.tf
+    if sec.shape == "rhs":
+        return ((0.0, tf, b), (tf, h - tf, 2 * tw), (h - tf, h, b))
+    if sec.shape == "i":
+        return ((0.0, tf, b), (tf, h - tf, tw), (h - tf, h, b))
+    if sec.shape == "tee":
+        return ((0.0, tf, b), (tf, h, tw))
+    return ((0.0, h, b),)
+
+
+def plastic_axis(sec: SectionProperties, N, M_top) -> np.ndarray:
+    """(k,) depth (mm from the top fibre) of the plastic neutral axis when the section is fully plastic
+    under ``N`` (+ tension) and ``M_top`` (+ compresses the top fibre) in proportion: their ratio fixes
+    it (pure bending: the equal-area axis; pure compression: the far fibre, pure tension: the near one).
+    The compressed side is the top for ``M_top >= 0``, else the bottom.
+
+    With the axis at ``u`` below the compressed fibre, the plastic pair is ``(2 Ac - A, 2 Sc) fy``
+    (``Ac`` the area above ``u``, ``Sc`` its first moment about the centroid); it is parallel to
+    ``(-N, |M|)`` where ``f(u) = (2 Ac - A) |M| + 2 N Sc`` crosses zero, once, from below.  Within
+    one band of the section ``f`` is a quadratic in ``u``: solved in closed form in the band where
+    it changes sign."""
+    N, M = np.broadcast_arrays(np.asarray(N, dtype=float), np.asarray(M_top, dtype=float))
+    h, zc, A = sec.h, sec.centroid, sec.A
+    P, Ma = -N, np.abs(M)
+    down = M >= 0
+    u = np.where(P > 0, h, 0.0)                       # no moment: all compressed, or all in tension
+    for top in (True, False):
+        sel = (down == top) & (Ma > 0)
+        if not sel.any():
+            continue
+        L = _layers(sec)
+        bands, zr = (L, zc) if top else (tuple((h - e, h - a, w) for a, e, w in reversed(L)), h - zc)
+        p, m = P[sel], Ma[sel]
+        us = np.zeros(p.shape)
+        C = Q = 0.0                                   # area and first moment above the band
+        for i, (a, e, w) in enumerate(bands):
+            Ce, Qe = C + w * (e - a), Q + w * (zr * (e - a) - (e * e - a * a) / 2)
+            fa, fe = (2 * C - A) * m - 2 * p * Q, (2 * Ce - A) * m - 2 * p * Qe
+            here = (fa <= 0) & ((fe > 0) | (i == len(bands) - 1))
+            a2, a1 = w * p, 2 * w * (m - p * (zr - a))  # f(a + v) = a2 v^2 + a1 v + fa
+            with np.errstate(divide="ignore", invalid="ignore"):
+                root = np.sqrt(np.maximum(a1 * a1 - 4 * a2 * fa, 0.0))
+                q = -0.5 * (a1 + np.where(a1 >= 0, root, -root))
+                r1, r2 = q / a2, fa / q
+            r1, r2 = np.where(np.isfinite(r1), r1, np.inf), np.where(np.isfinite(r2), r2, np.inf)
+            off1, off2 = (np.maximum(np.maximum(-r, r - (e - a)), 0.0) for r in (r1, r2))
+            v = np.where(off1 <= off2, r1, r2)               # the root inside the band
+            us = np.where(here, a + np.clip(v, 0.0, e - a), us)
+            C, Q = Ce, Qe
+        u[sel] = us if top else h - us
+    return u
+
+
+@dataclass(frozen=True, eq=False)
+class SectionClass:
+    """The class of a section under its forces, per point (``k``): ``cls`` (1..4, the worst part's),
+    ``ratio`` (c/t over the limit of the part nearest class 4: above 1, class 4; 0 when no part is
+    compressed), ``part`` (its name), ``ct``, ``limit`` (the largest of its class limits: the class 3
+    one, unless a plastic one is larger, which happens to outstands in tension and bending), ``alpha``
+    (the compressed fraction of ``c`` in the plastic distribution) and ``psi`` (the elastic stress
+    ratio of Table 5.2)."""
+
+    cls: np.ndarray
+    ratio: np.ndarray
+    part: np.ndarray
+    ct: np.ndarray
+    limit: np.ndarray
+    alpha: np.ndarray
+    psi: np.ndarray
+
+
+def _k_sigma(tip_first: np.ndarray, psi: np.ndarray) -> np.ndarray:
+    """Buckling factor of an outstand (EN 1993-1-5 Table 4.2): ``tip_first`` the free tip is the more
+    compressed edge (psi = sigma_held / sigma_tip), else the held edge is (psi = sigma_tip / sigma_held)."""
+    p = np.clip(psi, -3.0, 1.0)
+    tip = 0.57 - 0.21 * p + 0.07 * p ** 2
+    q = np.clip(psi, -1.0, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        held = np.where(q >= 0, 0.578 / (q + 0.34), 1.7 - 5 * q + 17.1 * q ** 2)
+    return np.where(tip_first, tip, held)
+
+
+def _elastic(sec: SectionProperties, p: Part, eps: float, N, M, Mw, floor):
+    """Part ``p`` under the elastic stresses of N + M_top (+ |M_weak| on flanges), compression +:
+    ``(on, psi, tip, l3)``: compressed (beyond ``floor``, MPa) at all, the stress ratio, the free tip the
+    more compressed edge (outstands), the class 3 limit of c/t."""
+    zc, A, I = sec.centroid, sec.A, sec.Iy
+    if p.flange:
+        on = -N / A + M * (zc - p.z0) / I + np.abs(Mw) * (sec.b / 2) / sec.Iz > floor
+        l3 = (42 if p.kind == "internal" else 14) * eps
+        return on, np.ones(on.shape), np.zeros(on.shape, dtype=bool), np.full(on.shape, float(l3))
+    s0, s1 = -N / A + M * (zc - p.z0) / I, -N / A + M * (zc - p.z1) / I
+    smax, smin = np.maximum(s0, s1), np.minimum(s0, s1)
+    on = smax > np.maximum(floor, 1e-12 * (np.abs(N) / A + np.abs(M) * sec.h / I))
+    psi = np.where(on, smin / np.where(on, smax, 1.0), 1.0)
+    tip = s1 >= s0                                     # z1 is an outstand's free tip
+    if p.kind == "internal":
+        l3 = np.where(psi > -1, 42 * eps / (0.67 + 0.33 * psi), 62 * eps * (1 - psi) * np.sqrt(np.maximum(-psi, 0.0)))
+    else:
+        l3 = np.where(psi >= 1 - 1e-9, 14 * eps, 21 * eps * np.sqrt(_k_sigma(tip, psi)))
+    return on, psi, tip, l3
+
+
+def _loads(N, M_top, M_weak):
+    return np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, dtype=float)) for v in (N, M_top, M_weak)))
+
+
+def classify(sec: SectionProperties, fy: float, N, M_top, M_weak=0.0, floor=0.0) -> SectionClass:
+    """The class of ``sec`` (EN 1993-1-1 Table 5.2, ``eps = sqrt(235 / fy)``, ``fy`` the characteristic
+    yield strength, MPa) at ``k`` points with axial force ``N`` (N, + tension), strong-axis moment
+    ``M_top`` (N mm, + compresses the top fibre) and weak-axis moment ``M_weak`` (N mm, either sign).
+
+    Webs and the tee stem under N + M_top: internal parts (class 1/2 from the plastic compressed
+    fraction alpha (:func:`plastic_axis`), ``396 eps / (13 alpha - 1)`` or ``36 eps / alpha``,
+    ``456 eps / (13 alpha - 1)`` or ``41.5 eps / alpha``; class 3 from the elastic stress ratio psi,
+    ``42 eps / (0.67 + 0.33 psi)`` or ``62 eps (1 - psi) sqrt(-psi)``), outstands (``9 eps / alpha`` and
+    ``10 eps / alpha`` with the tip compressed, over ``alpha sqrt(alpha)`` with it in tension; ``14 eps``
+    in uniform compression, else ``21 eps sqrt(k_sigma)``, EN 1993-1-5 Table 4.2).  Flanges: as in
+    uniform compression (the most restrictive row) wherever N + M_top + |M_weak| compress any point of
+    them, else unstressed.  A part with no compression (none above ``floor``, MPa: the round-off of a
+    beam's forces where its moment passes zero) has no limit (class 1).  The section's class is its
+    worst part's; ``part``, ``ratio`` ... name the part nearest class 4."""
+    eps = math.sqrt(235.0 / fy)
+    N, M, Mw = _loads(N, M_top, M_weak)
+    k = N.shape
+    cls, ratio, which = np.ones(k, dtype=np.int64), np.zeros(k), np.full(k, -1)
+    ct_, limit, alpha_, psi_ = np.zeros(k), np.full(k, np.inf), np.zeros(k), np.ones(k)
+    ps = parts(sec)
+    u = plastic_axis(sec, N, M) if any(not p.flange for p in ps) else None
+    for j, p in enumerate(ps):
+        ct = p.c / p.t
+        on, psi, _, l3 = _elastic(sec, p, eps, N, M, Mw, floor)
+        if p.flange:
+            alpha = np.where(on, 1.0, 0.0)
+            l1, l2 = ((33, 38) if p.kind == "internal" else (9, 10))
+            l1, l2 = np.full(k, l1 * eps), np.full(k, l2 * eps)
+        else:  # the compressed length of the part in the plastic distribution
+            top = M >= 0
+            inside = np.where(top, np.clip(u, p.z0, p.z1) - p.z0, p.z1 - np.clip(u, p.z0, p.z1))
+            alpha = np.where(on, inside / (p.z1 - p.z0), 0.0)
+            a = np.maximum(alpha, 1e-12)
+            if p.kind == "internal":
+                l1 = np.where(a > 0.5, 396 * eps / (13 * a - 1), 36 * eps / a)
+                l2 = np.where(a > 0.5, 456 * eps / (13 * a - 1), 41.5 * eps / a)
+            else:
+                tip = np.where(top, u >= p.z1, u <= p.z1)   # the free tip lies in the compressed zone
+                div = np.where(tip, a, a * np.sqrt(a))
+                l1, l2 = 9 * eps / div, 10 * eps / div
+        c_part = np.where(~on, 1, np.where(ct <= l1, 1, np.where(ct <= l2, 2, np.where(ct <= l3, 3, 4))))
+        lim = np.maximum(np.maximum(l1, l2), l3)     # l3, unless a plastic limit is the larger (tension)
+        r_part = np.where(on, ct / lim, 0.0)
+        take = r_part > ratio
+        which = np.where(take, j, which)
+        ct_ = np.where(take, ct, ct_)
+        limit, alpha_, psi_ = np.where(take, lim, limit), np.where(take, alpha, alpha_), np.where(take, psi, psi_)
+        ratio = np.where(take, r_part, ratio)
+        cls = np.maximum(cls, c_part)
+    names = np.array([""] + [p.name for p in ps], dtype=object)
+    return SectionClass(cls, ratio, names[which + 1], ct_, limit, alpha_, psi_)

@@ -5,11 +5,12 @@ mesh boundary) and ``interior``.  Each round solves the frame with the current s
 picks per group the lightest candidate whose utilization and beam deflection, estimated from
 the current forces (the utilization of :mod:`fabricate.structure.results` with the candidate's
 ``A, Wy, Wz`` and buckling factor; the deflection scaled by the larger ratio of ``Iy`` or ``Iz``),
-pass for every beam of the group; the forces change with the stiffnesses and the self-weight,
-so the rounds repeat until the choice is stable and the re-solved frame passes.  Candidates with a class 4 part (EN 1993-1-1 Table 5.2) are left out.
-A group whose
-choice failed a full solve never goes back to that section or a lighter one, so the rounds end.  The answer is always
-the result of a full solve with the chosen sections, never the estimate.
+pass for every beam of the group, and whose section class (EN 1993-1-1 Table 5.2) under the forces
+at each beam's point nearest class 4 is not 4; the forces change with the stiffnesses and the
+self-weight, so the rounds repeat until the choice is stable and the re-solved frame passes (no
+class 4 beam either).  A group whose choice failed a full solve never goes back to that section
+or a lighter one, so the rounds end.  The answer is always the result of a full solve with the
+chosen sections, never the estimate.
 """
 from __future__ import annotations
 
@@ -21,14 +22,15 @@ from optimize.errors import ConfigError
 
 from .check import check_structure, configured_section
 from .options import ALPHA, GRADES
-from .results import buckling_factor, utilization
-from .sections import slender_part
+from .results import ROUND_OFF, buckling_factor, utilization
+from .sections import classify
 
 
 @dataclass(frozen=True, eq=False)
 class Sizing:
     """The outcome: ``groups {name: (e_g,) element indices}``, ``chosen {group: section name}``,
-    ``check`` (the final solve), masses in kg, ``rounds``, ``passes``, per group max utilization."""
+    ``check`` (the final solve), masses in kg, ``rounds``, ``passes``, per group max utilization,
+    ``excluded``: the candidates that are class 4 in some beam under the final forces (an estimate)."""
 
     groups: dict
     chosen: dict
@@ -54,7 +56,7 @@ class Sizing:
                 "saved_kg": round(self.saved_kg, 1),
                 "saved_percent": round(100.0 * self.saved_kg / self.configured_mass_kg, 1)
                 if self.configured_mass_kg > 0 else 0.0, "history": self.history,
-                "excluded_class_4": self.excluded}
+                "class_4_under_the_final_forces": self.excluded}
 
 
 def beam_groups(structure, group_by: str) -> dict[str, np.ndarray]:
@@ -75,12 +77,7 @@ def size_sections(structure, options, spec) -> Sizing:
     base = configured_section(options, spec, structure)
     cands = sorted({s.properties("structure.sizing.sections").name: s.properties("structure.sizing.sections")
                     for s in options.sizing.sections}.values(), key=lambda s: (s.A, -s.Iy))
-    fy, alpha = options.fy, ALPHA[options.buckling_curve]
-    slender = [m for m in (slender_part(c, GRADES[options.grade]) for c in cands) if m]
-    cands = [c for c in cands if slender_part(c, GRADES[options.grade]) is None]
-    if not cands:
-        raise ConfigError(f"structure.sizing.sections: every candidate has a class 4 part ({'; '.join(slender)}), "
-                          "expected sections whose walls are thick enough not to buckle locally")
+    fy, alpha, fy_k = options.fy, ALPHA[options.buckling_curve], GRADES[options.grade]
     groups = beam_groups(structure, options.sizing.group_by)
     e = len(structure.edges)
     first = check_structure(structure, options, spec)
@@ -106,6 +103,7 @@ def size_sections(structure, options, spec) -> Sizing:
         for g, ix in groups.items():
             cur = cands[pick[g]]
             N, Ms, Mw = r.N_kN[ix] * 1e3, r.M_strong_kNm[ix] * 1e6, r.M_weak_kNm[ix] * 1e6
+            Nc, Mc = r.class_N_kN[ix] * 1e3, r.class_M_kNm[ix] * 1e6
             defl = r.deflection_mm[ix] / r.deflection_limit_mm[ix]
             L = chk.frame.lengths()[ix] * options.buckling_length_factor
             ok = [c for c, s in enumerate(cands)
@@ -113,21 +111,33 @@ def size_sections(structure, options, spec) -> Sizing:
                   and utilization(N, Ms, Mw, s.A, s.Wy, s.Wz,
                                   buckling_factor(s.A, min(s.Iy, s.Iz), L, options.elastic_modulus, fy, alpha),
                                   fy).max() <= 1.0
-                  and (defl * max(cur.Iy / s.Iy, cur.Iz / s.Iz)).max() <= 1.0]
+                  and (defl * max(cur.Iy / s.Iy, cur.Iz / s.Iz)).max() <= 1.0
+                  and not (classify(s, fy_k, Nc, Mc, Mw, _floor(s, N, Ms, Mw)).cls == 4).any()]
             new[g] = ok[0] if ok else min(max(floor[g], pick[g]), len(cands) - 1)
         if new == pick and (passes or all(floor[g] >= len(cands) for g in groups if g in _failing_groups(chk, groups))):
             break  # stable and passing, or the heaviest candidate does not pass: say so
         pick = new
     util = {g: round(float(chk.results.utilization[ix].max(initial=0.0)), 4) for g, ix in groups.items()}
+    r = chk.results
+    forces = [(r.class_N_kN[ix] * 1e3, r.class_M_kNm[ix] * 1e6, r.M_weak_kNm[ix] * 1e6, r.N_kN[ix] * 1e3,
+               r.M_strong_kNm[ix] * 1e6) for ix in groups.values()]
+    slender = [s.name for s in cands
+               if any((classify(s, fy_k, Nc, Mc, Mw, _floor(s, N, Ms, Mw)).cls == 4).any()
+                      for Nc, Mc, Mw, N, Ms in forces)]
     return Sizing(groups=groups, chosen={g: cands[checked[g]].name for g in groups}, check=chk,
                   configured_mass_kg=configured_mass, sized_mass_kg=chk.frame.steel_mass_kg(spec.density_steel),
                   configured_section=base.name, rounds=rounds, passes=chk.passes(), utilization=util,
                   history=history, excluded=slender)
 
 
+def _floor(s, N, Ms, Mw) -> np.ndarray:
+    """The round-off stress (MPa) of section ``s`` under a beam's governing forces (:data:`ROUND_OFF`)."""
+    return ROUND_OFF * (np.abs(N) / s.A + np.abs(Ms) * s.h / s.Iy + np.abs(Mw) * s.b / s.Iz)
+
+
 def _failing_groups(chk, groups) -> set[str]:
     r = chk.results
-    bad = (r.utilization > 1.0) | (chk.deflection_ratio() > 1.0)
+    bad = (r.utilization > 1.0) | (chk.deflection_ratio() > 1.0) | (r.section_class.cls == 4)
     if r.displacement_mm.max(initial=0.0) > r.displacement_limit_mm:
         bad[:] = True  # the whole structure is too soft: every group moves up
     return {g for g, ix in groups.items() if bad[ix].any()}
