@@ -132,3 +132,28 @@ def test_the_shipped_tube_shell_that_cannot_be_built_says_why_and_keeps_the_mesh
     assert "no panels or beams built from the optimized mesh: beam B" in summary.message
     assert "reduce parts.beam_depth" in summary.message and "design moved up to" in summary.message
     assert (out / "mesh.obj").is_file() and (out / "TOLERANCE_NOT_REACHED.txt").is_file()
+
+
+def test_a_roof_in_a_unit_float64_cannot_hold_to_the_cad_tolerance_is_refused_up_front(tmp_path):
+    """A mesh given in metres but saved in micrometres-of-kilometres (coordinates 1e15 mm): one line,
+    bad input (exit 2) before the optimizer runs, nothing written (it ended exit 3 after optimizing)."""
+    from optimize.errors import MeshError
+
+    mesh = tmp_path / "far.obj"
+    mesh.write_text("".join(f"v {x * 1e12} {y * 1e12} {0.1 * x * y * 1e12}\n" for y in range(3) for x in range(3))
+                    + "".join(f"f {1 + x + 3 * y} {2 + x + 3 * y} {5 + x + 3 * y} {4 + x + 3 * y}\n"
+                              for y in range(2) for x in range(2)))
+    cfg = tiny_config(tmp_path, "far", outputs=MESH_ONLY, input={"mesh": str(mesh)}, units="m")
+    with pytest.raises(MeshError, match=r"far\.obj: coordinates up to .* the CAD tolerance") as err:
+        run_pipeline(cfg, tmp_path / "out")
+    assert err.value.exit_code == 2 and "\n" not in str(err.value)
+    assert not (tmp_path / "out" / "far").exists()
+
+
+def test_every_report_counts_degenerate_faces_as_a_requirement(tmp_path):
+    run_pipeline(tiny_config(tmp_path, "degen", outputs=MESH_ONLY), tmp_path / "out")
+    m = json.loads((tmp_path / "out" / "degen" / "report.json").read_text())["measures"]["degenerate"]
+    assert m["role"] == "requirement" and m["pass"] is True and m["max"] == 0
+    assert m["shrunk_edges"] == 0 and m["straight_corners"] == 0
+    out = outcome({"degenerate": dict(m, max=2.0, **{"pass": False}, tolerance=0)})
+    assert out.exit_code == 3 and "degenerate 2 > 0" in out.message

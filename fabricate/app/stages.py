@@ -72,6 +72,12 @@ def stage_input(cfg) -> InputRecord:
         mesh = mesh.with_vertices(mesh.V * factor)
         if surface is not None:
             surface = surface.with_vertices(surface.V * factor)
+    from optimize.mesh.measures import check_range
+
+    # coordinates float64 holds more coarsely than the CAD tolerance (a mesh in the wrong unit, or far from
+    # the origin): bad input up front, not a failure of some later stage
+    check_range(surface if surface is not None else mesh, f"input.{kind} {plan['source']}",
+                resolution=cfg.tolerances.cad_linear_mm, needs="the CAD tolerance")
     return InputRecord(mesh=mesh, surface=surface, kind=kind, levels=int(plan["levels"]), scheme=plan["scheme"],
                        target=plan["target"], facts=frozen(plan), notes=tuple(mesh.notes),
                        line=f"{plan['source']}: {mesh.n_faces} faces")

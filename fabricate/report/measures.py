@@ -133,6 +133,17 @@ def collect_measures(cfg, inp, opt, off) -> dict[str, dict]:
                 "max": float(count), "mean": None,
                 "worst": [{"face": int(f), "value": 1.0} for f in folded["faces"][:N_WORST]],
                 "pass": count == 0}
+        degenerate = [(k, (result.defects or {}).get(k)) for k in ("shrunk_edges", "straight_corners")]
+        if any(d is not None for _, d in degenerate):
+            faces = sorted({int(f) for _, d in degenerate if d for f in d.get("faces", [])})
+            count = sum(int(d["count"]) for _, d in degenerate if d)
+            out["degenerate"] = {
+                "what": "faces with a side shrunk below 1 % of its input length (or 1e-6 of the face) or a corner "
+                        "at 0 or 180 deg: planar, but a sliver no one can cut",
+                "unit": "faces", "count": mesh.n_faces, "tolerance": 0, "enforced": True,
+                "max": float(count), "mean": None,
+                **{k: (d or {}).get("count", 0) for k, d in degenerate},
+                "worst": [{"face": f, "value": 1.0} for f in faces[:N_WORST]], "pass": count == 0}
     out.update(_offset_measures(off.structure, mesh, tol, enforce=target == "conical"))
     return out
 
