@@ -31,6 +31,7 @@ offset.distances=[0,-200],[0,-300]`` sweeps two lists).
 from __future__ import annotations
 
 import dataclasses
+import logging
 import math
 import re
 from pathlib import Path
@@ -55,6 +56,8 @@ from .options import (CHECK_AUTO_MAX_PARTS, TOLERANCE_KEYS, UNIT_TO_MM, OffsetOp
                       OutputsOptions, RunOptions)
 
 INPUT_KINDS = ("shape", "mesh", "control", "surface")
+
+log = logging.getLogger(__name__)
 
 
 MAX_ITER = OPT.MAX_ITER
@@ -279,6 +282,7 @@ class RunConfig(section_base(RunOptions, extra=_SECTIONS, order=["name", *_SECTI
     :class:`fabricate.app.options.RunOptions`."""
 
     _source: Path | None = PrivateAttr(default=None)
+    _units_note: str | None = PrivateAttr(default=None)
 
     @field_validator("name", mode="before")
     @classmethod
@@ -289,6 +293,12 @@ class RunConfig(section_base(RunOptions, extra=_SECTIONS, order=["name", *_SECTI
     def source(self) -> Path | None:
         """The config file this came from (None for a dict)."""
         return self._source
+
+    @property
+    def units_note(self) -> str | None:
+        """Where ``units`` came from when the input file states its own unit (a .3dm file): taken from
+        the file, or the config's overriding a different one (also logged as a warning); else None."""
+        return self._units_note
 
     @property
     def mm_per_unit(self) -> float:
@@ -341,7 +351,58 @@ def parse_config(data: dict[str, Any], *, source: str | Path = "<config>", base_
         cfg.name = _safe_name(source.stem)
     cfg._source = source
     _cross_checks(cfg, source, lines or {})
+    _file_units(cfg, source, lines or {})
     return cfg
+
+
+def mesh_file_units(path: str | Path, given: str | None, *, scale: float = 1.0,
+                    key: str = "units") -> tuple[str, str | None, bool]:
+    """``(unit, note, overridden)``: the unit to read the mesh file ``path`` in.
+
+    ``given`` (the config's ``units`` or ``--units``; None when not given) wins; without it, the
+    unit the file states (a .3dm file's model unit, :func:`optimize.mesh.io.api.mesh_units`), else
+    mm.  ``note`` says where the unit came from when the file states one; ``overridden`` is True
+    when ``given`` (times ``scale``) differs from the file's unit (the caller warns).  A file in a
+    unit ``key`` does not name (Kilometers, Yards) and no ``given``: ConfigError naming the unit.
+    """
+    from optimize.mesh.io.api import mesh_units
+
+    stated = mesh_units(path)
+    if stated is None:
+        return given or "mm", None, False
+    name, mm = stated
+    if mm is None:
+        unit = given or "mm"
+        return unit, f"{path}: the file states no model unit ({name}); read in {unit}", False
+    found = next((u for u, f in UNIT_TO_MM.items() if math.isclose(f, mm, rel_tol=1e-12)), None)
+    if given is None:
+        if found is None:
+            raise ConfigError(f"{path}: the file's model unit is {name} ({mm:g} mm), which {key} has no name for; "
+                              f"expected {key} set to one of {', '.join(UNIT_TO_MM)} (with scale for the rest, e.g. "
+                              f"units: m and scale: {mm / 1000:g} for {name})")
+        return found, f"{path}: read in {found}, the file's model unit ({name}); {key} not given", False
+    if not math.isclose(UNIT_TO_MM[given] * scale, mm, rel_tol=1e-12):
+        return given, (f"{path}: {key} {given}" + (f" x {scale:g}" if scale != 1.0 else "") + f" overrides the "
+                       f"file's model unit {name} ({mm:g} mm): its coordinates are read as {given}"), True
+    return given, f"{path}: read in {given}, as the file's model unit ({name}) says", False
+
+
+def _file_units(cfg: RunConfig, source: Path, lines: dict[tuple, int]) -> None:
+    """``units`` of an input file that states its own unit (a .3dm): the file's when the config gives
+    none (said in :attr:`RunConfig.units_note` and the log), the config's otherwise (a warning when
+    they differ)."""
+    if cfg.input.kind == "shape":
+        return
+    path = getattr(cfg.input, cfg.input.kind)
+    given = cfg.units if "units" in cfg.model_fields_set else None
+    try:
+        unit, note, overridden = mesh_file_units(path, given, scale=cfg.scale)
+    except ConfigError as exc:
+        raise ConfigError(f"{_at(source, lines, ('input', cfg.input.kind))}: input.{cfg.input.kind}: {exc}") from None
+    if note is None:
+        return
+    cfg.units, cfg._units_note = unit, note
+    (log.warning if overridden else log.info)("%s", note)
 
 
 def _at(source: Path, lines: dict[tuple, int], *keys: tuple) -> str:

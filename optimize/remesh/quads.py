@@ -52,6 +52,7 @@ integrable and varies elsewhere (principal lines spread and converge): see
 from __future__ import annotations
 
 import logging
+import math
 import time
 from dataclasses import dataclass, field
 
@@ -60,7 +61,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..errors import ConfigError, MeshError
-from ..mesh import Mesh
+from ..mesh import Mesh, measures
 from ..mesh.measures import edge_lengths
 from ..options import resolve_optimizer
 from .crossfield import comb, face_crosses, face_frames, smooth_cross_field
@@ -71,6 +72,93 @@ log = logging.getLogger(__name__)
 
 IRREGULAR = ("faces", "vertices", "nearest")  # what a kept singularity becomes
 SAMPLE = 0.25  # principal frames at vertices about SAMPLE * r apart on a surface finer than that
+
+MAX_FACES = 2_000_000
+"""Most faces a remeshing may make (about 5 GB and several minutes; a roof of 2,000 panels has 2,000)."""
+BYTES_PER_FACE = 2_500
+"""Peak memory per face made (measured: 2.1-2.2 kB a face, tracemalloc, a 2,400-triangle roof remeshed
+into 129,000 and 515,000 faces)."""
+MEMORY_SHARE = 0.5
+"""Largest share of the machine's memory (or of the address-space limit) a remeshing may plan on."""
+
+
+def machine_memory() -> int:
+    """Bytes this process may use: the physical memory, or the address-space limit (``ulimit -v``)
+    when that is lower."""
+    import os
+    import resource
+
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        total = 1 << 34
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    return int(min(total, soft)) if soft not in (resource.RLIM_INFINITY, -1) and soft > 0 else int(total)
+
+
+@dataclass(frozen=True)
+class RemeshSize:
+    """What a remeshing at ``edge_length`` would make: ``faces`` (surface ``area`` / ``edge_length^2``),
+    ``bytes`` (:data:`BYTES_PER_FACE` each), and the most faces allowed here (``limit``)."""
+
+    area: float
+    edge_length: float
+    faces: float
+    bytes: float
+    limit: int
+
+    @property
+    def ok(self) -> bool:
+        return self.faces <= self.limit
+
+    @property
+    def smallest_edge(self) -> float:
+        """The smallest edge length whose estimate is within the limit."""
+        return math.sqrt(self.area / self.limit) if self.limit > 0 else math.inf
+
+
+def remesh_size(surface: Mesh, edge_length: float) -> RemeshSize:
+    """The estimate :func:`check_remesh_size` holds to its limit (nothing is allocated beyond the
+    input's face areas)."""
+    area = float(measures.face_areas(surface).sum())
+    h = float(edge_length)
+    with np.errstate(over="ignore", divide="ignore"):
+        faces = area / (h * h) if h > 0 else math.inf
+    limit = min(MAX_FACES, int(MEMORY_SHARE * machine_memory() / BYTES_PER_FACE))
+    return RemeshSize(area=area, edge_length=h, faces=faces, bytes=faces * BYTES_PER_FACE, limit=limit)
+
+
+def check_remesh_size(surface: Mesh, edge_length: float, *, key: str = "edge_length", unit: str = "",
+                      per_unit: float = 1.0) -> RemeshSize:
+    """Refuse (:class:`ConfigError`, exit 2) an edge length that would make more faces than
+    :data:`MAX_FACES` or more than :data:`MEMORY_SHARE` of the memory, before anything is built.
+
+    surface : the input surface; edge_length : in its coordinates.  ``key``, ``unit`` and
+    ``per_unit`` (surface coordinates per ``unit``) name the value as the user gave it.
+    """
+    size = remesh_size(surface, edge_length)
+    if size.ok:
+        return size
+    u = f" {unit}" if unit else " (the surface's units)"
+    area = f"{size.area / per_unit ** 2:.4g}" + (f" {unit}2" if unit else "")
+    cap = (f"; {MEMORY_SHARE:.0%} of the {machine_memory() / 2 ** 30:.1f} GiB this process may use"
+           if size.limit < MAX_FACES else "")
+    raise ConfigError(f"{surface.name}: {key} {edge_length / per_unit:.4g}{u} makes about {size.faces:,.3g} faces "
+                      f"(area {area} / edge length^2; {_gib(size.bytes)} of memory), more than the {size.limit:,} "
+                      f"a remeshing may make{cap}; expected an edge length of at least "
+                      f"{_round_up(size.smallest_edge / per_unit)}{u}")
+
+
+def _round_up(x: float) -> str:
+    """``x`` to 3 significant digits, rounded up (a smallest allowed value stays allowed)."""
+    if not 0 < x < math.inf:
+        return f"{x:g}"
+    step = 10.0 ** (math.floor(math.log10(x)) - 2)
+    return f"{math.ceil(x / step * (1 - 1e-12)) * step:.3g}"
+
+
+def _gib(nbytes: float) -> str:
+    return f"{nbytes / 2 ** 30:,.3g} GiB" if nbytes >= 2 ** 30 else f"{nbytes / 2 ** 20:,.3g} MiB"
 
 
 @dataclass
@@ -236,6 +324,7 @@ def remesh(surface: Mesh, edge_length: float, *, radius: float | None = None, si
         raise ConfigError(f"edge_length = {edge_length}, expected a positive length")
     t0 = time.perf_counter()
     surface, split = as_triangles(surface)
+    check_remesh_size(surface, edge_length)  # before anything grows with the faces made
     mesh, N, closed = oriented_surface(surface, None, side)
     if closed:
         raise MeshError(f"{mesh.name}: closed surface (no boundary); remeshing supports open surfaces "

@@ -11,17 +11,18 @@ def register(sub) -> None:
     p = sub.add_parser("measure", help="print planarity, conical and circular defects and statistics",
                        description="Print every measure of a mesh (OBJ, OFF, PLY) as JSON, "
                                    "or as a readable table with --table.")
-    p.add_argument("mesh", help="mesh file (.obj, .off, .ply)")
+    p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl, .3dm)")
     p.add_argument("--table", action="store_true", help="a readable table instead of JSON")
-    add_units(p)
+    add_units(p, default=None)
     p.set_defaults(handler=run)
 
 
 def run(args) -> int:
     from optimize.mesh.measures import summary
 
-    from .units import UNIT_TO_MM, read_mm
+    from .units import UNIT_TO_MM, read_mm, resolve_units
 
+    args.units = resolve_units(args.mesh, args.units)
     mesh = read_mm(args.mesh, args.units)
     s = summary(mesh)
     s["units"] = {"file": args.units, "mm_per_unit": UNIT_TO_MM[args.units], "lengths": "mm",

@@ -22,10 +22,11 @@ def register(sub) -> None:
                     "DIR is replaced only when it is an earlier offset output of this tool with no files "
                     "added or changed, and only with --replace; a result that is not PQ (exit 3) never "
                     "replaces a passing one (it is written beside it as DIR.failed-<time>/).")
-    p.add_argument("mesh", help="mesh file (.obj, .off, .ply), in --units (default mm)")
+    p.add_argument("mesh", help="mesh file (.obj, .off, .ply, .stl, .3dm), in --units")
     p.add_argument("--distances", required=True, metavar="D1,D2,...",
-                   help="comma-separated signed distances in mm, e.g. 0,20,120 (use --distances=-20,0 "
-                        "for a leading minus); beams span the first and the last")
+                   help="comma-separated signed distances in mm whatever --units says (part dimensions, as "
+                        "offset.distances in a config), e.g. 0,20,120 (use --distances=-20,0 for a leading "
+                        "minus); beams span the first and the last")
     add_output(p, "output folder (written atomically, with a marker file; never a folder this tool did not "
                   "write)", metavar="DIR")
     p.add_argument("--replace", action="store_true",
@@ -36,7 +37,7 @@ def register(sub) -> None:
     p.add_argument("--free-axes", choices=("planar_beams", "min_norm"), default="planar_beams",
                    help="axes the faces leave free (boundary, cylinder-like vertices): turned for planar "
                         "beams (default) or the bisector of the face normals")
-    add_units(p)
+    add_units(p, "MESH (the output files are in mm)", default=None)
     p.set_defaults(handler=run)
 
 
@@ -70,11 +71,12 @@ def run(args) -> int:
 
     from .. import runfolder
     from ...offset import offset_structure, require_pq, write_offset_files
-    from .units import UNIT_TO_MM, read_mm
+    from .units import UNIT_TO_MM, read_mm, resolve_units
 
     texts, values = parse_distances(args.distances)
     out = Path(args.output)
     runfolder.check_target(out, force=True, flag="--replace")  # said before reading the mesh
+    args.units = resolve_units(args.mesh, args.units)
     mesh = read_mm(args.mesh, args.units)
     tol = Tolerances()
     if not args.force:

@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 
 from .args import add_output
-from .units import add_units
+from .units import add_units, positive_length
 
 
 def _vector(text: str):
@@ -30,12 +30,14 @@ def register(sub) -> None:
                     "become 3-/5-gons or valence-3/5 vertices), then optimize it to a conical (or "
                     "circular) mesh close to the surface.  Exit 3 when the optimization misses a tolerance "
                     "(the mesh is written all the same, and the report says so).")
-    p.add_argument("surface", help="triangle or polygon mesh (.obj, .off, .ply, .stl): one piece, open "
+    p.add_argument("surface", help="triangle or polygon mesh (.obj, .off, .ply, .stl, .3dm): one piece, open "
                                    "(holes allowed)")
-    p.add_argument("--edge-length", type=float, required=True, help="target edge length (mm)")
+    p.add_argument("--edge-length", type=positive_length, required=True, metavar="L",
+                   help="target edge length, in --units (--units m --edge-length 1.5: 1.5 m); refused (exit 2) "
+                        "when the surface's area / L^2 is more than 2,000,000 faces or needs half the memory")
     add_output(p, "output quad mesh (.obj, .off, .ply)")
-    p.add_argument("--radius", type=float, default=None,
-                   help="kernel radius of the principal directions, mm (default: the edge length, at "
+    p.add_argument("--radius", type=positive_length, default=None, metavar="R",
+                   help="kernel radius of the principal directions, in --units (default: the edge length, at "
                         "least 3 mean triangle edges)")
     p.add_argument("--side", type=_vector, default=None,
                    help="x,y,z: direction toward the inside of the surface (default 0,0,-1: below; "
@@ -49,25 +51,30 @@ def register(sub) -> None:
     p.add_argument("--free-boundary", action="store_true",
                    help="let boundary vertices move freely instead of gliding along the boundary")
     p.add_argument("--report", default=None, help="write a JSON report here (lengths in mm)")
-    add_units(p, "SURFACE (the quad mesh is written in the same unit)")
+    add_units(p, "SURFACE, --edge-length and --radius (the quad mesh is written in the same unit)", default=None)
     p.set_defaults(handler=run)
 
 
 def run(args) -> int:
     from optimize.atomic import atomic_open
     from optimize.mesh.io import write_mesh
-    from optimize.remesh.quads import surface_to_mesh
+    from optimize.remesh.quads import check_remesh_size, surface_to_mesh
 
-    from .units import read_mm, to_file_units
+    from .units import UNIT_TO_MM, length_mm, read_mm, resolve_units, to_file_units
 
+    args.units = resolve_units(args.surface, args.units)
     surface = read_mm(args.surface, args.units)
-    mesh, res, rep = surface_to_mesh(surface, args.edge_length, target=args.optimize, radius=args.radius,
+    h = length_mm(args.edge_length, args.units)
+    check_remesh_size(surface, h, key="--edge-length", unit=args.units, per_unit=UNIT_TO_MM[args.units])
+    radius = None if args.radius is None else length_mm(args.radius, args.units)
+    mesh, res, rep = surface_to_mesh(surface, h, target=args.optimize, radius=radius,
                                      side=args.side, glide_boundary=not args.free_boundary,
                                      irregular=args.irregular)
     from .cmd_optimize import _marks
 
     write_mesh(args.output, to_file_units(mesh, args.units), comments=_marks(res))
     facts = {"input": args.surface, "output": args.output, "units": args.units, "lengths": "mm",
+             "edge_length": {"given": args.edge_length, "units": args.units, "mm": h},
              "remesh": rep.as_dict(), "notes": mesh.notes}
     if res is not None:
         facts["optimize"] = {"target": args.optimize, "status": res.status, "success": res.success,
@@ -77,8 +84,9 @@ def run(args) -> int:
         with atomic_open(args.report, "w") as fh:
             json.dump(facts, fh, indent=2, default=str)
     sizes = ", ".join(f"{c} {k}-gons" for k, c in rep.face_sizes.items())
+    target = f"{h:.4g} mm" + (f" = {args.edge_length:g} {args.units}" if args.units != "mm" else "")
     print(f"{args.output}: {mesh.n_vertices} vertices, {sizes} (written in {args.units}); edge length mean "
-          f"{rep.edge_length['mean']:.4g} mm (target {args.edge_length:g} mm), radius {rep.radius:.4g} mm")
+          f"{rep.edge_length['mean']:.4g} mm (target {target}), radius {rep.radius:.4g} mm")
     for note in mesh.notes:
         print(f"note: {note}")
     if res is None:

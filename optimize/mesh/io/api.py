@@ -73,6 +73,19 @@ def read_mesh(path: str | os.PathLike, *, fmt: str | None = None, layer: str | N
     return build_mesh(parsed, name)
 
 
+def mesh_units(path: str | os.PathLike, *, fmt: str | None = None) -> tuple[str, float | None] | None:
+    """The length unit a mesh file states: ``(name, mm per unit)`` for a Rhino .3dm file (its
+    ``ModelUnitSystem``; mm per unit None when it has none or a custom one), None for a format that
+    states none (OBJ, OFF, PLY, STL: the caller's ``units`` says).  Reading the unit of a .3dm
+    reads the file (rhino3dm has no lighter way)."""
+    if detect_format(path, fmt) != "3dm":
+        return None
+    from .rhino import model_units
+
+    check_file(path, "3dm")
+    return model_units(str(path))
+
+
 def build_mesh(parsed: Parsed, name: str) -> Mesh:
     """Check ``parsed`` and make the :class:`Mesh`; every error names the file position."""
     V, flat, sizes = parsed.V, parsed.flat, parsed.sizes
