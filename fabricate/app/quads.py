@@ -36,7 +36,7 @@ def require_quads(mesh: Mesh, source: str, *, hint: str) -> None:
 
 
 CLI_HINT = ("turn the surface into quads first: `fabricate remesh SURFACE --edge-length L -o quads.obj` "
-            "(or give it to `fabricate run` as input.surface)")
+            "(L in --units) (or give it to `fabricate run` as input.surface)")
 RUN_HINT = ("give the triangle surface as input.surface (with input.edge_length) to remesh it into "
             "quads, or as input.control with subdivision levels; `fabricate remesh` does the same "
             "on its own")
