@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from optimize.atomic import atomic_open
-from optimize.errors import ConfigError, ConicalFabError
+from optimize.errors import ConfigError, ConicalFabError, writing
 
 from .config import RunConfig, load_config, override_values
 from .options import COMMAND
@@ -385,8 +385,9 @@ def write_csv(summaries: list[RunSummary], path: str | Path) -> Path:
     writer.writeheader()
     for r in rows(summaries):
         writer.writerow({k: ("" if v is None else f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
-    with atomic_open(path, newline="") as fh:
-        fh.write(buf.getvalue())
+    text = buf.getvalue()
+    with writing(path, "batch summary", needed=len(text.encode())), atomic_open(path, newline="") as fh:
+        fh.write(text)
     return Path(path)
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 COLUMNS = ("id", "kind", "element", "mesh_vertices", "area_m2", "length_mm", "thickness_mm", "volume_mm3",
            "weight_kg", "rect_w_mm", "rect_h_mm", "planarity_mm", "residual_mm", "neighbours", "unit", "member",
@@ -69,7 +69,7 @@ def write_bom(parts, path, *, mesh=None) -> dict:
                                 pid.split(".", 1)[0], g.member, material))
                     rows += 1
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the bill of materials ({exc.strerror or exc})") from None
+        raise write_error(path, "bill of materials", exc) from exc
     return {"file": path.name, "bytes": path.stat().st_size, "rows": rows,
             "mass_kg": {k: round(v, 3) for k, v in mass.items()}, "seconds": time.perf_counter() - t0}
 

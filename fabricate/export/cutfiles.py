@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 from .nesting import layout
 
@@ -206,7 +206,7 @@ def write_layout_plan(parts, path) -> dict:
         with atomic_open(path, "w", encoding="utf-8", newline="\n") as fh:
             doc.write(fh)
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the layout plan ({exc.strerror or exc})") from None
+        raise write_error(path, "layout plan", exc) from exc
     return {"file": path.name, "bytes": path.stat().st_size, "parts": len(items), "view": "plan (model x, y), mm",
             "plot_scale": f"1:{scale}", "text_mm": [size, 3 * size], "labels": counts,
             "seconds": time.perf_counter() - t0}

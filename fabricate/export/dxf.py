@@ -32,7 +32,7 @@ import numpy as np
 
 from fabricate.cad.parts import cut_from_sheet
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 from .flat import flat_group
 from .nesting import Layout, sheet_gap
@@ -269,7 +269,7 @@ def write_dxf(parts, path, *, sheet: tuple[float, float] | None = None, spacing:
             for text in (head, sheets, entities, tail):
                 fh.write(text)
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the DXF file ({exc.strerror or exc})") from None
+        raise write_error(path, "DXF file", exc) from exc
     return {"file": path.name, "bytes": path.stat().st_size, "outlines": n, "entities": next_handle - seed,
             "units": "mm", "layers": list(LAYERS),
             "audit": f"ezdxf audit clean on the document with the first {n_sample} parts "

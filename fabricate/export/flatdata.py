@@ -23,7 +23,7 @@ import numpy as np
 from fabricate.cad.parts import cut_from_sheet
 from optimize import jsontext
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 TOL_MM = 0.01
 """Largest accepted Hausdorff distance (mm); the volume may differ by this times the outline area."""
@@ -57,7 +57,7 @@ def write_flat(parts, path) -> dict:
             for text in _json_chunks(doc):
                 fh.write(text)
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the flat data ({exc.strerror or exc})") from None
+        raise write_error(path, "flat data", exc) from exc
     return {"file": path.name, "bytes": path.stat().st_size, "parts": n, "seconds": time.perf_counter() - t0}
 
 

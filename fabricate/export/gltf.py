@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 from ..cad.parts import COLOURS
 
@@ -42,6 +42,6 @@ def write_parts_gltf(parts, path) -> dict:
     try:
         facts = write_glb(path, meshes, generator="conical-fab parts (metres, y up; model mm x 0.001)")
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the glTF file ({exc.strerror or exc})") from None
+        raise write_error(path, "glTF file", exc) from exc
     return dict(facts or {}, file=path.name, bytes=path.stat().st_size, nodes=len(meshes), units="m",
                 seconds=time.perf_counter() - t0)

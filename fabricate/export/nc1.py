@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_dir, umask
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 NUM = "{:10.3f}"
 
@@ -277,6 +277,6 @@ def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -
             with atomic_dir(folder) as tmp:
                 write_all(_Files(tmp, mode, staged=True))
     except OSError as exc:
-        raise ExportError(f"{folder}: cannot write the NC1 files ({exc.strerror or exc})") from None
+        raise write_error(folder, "NC1 files", exc) from exc
     return {"file": folder.name + "/", "files": files, "tubes": tubes, "bytes": size,
             "seconds": time.perf_counter() - t0}

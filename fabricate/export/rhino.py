@@ -17,6 +17,7 @@ reads in a child process, so that a long-lived process (a batch worker) keeps no
 from __future__ import annotations
 
 import logging
+import os
 import pickle
 import subprocess
 import sys
@@ -25,7 +26,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Callable
 
 from optimize.atomic import atomic_path
-from optimize.errors import ExportError
+from optimize.errors import DISK_FULL, ExportError, c_errno, writing
 
 if TYPE_CHECKING:
     import numpy as np
@@ -145,12 +146,13 @@ def write_3dm(parts, path, *, structure=None, mesh=None) -> dict:
             line = rh.LineCurve(rh.Point3d(*a), rh.Point3d(*b))
             model.Objects.AddCurve(line, attributes(index["node axes"], f"axis_{v + 1}", {"vertex": v}))
             counts["node axes"] += 1
-    try:
-        with atomic_path(path) as tmp:
-            if not model.Write(str(tmp), 7):
-                raise ExportError(f"{path}: rhino3dm could not write the file")
-    except OSError as exc:
-        raise ExportError(f"{path}: cannot write the .3dm file ({exc.strerror or exc})") from None
+    with writing(path, ".3dm file"), atomic_path(path) as tmp:
+        c_errno(0)
+        if not model.Write(str(tmp), 7):  # rhino3dm says only "failed": the C library's errno says why
+            err = c_errno()
+            if err in DISK_FULL:
+                raise OSError(err, os.strerror(err), str(tmp))
+            raise ExportError(f"{path}: rhino3dm could not write the file")
     return {"file": path.name, "bytes": path.stat().st_size, "objects": counts, "units": "mm",
             "seconds": time.perf_counter() - t0}
 

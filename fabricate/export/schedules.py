@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 from fabricate.cad.geometry import polygon_area_2d
 from fabricate.cad.limits import corner_angles_deg, edge_lengths
@@ -75,7 +75,7 @@ def _write(path: Path, columns, rows) -> int:
                 w.writerow(row)
                 n += 1
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the schedule ({exc.strerror or exc})") from None
+        raise write_error(path, "schedule", exc) from exc
     return n
 
 

@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 from ..cad.parts import COLOURS, KINDS
 from .brep import edge_table
@@ -303,7 +303,7 @@ def _write_direct(parts, path: Path, name: str, schema: str = "AP214") -> dict:
             fh.write(f"#{next_id}=MECHANICAL_DESIGN_GEOMETRIC_PRESENTATION_REPRESENTATION('',("
                      + ",".join(f"#{int(i)}" for i in styled) + "),#9);\nENDSEC;\nEND-ISO-10303-21;\n")
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the STEP file ({exc.strerror or exc})") from None
+        raise write_error(path, "STEP file", exc) from exc
     return {"entities": int(n_entities), "pcurves": False}
 
 

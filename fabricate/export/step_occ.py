@@ -5,10 +5,11 @@ a shared 2-core machine); the reference it is tested against.
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from optimize.atomic import atomic_path
-from optimize.errors import ExportError
+from optimize.errors import DISK_FULL, ExportError, c_errno, writing
 
 from ..cad.parts import COLOURS
 from .brep import group_solids
@@ -57,7 +58,11 @@ def write_step_occ(parts, path: Path, *, name: str = "model", pcurves: bool = Tr
     Interface_Static.SetIVal_s("write.surfacecurve.mode", int(pcurves))
     if not writer.Transfer(doc, STEPControl_StepModelType.STEPControl_AsIs):
         raise ExportError(f"{path}: OpenCASCADE could not transfer the model to STEP")
-    with atomic_path(path) as tmp:
+    with writing(path, "STEP file"), atomic_path(path) as tmp:
+        c_errno(0)
         if writer.Write(str(tmp)) != IFSelect_ReturnStatus.IFSelect_RetDone:
+            err = c_errno()  # OpenCASCADE says only "failed": the C library's errno says why
+            if err in DISK_FULL:
+                raise OSError(err, os.strerror(err), str(tmp))
             raise ExportError(f"{path}: OpenCASCADE could not write the STEP file")
     return {"pcurves": pcurves}

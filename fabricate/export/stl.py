@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, writing
 
 from .meshes import group_triangles, validate_manifold
 
@@ -99,13 +99,10 @@ def write_stl(parts, path, *, origin: np.ndarray | None = None) -> dict:
     origin = parts.local_origin() if origin is None else np.asarray(origin, dtype=float)
     facts = validate_manifold(parts, origin)
     rec = records(parts, origin)
-    try:
-        with atomic_open(path, "wb") as fh:
-            fh.write(header_text(origin, len(parts)))
-            fh.write(np.uint32(len(rec)).tobytes())
-            rec.tofile(fh)
-    except OSError as exc:
-        raise ExportError(f"{path}: cannot write the STL file ({exc.strerror or exc})") from None
+    with writing(path, "STL file", needed=84 + rec.nbytes), atomic_open(path, "wb") as fh:
+        fh.write(header_text(origin, len(parts)))
+        fh.write(np.uint32(len(rec)).tobytes())
+        fh.write(rec.view(np.uint8))  # a file write (ndarray.tofile's short write has no errno)
     return {"file": path.name, "bytes": path.stat().st_size, "triangles": len(rec), "parts": len(parts),
             "origin_mm": origin.tolist(), "manifold": facts, "seconds": time.perf_counter() - t0}
 
@@ -140,13 +137,11 @@ def write_stl_parts(parts, folder, *, origin: np.ndarray | None = None) -> dict:
         rec = group_records(g, origin)                                # (p, t)
         t = rec.shape[1]
         for i, pid in enumerate(g.ids):  # one file per part
-            try:
-                with atomic_open(folder / f"{pid}.stl", "wb") as fh:
-                    fh.write(header_text(origin, 1))
-                    fh.write(np.uint32(t).tobytes())
-                    rec[i].tofile(fh)
-            except OSError as exc:
-                raise ExportError(f"{folder / pid}.stl: cannot write the STL file ({exc.strerror or exc})") from None
+            path = folder / f"{pid}.stl"
+            with writing(path, "STL file", needed=84 + rec[i].nbytes), atomic_open(path, "wb") as fh:
+                fh.write(header_text(origin, 1))
+                fh.write(np.uint32(t).tobytes())
+                fh.write(rec[i].view(np.uint8))
             files += 1
             tris += t
     return {"folder": folder.name, "files": files, "triangles": tris, "origin_mm": origin.tolist(),

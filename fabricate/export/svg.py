@@ -15,7 +15,7 @@ import numpy as np
 
 from fabricate.cad.parts import cut_from_sheet
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 from .flat import flat_group
 from .nesting import Layout, sheet_gap
@@ -87,6 +87,6 @@ def write_svg(parts, path, *, sheet: tuple[float, float] | None = None, spacing:
         with atomic_open(path, "w", encoding="utf-8") as fh:
             fh.write(text)
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the SVG file ({exc.strerror or exc})") from None
+        raise write_error(path, "SVG file", exc) from exc
     return {"file": path.name, "bytes": path.stat().st_size, "parts": len(lay.ids), "width_mm": total_w,
             "height_mm": H, "layout": lay.facts(), "seconds": time.perf_counter() - t0}

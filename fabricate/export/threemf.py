@@ -16,7 +16,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from optimize.atomic import atomic_path
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 from ..cad.parts import COLOURS, KINDS
 from .meshes import group_triangles, validate_manifold
@@ -176,7 +176,7 @@ def write_3mf(parts, path, *, origin: np.ndarray | None = None) -> dict:
                           + "".join(f'<item objectid="{i}"{transform}/>\n' for i in range(2, object_id))
                           + "</build>\n</model>\n").encode())
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the 3MF file ({exc.strerror or exc})") from None
+        raise write_error(path, "3MF file", exc) from exc
     return {"file": path.name, "bytes": path.stat().st_size, "objects": object_id - 2, "triangles": n_tri,
             "origin_mm": origin.tolist(), "seconds": time.perf_counter() - t0}
 

@@ -13,6 +13,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from optimize.atomic import atomic_open
+from optimize.errors import writing
 
 from .totals import client_totals
 
@@ -126,7 +127,7 @@ def build_report(run, pictures: dict[str, str], own_files: Mapping[str, Mapping]
 
 def write_report_json(report: dict[str, Any], path: str | Path) -> Path:
     """Write ``report`` as strict JSON (no NaN), atomically."""
-    text = json.dumps(report, indent=2, allow_nan=False)
-    with atomic_open(path) as fh:
-        fh.write(text + "\n")
+    text = json.dumps(report, indent=2, allow_nan=False) + "\n"
+    with writing(path, "report", needed=len(text.encode())), atomic_open(path) as fh:
+        fh.write(text)
     return Path(path)

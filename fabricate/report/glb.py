@@ -18,6 +18,7 @@ import numpy as np
 
 from optimize import jsontext
 from optimize.atomic import atomic_path
+from optimize.errors import writing
 
 GLB_MAGIC = 0x46546C67  # b"glTF"
 CHUNK_JSON = 0x4E4F534A
@@ -122,7 +123,7 @@ def glb_bytes(meshes: list[GlbMesh], *, mm_to_m: bool = True, z_up: bool = True,
 def write_glb(path: str | Path, meshes: list[GlbMesh], **kwargs) -> dict:
     """Write ``meshes`` to ``path`` atomically; return facts for the report."""
     data = glb_bytes(meshes, **kwargs)
-    with atomic_path(path) as tmp:
+    with writing(path, "glTF model", needed=len(data)), atomic_path(path) as tmp:
         Path(tmp).write_bytes(data)
     return {"file": Path(path).name, "bytes": len(data), "meshes": len(meshes)}
 

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from optimize.atomic import atomic_open, atomic_path
+from optimize.errors import writing
 
 from .totals import kg, totals_lines
 
@@ -61,11 +62,14 @@ def copy_viewer(out_dir: Path, glb: bytes) -> list[str]:
         src = ASSETS / name
         if not src.is_file():
             raise FileNotFoundError(f"{src}: the bundled 3D viewer is missing from the installation")
-        with atomic_path(assets / name) as tmp:
+        with writing(assets / name, "3D viewer script", needed=src.stat().st_size), \
+                atomic_path(assets / name) as tmp:
             shutil.copyfile(src, tmp)
         written.append(f"assets/{name}")
-    with atomic_open(out_dir / "model_glb.js") as fh:
-        fh.write("window.FAB_GLB = \"" + base64.b64encode(glb).decode("ascii") + "\";\n")
+    text = "window.FAB_GLB = \"" + base64.b64encode(glb).decode("ascii") + "\";\n"
+    with writing(out_dir / "model_glb.js", "3D view's model", needed=len(text)), \
+            atomic_open(out_dir / "model_glb.js") as fh:
+        fh.write(text)
     written.append("model_glb.js")
     return written
 
@@ -201,6 +205,7 @@ def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: boo
 
 
 def write_html(report: dict[str, Any], pictures: dict[str, str], path: str | Path, *, viewer: bool) -> Path:
-    with atomic_open(path, encoding="utf-8") as fh:
-        fh.write(render_html(report, pictures, viewer=viewer))
+    text = render_html(report, pictures, viewer=viewer)
+    with writing(path, "report", needed=len(text.encode())), atomic_open(path, encoding="utf-8") as fh:
+        fh.write(text)
     return Path(path)

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_path
+from optimize.errors import writing
 from optimize.mesh import Mesh
 
 DPI = 110
@@ -36,7 +37,7 @@ def _figure(size=(7.0, 5.5)):
 
 def _save(fig, path: str | Path) -> Path:
     path = Path(path)
-    with atomic_path(path) as tmp:
+    with writing(path, "picture"), atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=DPI, bbox_inches="tight")
     return path
 

@@ -8,6 +8,7 @@ import numpy as np
 
 from optimize.mesh import measures as M
 from optimize.atomic import atomic_open
+from optimize.errors import writing
 
 from .document import build_report, write_report_json
 from .glb import glb_bytes
@@ -94,7 +95,8 @@ def write_report(run) -> list[str]:
         scene = build_scene(mesh, M.planarity(mesh), tolerance=cfg.tolerances.planarity,
                             structure=run.offset.structure, parts=run.parts.parts)
         glb = glb_bytes(scene, generator=f"conical-fab report of {cfg.name}")
-        (out / "model.glb").write_bytes(glb)  # the folder itself is renamed into place atomically
+        with writing(out / "model.glb", "3D view's model", needed=len(glb)):
+            (out / "model.glb").write_bytes(glb)  # the folder itself is renamed into place atomically
         own["model.glb"] = {"what": "the 3D view's model (glTF binary, metres, y up)", "meshes": len(scene)}
         written += ["model.glb"] + copy_viewer(out, glb)
     outcome = run.outcome
@@ -102,7 +104,7 @@ def write_report(run) -> list[str]:
     if marker:
         why = ("do not meet the tolerances (see report.json, measures)" if outcome.status == "tolerance_not_reached"
                else "failed the output check (see report.json, check)")
-        with atomic_open(out / marker) as fh:
+        with writing(out / marker, "marker"), atomic_open(out / marker) as fh:
             fh.write(f"{cfg.name}: {outcome.message}\nThe results in this folder were written but {why}; "
                      f"status {outcome.status!r}, exit code {outcome.exit_code}.\n")
         written.append(marker)
