@@ -253,9 +253,11 @@ def test_too_deep_beams_are_told_to_reduce_beam_depth(tmp_path, capsys):
     path.write_text("input: {shape: {name: dome, params: {radius: 6000, rise: 2500, meridians: 12, rings: 4}}}\n"
                     "optimize: {target: none}\nparts: {beam_depth: 6000}\n"
                     "outputs: {step: false, stl: false, 3mf: false, pictures: false, html: false}\n")
-    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 2
+    # no part can be built from the mesh: the mesh, layers and report are written, marked, exit 3 (#30)
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "-q"]) == 3
     err = capsys.readouterr().err
     assert "reduce parts.beam_depth" in err and "reduce parts.beam_width" not in err, err
+    assert (tmp_path / "out" / "deep" / "mesh.obj").is_file()
 
 
 def test_memory_is_capped_in_a_child_for_the_alias_bomb(tmp_path):

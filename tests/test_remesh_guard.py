@@ -115,5 +115,5 @@ def test_run_refuses_a_tiny_input_edge_length(tmp_path, roof, capsys):
     code = main(["run", str(cfg), "--out", str(tmp_path / "out"), "-q"])
     err = capsys.readouterr().err
     assert code == 2, err
-    assert "edge_length 1e-07" in err and "1.29e+15 faces" in err and "at least 0.00254" in err, err
+    assert "input.edge_length 1e-07 m makes" in err and "1.29e+15 faces" in err and "at least 0.00254 m" in err, err
     assert not (tmp_path / "out" / "tiny").exists()

@@ -89,10 +89,11 @@ def test_a_mesh_scaled_beyond_any_building_is_not_blamed_on_narrow_faces(tmp_pat
     code = main(["run", str(cfg), "--out", str(tmp_path / "out"), "-q"])
     cap = capsys.readouterr()
     text = cap.out + cap.err
-    assert code != 0
+    assert code == 2  # refused at the input, before optimizing (it ended 3 after the CAD stage failed)
     assert "narrow" not in text, text
-    assert "coordinates up to 2.16e+18 mm: float64 holds them only to 256 mm" in text, text
-    assert "expected |x| < 4.5e+12 mm" in text
+    assert "big.obj: coordinates up to 4.09e+18 mm: float64 holds them only to 512 mm" in text, text
+    assert "expected |x| < 4.5e+12 mm" in text and "is the unit right?" in text
+    assert not (tmp_path / "out" / "big").exists()
 
 
 def _flat_grid_with(vertex: int, position) -> Mesh:

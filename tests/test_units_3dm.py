@@ -134,3 +134,16 @@ def test_remesh_reads_the_files_unit_and_writes_in_it(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "read in m" in captured.err and "(written in m)" in captured.out and "target 500 mm" in captured.out
     assert read_mesh(out).n_faces < 100  # 0.5 m, not 0.5 mm
+
+
+def test_fabricate_optimize_reads_a_3dm_in_its_own_unit_and_writes_it_back_in_it(roof_m, tmp_path, capsys):
+    """#30 item 6: ``fabricate optimize`` took a .3dm in metres as millimetres (a 16 mm dome)."""
+    report = tmp_path / "rep.json"
+    code = main(["optimize", str(roof_m), "-o", str(tmp_path / "out.obj"), "--target", "pq", "--report", str(report)])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "note:" in err and "Meters" in err
+    rep = json.loads(report.read_text())
+    assert rep["units"] == "m"
+    written = read_mesh(tmp_path / "out.obj")
+    assert np.abs(written.V - _dome_m().V).max() < 0.05 * _dome_m().bbox_diagonal()  # metres in, metres out

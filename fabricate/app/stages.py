@@ -53,9 +53,10 @@ def stage_input(cfg) -> InputRecord:
         plan.update(source=str(path), units=cfg.units, levels=2 if kind == "control" else 0)
         factor = cfg.mm_per_unit
         if kind == "surface":
-            from optimize.remesh.quads import remesh
+            from optimize.remesh.quads import check_remesh_size, remesh
 
             surface = mesh  # the optimizer's reference: the user's surface, not the quads
+            check_remesh_size(mesh, inp.edge_length, key="input.edge_length", unit=cfg.units)
             mesh, rep = remesh(mesh, inp.edge_length, radius=inp.radius, side=inp.side,
                                irregular=inp.irregular or "faces", with_report=True)
             plan["remesh"] = _plain(dict(rep.as_dict(), faces=mesh.n_faces, vertices=mesh.n_vertices))

@@ -59,7 +59,7 @@ def register(sub) -> None:
     p.add_argument("--report", metavar="JSON", help="write the run report (defects, history, timings)")
     p.add_argument("--progress", choices=("auto", "on", "off"), default="auto",
                    help="a progress line per iteration on stderr (auto: when stderr is a terminal)")
-    add_units(p, "the mesh files (MESH, --reference; OUT is written in the same unit)")
+    add_units(p, "the mesh files (MESH, --reference; OUT is written in the same unit)", default=None)
     p.set_defaults(handler=run)
 
 
@@ -71,7 +71,7 @@ def run(args) -> int:
     from optimize.result import TARGET_MEASURES
 
     from ..quads import CLI_HINT, require_quads
-    from .units import read_mm, to_file_units
+    from .units import read_mm, resolve_units, to_file_units
 
     if args.fix not in ("boundary", "corners", "none"):
         raise ConfigError(f"--fix: {args.fix!r}, expected boundary, corners or none")
@@ -80,6 +80,7 @@ def run(args) -> int:
         if not args.tol > 0:
             raise ConfigError(f"--tol: {args.tol!r}, expected a positive number")
         tol = tol.replace(planarity=args.tol, conical=args.tol, circular=args.tol)
+    args.units = resolve_units(args.mesh, args.units)  # --units, else a .3dm file's model unit, else mm
     mesh = read_mm(args.mesh, args.units)
     check_range(mesh, str(args.mesh))
     require_quads(mesh, str(args.mesh), hint=CLI_HINT)
