@@ -18,19 +18,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cad_fixtures import dome_parts
+from cad_fixtures import dome_mesh, dome_parts
 
 import fabricate.export as export
 from fabricate.app.batch import write_csv
 from fabricate.app.cli.exits import classify
 from fabricate.app.pipeline import RunSummary
 from fabricate.app.stages import _write_failed
+from fabricate.offset.files import write_axes_obj, write_json
 from fabricate.report import html
 from fabricate.report.document import write_report_json
 from fabricate.report.glb import GlbMesh, write_glb
 from fabricate.report.pictures import picture_history
 from optimize import atomic
 from optimize.errors import ExportError, write_error
+from optimize.mesh.io import write_mesh
 
 LIMIT = 512
 """Bytes a file may grow to under :func:`file_size_limit` (every file below is bigger)."""
@@ -65,6 +67,16 @@ def _html(path):
         return html.write_html({}, {}, path, viewer=False)
 
 
+def _structure_columns(parts, path):
+    """The structure's columns added to a bom.csv written before (a check of no beams: they stay empty)."""
+    from types import SimpleNamespace
+
+    from fabricate.structure.outputs import add_bom_columns
+
+    check = SimpleNamespace(results=SimpleNamespace(uls=[]), frame=SimpleNamespace(sections=[], ids=[], section_of=[]))
+    return add_bom_columns(path, check)
+
+
 def _csv(path):
     return write_csv([RunSummary(f"job{k}", "ok", 0, message="fine " * 10) for k in range(20)], path)
 
@@ -92,6 +104,11 @@ WRITERS = {  # name: writer of (parts, path)
     "history.png": lambda p, path: picture_history([], path, tolerances={}, title="history"),
     "viewer": lambda p, path: html.copy_viewer(path, b"glb" * 400),
     "batch.csv": lambda p, path: _csv(path),
+    "mesh.obj": lambda p, path: write_mesh(path, dome_mesh(8, 4)),
+    "mesh.ply": lambda p, path: write_mesh(path, dome_mesh(8, 4)),
+    "offset_report.json": lambda p, path: write_json(path, {"notes": ["a note"] * 100}),
+    "axes.obj": lambda p, path: write_axes_obj(path, p.mesh.V, p.mesh.V + 1.0),
+    "structure bom.csv": lambda p, path: _structure_columns(p, path),
 }
 
 
@@ -105,12 +122,16 @@ def test_a_refused_write_is_one_line_naming_the_file_and_exit_4(name, parts, tmp
     ok = tmp_path / "ok" / name
     if name == "viewer":
         ok.mkdir(parents=True)
+    if name == "structure bom.csv":  # the file it rewrites, written without a limit
+        export.write_bom(parts, ok)
     write(parts, ok)
     assert min(_sizes(ok)) > LIMIT  # each file it writes is longer than the limit
     target = tmp_path / "full" / name
     target.parent.mkdir()
     if name == "viewer":
         target.mkdir()
+    if name == "structure bom.csv":
+        export.write_bom(parts, target)
     with file_size_limit(LIMIT), pytest.raises(ExportError) as info:
         write(parts, target)
     text = str(info.value)

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_open
+from optimize.errors import writing
 from optimize.mesh.io import write_mesh
 
 from .focal import focal_meshes, spherical_image, spherical_image_defect
@@ -27,7 +28,7 @@ def layer_filename(text: str) -> str:
 
 def write_json(path: Path, data) -> None:
     """Write strict JSON (no NaN) atomically."""
-    with atomic_open(path, "w") as fh:
+    with writing(path, "JSON file"), atomic_open(path, "w") as fh:
         json.dump(data, fh, indent=1, allow_nan=False)
         fh.write("\n")
 
@@ -37,7 +38,7 @@ def write_axes_obj(path: Path, lower: np.ndarray, upper: np.ndarray) -> None:
     n = len(lower)
     P = np.empty((2 * n, 3))
     P[0::2], P[1::2] = lower, upper
-    with atomic_open(path, "w") as fh:
+    with writing(path, "node axes"), atomic_open(path, "w") as fh:
         fh.write(f"# {n} node axes: line i+1 is the axis of mesh vertex i (written by conical-fab)\n")
         fh.write("".join("v %.17g %.17g %.17g\n" % tuple(p) for p in P.tolist()))
         fh.write("".join(f"l {2 * i + 1} {2 * i + 2}\n" for i in range(n)))

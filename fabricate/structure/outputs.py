@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError
+from optimize.errors import ExportError, write_error
 
 BOM_COLUMNS = ("section", "N_kN", "M_strong_kNm", "M_weak_kNm", "utilization", "combination", "deflection_mm",
                "deflection_limit_mm")
@@ -72,7 +72,7 @@ def add_bom_columns(path, check) -> dict:
                 filled += extra is not None
                 w.writerow(row + list(extra or ("",) * len(BOM_COLUMNS)))
     except OSError as exc:
-        raise ExportError(f"{path}: cannot add the structure columns ({exc.strerror or exc})") from None
+        raise write_error(path, "structure columns", exc) from exc
     return {"structure_columns": list(BOM_COLUMNS), "structure_rows": filled}
 
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ...atomic import atomic_open
-from ...errors import ExportError, MeshError
+from ...errors import MeshError, write_error
 from ..core import Mesh
 from .common import BOM, Parsed, check_file, decode, pad, read_bytes, where
 from .obj import format_obj, parse_obj
@@ -164,4 +164,4 @@ def write_mesh(path: str | os.PathLike, mesh: Mesh, *, fmt: str | None = None,
         with atomic_open(path, "wb") as fh:
             fh.write(payload)
     except OSError as exc:
-        raise ExportError(f"{path}: cannot write the .{kind} file ({exc.strerror or exc})") from None
+        raise write_error(path, f".{kind} file", exc, needed=len(payload)) from exc
