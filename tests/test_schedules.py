@@ -138,3 +138,43 @@ def test_the_quickstart_hubs_are_in_the_steel_cut_list_as_chs_and_caps(tmp_path)
     w = facts["weight_kg"]
     assert w["total"] == pytest.approx(steel, rel=1e-6) and w["hubs"] > 0 and w["beams"] > w["hubs"]
     assert w["total"] == pytest.approx(w["beams"] + w["hubs"], abs=1e-3)
+
+
+def test_the_glass_blank_holds_every_ply(tmp_path):
+    """Issue 36: the unit's blank was its largest ply's (by area); on a flipped insulated dome the other
+    plies are wider or taller than it by up to 0.58 mm, so a blank cut to the schedule was short."""
+    from cad_fixtures import dome_structure
+
+    glass = {"type": "insulated", "outer": {"type": "monolithic", "thickness_mm": 10}, "cavity_mm": 16,
+             "inner": {"type": "laminated", "plies_mm": [6, 6], "interlayer_mm": 1.52}, "edge_seal_mm": 14}
+    parts = build_parts(dome_structure(n_around=5, k=2, flip=True), PartSpec(glass=glass, edge="auto"))
+    write_glass_schedule(parts, tmp_path / "glass.csv")
+    rows = {r["id"]: r for r in _rows(tmp_path / "glass.csv")}
+    short = 0
+    for g in parts.of_kind("panel"):
+        if g.material:
+            continue
+        for pid, (w, h) in zip(g.ids, g.rect):
+            r = rows[pid.split(".")[0]]
+            assert float(r["blank_w_mm"]) >= float(r["blank_h_mm"])
+            short += float(r["blank_w_mm"]) < w - 0.05 or float(r["blank_h_mm"]) < h - 0.05
+    assert short == 0
+
+
+def test_every_schedule_names_the_type_of_its_parts(parts, files):
+    """Issue 37: a type column in every schedule; the 6-fold dome has one glass
+    shape per ring of faces, one node type per ring of vertices, one beam type per ring of edges."""
+    mesh = parts.mesh
+    n_around = 6
+    glass = {r["id"]: r["type"] for r in files["glass"]}
+    assert len(set(glass.values())) == mesh.n_faces // n_around
+    nodes = {r["id"]: r["type"] for r in files["nodes"]}
+    assert len(set(nodes.values())) == mesh.n_vertices // n_around
+    beams = {r["id"]: r["type"] for r in files["steel"] if r["member"] in ("", "beam")}
+    assert len(set(beams.values())) == len(mesh.topology.edges) // n_around
+    # congruent by a rotation about the dome's axis: faces of one ring are one type
+    ring = {}
+    for r in files["glass"]:
+        c = mesh.V[mesh.F[int(r["face"])]].mean(axis=0)
+        ring.setdefault(round(float(c[2])), set()).add(r["type"])
+    assert all(len(t) == 1 for t in ring.values())

@@ -301,3 +301,16 @@ def unit_sums(parts, values) -> np.ndarray:
     for g in parts.of_kind("panel"):  # a few groups (layers x face sizes)
         np.add.at(out, g.element, values(g))
     return out
+
+
+def unit_blank(parts) -> np.ndarray:
+    """(n_faces, 2) per mesh face the blank of its glass unit: width >= height of a rectangle that holds
+    every glass ply of the unit, each in its own stock orientation (``PartGroup.rect``): the largest
+    width and the largest height over the plies (the ply of the largest area may be the narrower one:
+    a stepped or bevelled unit's plies differ in both directions)."""
+    n = 1 + max((int(g.element.max()) for g in parts.of_kind("panel") if len(g)), default=-1)
+    out = np.zeros((n, 2))
+    for g in parts.of_kind("panel"):  # a few groups (plies x face sizes)
+        if not g.material:
+            np.maximum.at(out, g.element, g.rect)
+    return out

@@ -4,7 +4,8 @@
   build-up): the build-up (``10/16/88.4`` and spelled out), its total
   thickness (cavity included), its solids (``P0001.1 ...``: plies and
   interlayers, outside in), the spacer setback of an insulated unit (edge
-  seal width), area, the stock blank (of its largest ply), per edge (in the order of the bearing face, counter-clockwise
+  seal width), area, the stock blank (the largest width and height over its
+  plies: it holds every ply), per edge (in the order of the bearing face, counter-clockwise
   seen from the beams) its length, the corner angle at its start, its bevel
   (degrees from square, positive when the face away from the beams is the
   smaller one), the beam under it and the neighbouring panel across it;
@@ -27,6 +28,12 @@
   length = hub height, weight of its pieces) and, for a tube hub, its tube
   (``N0001.1``: ``CHS 160 x 8``, length = the tube cut between the caps) and its
   two caps (``PL12``, their blank): :func:`hub_rows`.
+- every schedule's ``type`` column names the part's type, the same for parts
+  that are congruent within 1 mm (:mod:`fabricate.cad.congruence`): ``G007``
+  a glass shape (``G007A`` / ``G007B`` its two mirror hands where both are
+  made), ``BT012`` a beam type (its plates and its rows), ``NT003`` a node type
+  (the hub rows of the cut list too): :func:`glass_types`, :func:`beam_types`,
+  :func:`node_types`.
 - ``node_schedule.csv``: one row per node: position, axis direction (glass
   toward beams), the incoming beams with their angle around the axis
   (azimuth, from the first one, counter-clockwise seen along the axis) and
@@ -47,13 +54,13 @@ from optimize.errors import ExportError, write_error
 from fabricate.cad.geometry import polygon_area_2d
 from fabricate.cad.limits import corner_angles_deg, edge_lengths
 
-GLASS_COLUMNS = ("id", "face", "build_up", "thickness_mm", "solids", "spacer_setback_mm", "area_m2", "blank_w_mm",
+GLASS_COLUMNS = ("id", "face", "type", "build_up", "thickness_mm", "solids", "spacer_setback_mm", "area_m2", "blank_w_mm",
                  "blank_h_mm", "edge_lengths_mm", "corner_angles_deg", "edge_bevels_deg", "beams", "neighbours",
                  "weight_kg", "warp_mm", "planarity", "flags")
-STEEL_COLUMNS = ("id", "edge", "section", "member", "plates", "grade", "length_mm", "blank_w_mm", "blank_h_mm",
+STEEL_COLUMNS = ("id", "edge", "type", "section", "member", "plates", "grade", "length_mm", "blank_w_mm", "blank_h_mm",
                  "end_a_mitre_deg", "end_a_bevel_deg", "end_b_mitre_deg", "end_b_bevel_deg", "top_bevel_deg",
                  "dihedral_deg", "weight_kg", "panels", "nodes", "flags")
-NODE_COLUMNS = ("id", "vertex", "x_mm", "y_mm", "z_mm", "axis_x", "axis_y", "axis_z", "valence", "beams",
+NODE_COLUMNS = ("id", "vertex", "type", "x_mm", "y_mm", "z_mm", "axis_x", "axis_y", "axis_z", "valence", "beams",
                 "azimuth_deg", "elevation_deg", "hub", "hub_diameter_mm", "hub_wall_mm", "hub_height_mm")
 
 
@@ -126,7 +133,7 @@ def write_glass_schedule(parts, path) -> dict:
     """Write ``glass_schedule.csv`` (atomic).  Returns facts: ``file, bytes, rows, seconds``."""
     t0 = time.perf_counter()
     path = Path(path)
-    from fabricate.cad.glass import bearing_groups, unit_sums
+    from fabricate.cad.glass import bearing_groups, unit_blank, unit_sums
     from fabricate.cad.parts import unit_id
 
     flags: dict[str, list[str]] = {}
@@ -143,14 +150,9 @@ def write_glass_schedule(parts, path) -> dict:
     seal = f"{spec.glass.edge_seal_mm:g}" if spec.glass.type == "insulated" else ""
     mesh = parts.mesh
     weight_of = unit_sums(parts, lambda g: g.volume_mm3 * spec.group_density(g) * 1e-9)
-    glass = [g for g in parts.of_kind("panel") if not g.material]
-    blank_area = unit_sums(parts, lambda g: np.zeros(len(g)))
-    blank = np.zeros((len(blank_area), 2))
-    for g in glass:  # the unit's blank: its largest ply's
-        a = g.rect.prod(axis=1)
-        bigger = a > blank_area[g.element]
-        blank_area[g.element[bigger]] = a[bigger]
-        blank[g.element[bigger]] = g.rect[bigger]
+    blank = unit_blank(parts)
+    ids, names, _ = glass_types(parts)
+    types = dict(zip(ids, names))
 
     def rows():
         for g in bearing_groups(parts):
@@ -167,7 +169,7 @@ def write_glass_schedule(parts, path) -> dict:
                 beams = [beams[s] for s in side.tolist()]
                 across = [next((p for p in beam_panels.get(b, []) if p != pid), "-") for b in beams]
                 members = " ".join(f"{pid}.{k + 1}" for k in range(len(solids))) if len(solids) > 1 else pid
-                yield (pid, int(g.element[i]), build_up, f"{spec.glass.thickness_mm:.2f}", members, seal,
+                yield (pid, int(g.element[i]), types.get(pid, ""), build_up, f"{spec.glass.thickness_mm:.2f}", members, seal,
                        f"{area[i] * 1e-6:.4f}", f"{blank[g.element[i], 0]:.1f}", f"{blank[g.element[i], 1]:.1f}",
                        _num(L[i]), _num(A[i]), _num(bevel[i], "{:+.2f}"), " ".join(beams), " ".join(across),
                        f"{weight[i]:.1f}", f"{warp[i]:.3g}", f"{warp[i] / diag[i]:.2e}",
@@ -263,6 +265,8 @@ def write_steel_cut_list(parts, path) -> dict:
     plate = spec.beam.section == "plate"
     depth = abs(np.diff(parts.report.get("layers_mm", [0.0, spec.beam_depth]))[0])
     uf = unit_facts(parts) if parts.of_kind("beam") else None
+    ids, names, _ = beam_types(parts)
+    types = dict(zip(ids, names))
     by_edge: dict[int, list] = {}
     for g in parts.of_kind("beam"):
         a = beam_angles(g)
@@ -288,19 +292,19 @@ def write_steel_cut_list(parts, path) -> dict:
             unit_flags = sorted({f for p in plates for f in flags.get(p[2], [])} | set(flags.get(unit, [])))
             if plate:
                 g, i, pid, a, w, L = plates[0]
-                yield (pid, e, f"plate {spec.beam_width:g} x {g.rect[i, 1]:.0f}", "",
+                yield (pid, e, types.get(pid, ""), f"plate {spec.beam_width:g} x {g.rect[i, 1]:.0f}", "",
                        f"{len(plates)}", spec.steel_grade, f"{L:.1f}", f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}",
                        *angles(a, i), dihedral, f"{w:.2f}", " ".join(panels), nodes, "; ".join(unit_flags))
                 continue
             cuts = angles(a0, i0, uf["mitre"][e])[:4] + ("",)   # end cuts of the first plate; ridges: per plate
-            yield (unit, e, section_text(spec, depth), "beam", f"{len(plates)}", spec.steel_grade,
+            yield (unit, e, types.get(unit, ""), section_text(spec, depth), "beam", f"{len(plates)}", spec.steel_grade,
                    f"{uf['length'][e]:.1f}", "", "", *cuts, dihedral,
                    f"{uf['weight_kg'][e]:.2f}", " ".join(panels), nodes, "; ".join(unit_flags))
             for g, i, pid, a, w, L in plates:
-                yield (pid, e, f"PL{g.thickness_mm[i]:g}", g.member, "", spec.steel_grade, f"{L:.1f}",
+                yield (pid, e, types.get(unit, ""), f"PL{g.thickness_mm[i]:g}", g.member, "", spec.steel_grade, f"{L:.1f}",
                        f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}", *angles(a, i), "", f"{w:.2f}",
                        " ".join(unit_id(n) for n in g.neighbours[i] if n[0] == "P"), nodes, "; ".join(flags.get(pid, [])))
-    hubs, hub_weight = hub_rows(parts, flags)
+    hubs, hub_weight = hub_rows(parts, flags, dict(zip(*node_types(parts)[:2])))
 
     def every_row():
         yield from rows()
@@ -327,7 +331,7 @@ def hub_section(spec) -> tuple[str, str]:
     return f"solid hub RD {d:g} ({k}-gon)", f"RD {d:g}"
 
 
-def hub_rows(parts, flags: dict) -> tuple[list[tuple], float]:
+def hub_rows(parts, flags: dict, types: dict | None = None) -> tuple[list[tuple], float]:
     """The steel cut list's rows of the hubs and their total weight (kg).
 
     Per hub: one row (``N0001``, member ``hub``: the hub section, length = hub height between its outer
@@ -353,18 +357,20 @@ def hub_rows(parts, flags: dict) -> tuple[list[tuple], float]:
         for i, pid in enumerate(g.ids):  # the pieces, grouped by hub
             pieces.setdefault(int(g.element[i]), []).append((g, i, pid, w[i]))
     blank = ("", "", "", "", "", "", "", "")
+    types = types or {}
     out = []
     for v in sorted(pieces):
         own = pieces[v]
         uid = unit_id(own[0][2])
+        kind = types.get(uid, "")
         unit_flags = sorted({f for p in own for f in flags.get(p[2], [])} | set(flags.get(uid, [])))  # caps: by hub
-        out.append((uid, "", hub_text, "hub", f"{len(own)}", spec.steel_grade, f"{height[v]:.1f}", *blank,
+        out.append((uid, "", kind, hub_text, "hub", f"{len(own)}", spec.steel_grade, f"{height[v]:.1f}", *blank,
                     f"{weight[v]:.2f}", "", uid, "; ".join(unit_flags)))
         if len(own) == 1:
             continue
         for g, i, pid, w in own:
             cap = g.member != "tube"
-            out.append((pid, "", f"PL{g.thickness_mm[i]:g}" if cap else piece, g.member, "", spec.steel_grade,
+            out.append((pid, "", kind, f"PL{g.thickness_mm[i]:g}" if cap else piece, g.member, "", spec.steel_grade,
                         f"{g.length_mm[i]:.1f}", f"{g.rect[i, 0]:.1f}" if cap else "",
                         f"{g.rect[i, 1]:.1f}" if cap else "", "", "", "", "", "", "", f"{w:.2f}", "", uid,
                         "; ".join(flags.get(pid, []))))
@@ -436,15 +442,109 @@ def write_node_schedule(parts, path) -> dict:
     stops = np.r_[starts[1:], len(v)]
     nid = part_ids("node", np.arange(mesh.n_vertices))
     hub, height, diameter, wall = hub_columns(parts, mesh.n_vertices)
+    types = dict(zip(*node_types(parts)[:2]))
 
     def rows():
         for s, e in zip(starts.tolist(), stops.tolist()):  # one row per node
             i = int(v[s])
             x = mesh.V[i]
             a = axis[s]
-            yield (nid[i], i, f"{x[0]:.1f}", f"{x[1]:.1f}", f"{x[2]:.1f}", f"{a[0]:.6f}", f"{a[1]:.6f}",
+            yield (nid[i], i, types.get(nid[i], ""), f"{x[0]:.1f}", f"{x[1]:.1f}", f"{x[2]:.1f}", f"{a[0]:.6f}", f"{a[1]:.6f}",
                    f"{a[2]:.6f}", e - s, " ".join(beam[s:e]), _num(az[s:e]), _num(elev[s:e]), hub[i],
                    f"{diameter:g}" if diameter else "", f"{wall[i]:g}" if wall[i] else "",
                    f"{height[i]:.1f}" if np.isfinite(height[i]) else "")
     n = _write(path, NODE_COLUMNS, rows())
     return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "seconds": time.perf_counter() - t0}
+
+
+# -- types: how many different parts (fabricate.cad.congruence) ----------------------------------------
+TYPE_PREFIX = {"glass": "G", "beam": "BT", "node": "NT"}
+"""Type names: ``G007`` (a glass shape; ``G007A`` / ``G007B`` its two hands), ``BT012`` (a beam type),
+``NT003`` (a node type): apart from the part ids ``P``, ``B``, ``N``."""
+
+
+def lever_mm(parts) -> float:
+    """The length over which an angle becomes a distance for the type tolerance: the beam depth (an end
+    cut or a beam direction off by ``a`` rad misses by ``depth * a`` mm across the section)."""
+    layers = parts.report.get("layers_mm") if isinstance(parts.report, dict) else None
+    depth = abs(float(np.diff(layers)[0])) if layers and len(layers) > 1 else float(parts.spec.beam_depth)
+    return depth if depth > 0 else float(parts.spec.beam_depth)
+
+
+def glass_types(parts, tol: float | None = None) -> tuple[list[str], list[str], "object"]:
+    """``(unit ids, type names, Classes)`` of every glass unit: one type per shape
+    (:func:`fabricate.cad.congruence.glass_classes`), ``A`` / ``B`` for the hands of a shape made in both."""
+    from fabricate.cad.congruence import TOLERANCE_MM, glass_classes
+
+    ids, c = glass_classes(parts, TOLERANCE_MM if tol is None else tol)
+    return ids, c.names(TYPE_PREFIX["glass"]), c
+
+
+def node_types(parts, tol: float | None = None) -> tuple[list[str], list[str], "object"]:
+    """``(node ids, type names, Classes)``: two nodes are of one type when their beam directions, in the
+    frame of the node axis, agree within ``tol`` mm at the beam depth (:func:`lever_mm`) for some rotation
+    about the axis and relabelling of the beams (same valence); mirror images are the other hand."""
+    from fabricate.cad.beams import _node_frames
+    from fabricate.cad.congruence import TOLERANCE_MM, empty, merge, ring_classes
+    from fabricate.cad.parts import part_ids
+
+    tol = TOLERANCE_MM if tol is None else tol
+    if parts.mesh is None or not parts.of_kind("beam"):
+        return [], [], empty(tol)
+    nt = node_table(parts)
+    v = nt["vertex"]
+    first = np.searchsorted(v, v, side="left")
+    axis = nt["axis"][first]
+    fx, fy = _node_frames(axis)
+    d = nt["direction"] * lever_mm(parts)
+    x, y, z = (np.einsum("pi,pi->p", d, f) for f in (fx, fy, axis))
+    order = np.lexsort((np.arctan2(y, x), v))                                  # by node, then around its axis
+    v, x, y, z = v[order], x[order], y[order], z[order]
+    starts = np.flatnonzero(np.r_[True, v[1:] != v[:-1]])
+    valence = np.diff(np.r_[starts, len(v)])
+    nodes = v[starts]
+    subsets = []
+    for k in np.unique(valence).tolist():  # one batch per valence
+        sel = np.flatnonzero(valence == k)
+        at = starts[sel][:, None] + np.arange(k)
+        X = np.stack([x[at], y[at]], axis=-1)[:, None]                         # (q, 1, k, 2)
+        subsets.append((sel, ring_classes(X, tol, F=z[at][:, None, :, None], translate=False)))
+    c = merge(subsets, len(nodes))
+    return list(part_ids("node", nodes)), c.names(TYPE_PREFIX["node"]), c
+
+
+def beam_descriptors(parts) -> tuple[list[str], np.ndarray]:
+    """``(beam ids, D (e, 4, 9))`` mm: each beam's length, end mitres, end bevels ``[+, -]`` and ridge
+    bevels (angles as ``depth * rad``, :func:`lever_mm`), spelt as made (0), turned end for end (1: a
+    section symmetric about its web plane is the same piece), and as its mirror image (2, 3)."""
+    from fabricate.cad.parts import unit_id
+
+    gs = beam_units(parts)
+    if not gs:
+        return [], np.zeros((0, 4, 9))
+    h = lever_mm(parts)
+    ids, rows = [], []
+    for g in gs:  # a few groups (sections x members)
+        a = beam_angles(g)
+        L = np.linalg.norm(g.bevel_ref[:, 1] - g.bevel_ref[:, 0], axis=1)
+        m, e, t = (np.radians(a[key]) * h for key in ("mitre", "end_bevel", "top_bevel"))
+        made = np.column_stack([L, m[:, 0], m[:, 1], e[:, 0, 0], e[:, 0, 1], e[:, 1, 0], e[:, 1, 1], t[:, 0], t[:, 1]])
+        turned = np.column_stack([L, m[:, 1], m[:, 0], e[:, 1, 1], e[:, 1, 0], e[:, 0, 1], e[:, 0, 0], t[:, 1], t[:, 0]])
+        mirror = np.column_stack([L, m[:, 0], m[:, 1], e[:, 0, 1], e[:, 0, 0], e[:, 1, 1], e[:, 1, 0], t[:, 1], t[:, 0]])
+        mirror_turned = np.column_stack([L, m[:, 1], m[:, 0], e[:, 1, 0], e[:, 1, 1], e[:, 0, 0], e[:, 0, 1],
+                                         t[:, 0], t[:, 1]])
+        rows.append(np.stack([made, turned, mirror, mirror_turned], axis=1))
+        ids += [unit_id(i) for i in g.ids]
+    return ids, np.nan_to_num(np.concatenate(rows))
+
+
+def beam_types(parts, tol: float | None = None) -> tuple[list[str], list[str], "object"]:
+    """``(beam ids, type names, Classes)``: two beams are of one type when length, end cuts and ridge
+    bevels (:func:`beam_descriptors`) agree within ``tol`` mm, either end first; the mirror image (the
+    bevels of the ``+`` and ``-`` sides swapped) is the other hand.  One section per run."""
+    from fabricate.cad.congruence import TOLERANCE_MM, vector_classes
+
+    tol = TOLERANCE_MM if tol is None else tol
+    ids, D = beam_descriptors(parts)
+    c = vector_classes(D, tol, spellings=2)
+    return ids, c.names(TYPE_PREFIX["beam"]), c

@@ -1,57 +1,52 @@
-"""The totals a client asks first: glass area, steel length and weight, distinct panel sizes.
+"""The totals a client asks first: glass area, steel length and weight, how many different parts.
 
 ``client_totals(parts)`` is JSON-ready (``report.json["totals"]``) and is
 shown at the top of report.html and in the console summary of ``fabricate
-run``.  Panel sizes: two panels are the same size when their flat outlines
-(:attr:`PartGroup.flat`, mm) are congruent within ``SIZE_TOL_MM`` (every
-corner-to-corner distance, for some cyclic relabelling of the corners;
-mirror images count as different sizes because laminated and coated glass
-has a side) and their thicknesses agree within the same tolerance.  Groups
-are the connected components of "congruent within the tolerance", so a chain
-of panels each within 1 mm of the next is one size.
+run``.  Different parts are congruence classes within :data:`SIZE_TOL_MM`
+(:mod:`fabricate.cad.congruence`): glass shapes (every ply's outline; a mirror
+image is the same shape's other hand, which a glass order lists as a position
+of its own because laminated and coated glass has a side), node types (beam
+directions in the node's frame) and beam types (length, end cuts, ridge
+bevels).  ``distinct_panel_sizes`` counts the glass order's positions (shapes
+and their hands), ``glass_shapes`` the shapes with mirror images as one.
 """
 from __future__ import annotations
 
 import numpy as np
 
-SIZE_TOL_MM = 1.0
-"""Outlines whose corner distances all agree within this are one panel size (a glass cutter's mm)."""
+from fabricate.cad.congruence import TOLERANCE_MM
 
-
-def _signatures(flat: np.ndarray, shift: int) -> np.ndarray:
-    """(p, k*k) corner-to-corner distances of the outlines ``flat (p, k, 2)`` relabelled by ``shift``,
-    with the signed double areas of the corner triangles (so a mirror image differs)."""
-    P = np.roll(flat, -shift, axis=1)
-    D = np.linalg.norm(P[:, :, None, :] - P[:, None, :, :], axis=3)
-    Q = np.roll(P, -1, axis=1) - P
-    R = np.roll(P, -2, axis=1) - P
-    turn = Q[..., 0] * R[..., 1] - Q[..., 1] * R[..., 0]          # (p, k): signed, mm^2
-    scale = np.maximum(np.linalg.norm(Q, axis=2), 1e-300)
-    return np.concatenate([D.reshape(len(P), -1), turn / scale], axis=1)
+SIZE_TOL_MM = TOLERANCE_MM
+"""Parts whose corners all match within this are one type (a glass cutter's mm)."""
 
 
 def distinct_sizes(flat: np.ndarray, thickness: np.ndarray, tol: float = SIZE_TOL_MM) -> np.ndarray:
-    """(p,) int size label of every outline ``flat (p, k, 2)`` (labels 0..s-1)."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
+    """(p,) int size label of every outline ``flat (p, k, 2)`` (labels 0..s-1): congruent within ``tol``
+    (:func:`fabricate.cad.congruence.ring_classes`), of equal thickness within ``tol``, mirror images apart."""
+    from fabricate.cad.congruence import ring_classes
 
+    flat = np.asarray(flat, dtype=float)
     p, k = flat.shape[:2]
     if p == 0:
         return np.zeros(0, dtype=np.int64)
-    base = np.concatenate([_signatures(flat, 0), thickness[:, None]], axis=1)
-    tree = cKDTree(base)
-    rows, cols = [np.arange(p)], [np.arange(p)]
-    for s in range(k):  # every relabelling of the corners against the unshifted ones
-        S = np.concatenate([_signatures(flat, s), thickness[:, None]], axis=1)
-        pairs = cKDTree(S).query_ball_tree(tree, r=tol, p=np.inf)
-        cnt = np.fromiter((len(x) for x in pairs), dtype=np.int64, count=p)
-        rows.append(np.repeat(np.arange(p), cnt))
-        cols.append(np.fromiter((j for x in pairs for j in x), dtype=np.int64, count=int(cnt.sum())))
-    r, c = np.concatenate(rows), np.concatenate(cols)
-    G = sp.coo_matrix((np.ones(len(r)), (r, c)), shape=(p, p))
-    _, labels = connected_components(G, directed=False)
-    return labels
+    F = np.broadcast_to(np.asarray(thickness, dtype=float)[:, None, None, None], (p, 1, k, 1))
+    c = ring_classes(flat[:, None], tol, F=F)
+    _, labels = np.unique(np.stack([c.label, c.hand], axis=1), axis=0, return_inverse=True)
+    return labels.ravel()
+
+
+def repetition(parts, tol: float = SIZE_TOL_MM) -> dict:
+    """How many different parts (JSON-ready, ``report.json["repetition"]``): per kind (``glass``,
+    ``nodes``, ``beams``) the parts, their types (mirror images as one), the types with mirror images
+    apart, the largest type, the largest deviation from a type's drawing (mm) and the tolerance."""
+    from fabricate.export.schedules import beam_types, glass_types, node_types
+
+    out = {"tolerance_mm": tol, "rule": "congruent within the tolerance at every corner (glass: every ply's "
+           "outline; nodes: beam directions at the beam depth in the node axis frame; beams: length, end cuts "
+           "and ridge bevels at the beam depth, either end first); mirror images are one type's two hands"}
+    for key, fn in (("glass", glass_types), ("nodes", node_types), ("beams", beam_types)):
+        out[key] = fn(parts, tol)[2].summary()
+    return out
 
 
 def client_totals(parts) -> dict | None:
@@ -62,16 +57,10 @@ def client_totals(parts) -> dict | None:
     from fabricate.cad.parts import unit_id
 
     panels = parts.of_kind("panel")
-    area = 0.0
-    sizes = 0
-    largest = 0
     units = bearing_groups(parts)          # one solid per glass unit: its ply on the beams
-    for g in units:  # one area per panel position (a ply of the same face is not more glass area)
-        area += float(np.sum(g.area_mm2))
-        labels = distinct_sizes(np.asarray(g.flat, dtype=float), np.asarray(g.thickness_mm, dtype=float))
-        if labels.size:
-            sizes += int(labels.max()) + 1
-            largest = max(largest, int(np.bincount(labels).max()))
+    area = sum(float(np.sum(g.area_mm2)) for g in units)  # a ply of the same face is not more glass area
+    rep = repetition(parts)
+    glass = rep["glass"]
     steel = [g for kind in ("beam", "node") for g in parts.of_kind(kind)]
     density = parts.spec.density("beam")
     steel_kg = sum(float(np.sum(g.volume_mm3)) for g in steel) * 1e-9 * density
@@ -81,10 +70,13 @@ def client_totals(parts) -> dict | None:
     length = sum(float(np.sum(g.length_mm)) for g in beam_units(parts))   # one length per beam, not per plate
     return {"glass_area_m2": area * 1e-6, "panels": sum(len(g) for g in units),
             "build_up": parts.spec.glass.short() if hasattr(parts.spec, "glass") else "",
-            "distinct_panel_sizes": sizes, "most_panels_of_one_size": largest,
+            "distinct_panel_sizes": glass["with_hands"], "most_panels_of_one_size": glass["most_of_one_type"],
+            "glass_shapes": glass["types"], "node_types": rep["nodes"]["types"],
+            "nodes": rep["nodes"]["parts"], "beam_types": rep["beams"]["types"],
             "size_tolerance_mm": SIZE_TOL_MM,
-            "size_rule": "congruent flat outlines (corner distances, mirror images differ) and equal "
-                         f"thickness, within {SIZE_TOL_MM:g} mm",
+            "size_rule": f"congruent within {SIZE_TOL_MM:g} mm at every corner of every ply; a size is a shape "
+                         "and hand (a mirror image is another size, and the same shape)",
+            "repetition": rep,
             "glass_mass_kg": glass_kg, "beams": len({unit_id(i) for g in parts.of_kind("beam") for i in g.ids}),
             "steel_length_m": length * 1e-3, "steel_mass_kg": steel_kg, "steel_mass_t": steel_kg * 1e-3,
             "steel_includes": "beams and nodes"}
@@ -102,8 +94,13 @@ def totals_lines(t: dict | None) -> list[str]:
     if not t:
         return []
     bu = f" {t['build_up']} mm" if t.get("build_up") else ""
+    shapes = t.get("glass_shapes")
+    shapes = f"{shapes:,} shapes, mirror images as one; " if shapes is not None else ""
+    beams = f"{t['beams']:,}" + (f" of {t['beam_types']:,} types" if t.get("beam_types") is not None else "")
+    nodes = (f", {t['nodes']:,} nodes of {t['node_types']:,} types" if t.get("node_types") is not None
+             and t.get("nodes") else "")
     return [f"glass{bu} {t['glass_area_m2']:,.1f} m2 in {t['panels']:,} panels of {t['distinct_panel_sizes']:,} "
-            f"distinct sizes (within {t['size_tolerance_mm']:g} mm; at most {t['most_panels_of_one_size']:,} "
-            f"of one size), {kg(t['glass_mass_kg'])}",
-            f"steel {t['steel_length_m']:,.1f} m of beams ({t['beams']:,}), {kg(t['steel_mass_kg'])} = "
+            f"distinct sizes ({shapes}within {t['size_tolerance_mm']:g} mm; at most "
+            f"{t['most_panels_of_one_size']:,} of one size), {kg(t['glass_mass_kg'])}",
+            f"steel {t['steel_length_m']:,.1f} m of beams ({beams}{nodes}), {kg(t['steel_mass_kg'])} = "
             f"{t['steel_mass_t']:,.2f} t with the nodes"]

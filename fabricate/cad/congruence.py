@@ -1,0 +1,312 @@
+"""Which parts are the same part: congruence classes within a tolerance, mirror images as the other hand.
+
+A glass supplier prices and racks by *position* (one shape, a quantity), a
+steel shop saws and drills by *type*: what counts is how many different parts
+there are.  Two parts are of one class when one can be laid on the other by a
+rigid motion (and a relabelling of its corners) so that every corner lies
+within ``tol`` (mm) of its match; when it needs a reflection too, it is the
+class's other *hand* (a glass unit turned over puts its coating and its
+laminate on the wrong side; a node or a beam built as its mirror image does
+not fit).
+
+- :func:`ring_classes` classifies ``p`` sets of rings ``X (p, n, k, 2)`` (mm):
+  ``n`` polygons of ``k`` corners each, moved together (a glass unit: the
+  outline of each of its plies in one frame), relabelled together by a cyclic
+  shift of the corners; optional per-corner values ``F (p, n, k, c)`` (mm) that
+  travel with the corners and must agree within ``tol`` too (a node: the
+  height of each beam direction along the node axis, which a rotation about
+  the axis keeps); ``translate=False`` allows rotations about the origin only
+  (a node's beam directions).  The mirror image is the rings reflected in the
+  y axis with their corners in reverse order (still counter-clockwise).
+- :func:`vector_classes` classifies ``p`` descriptors given in each of their
+  equivalent spellings ``D (p, v, q)`` (mm): ``v`` spellings of one hand (a
+  beam read from either end), then as many of the other (its mirror image).
+- :func:`glass_unit_rings` gives the rings of every glass unit of a
+  :class:`fabricate.cad.parts.Parts` (every ply's cut outline and bearing line,
+  in the frame of the ply on the beams), :func:`glass_classes` their classes.
+
+The test is the best fit in the least-squares sense (2D Kabsch: the centroids
+laid on each other, the rotation ``atan2(sum a x b, sum a . b)``), for every
+cyclic shift and both hands, then the largest corner distance: a class never
+holds two parts further apart than that fit shows (it may split a pair the
+min-max fit would join, never join a pair it would split).  Classes are found
+by a leader rule, not by chaining: the first part not yet classified (in
+input order) opens a class and takes every later unclassified part within
+``tol`` of it, so every member lies within ``tol`` of its class's first part,
+whose drawing the class's order shows.  Candidates come from a k-d tree over
+invariants that move at most ``2 tol`` between congruent parts (sorted edge
+lengths and distances from the centroid, sorted per-corner values), so the
+work is linear in the parts for a roof of many shapes and for one of few; the
+Python loop runs once per class, the fits are array operations.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+TOLERANCE_MM = 1.0
+"""Default: parts whose corners all match within 1 mm are one class (a glass cutter's mm)."""
+
+HANDS = ("A", "B")
+"""Hand 0 (as the class's first part is drawn) and hand 1 (its mirror image)."""
+
+
+@dataclass(frozen=True)
+class Classes:
+    """Congruence classes of ``p`` parts.
+
+    label : (p,) int, class 0..c-1 numbered by their first member.
+    hand : (p,) int, 0 laid on the class's first member by a rigid motion, 1 only by its mirror image.
+    shift : (p,) int, how its corners are relabelled onto the first member's: corner ``j`` of the
+        first member matches corner ``(j + shift) % k`` of this one (of its mirror image for hand 1,
+        whose corners run in reverse: corner ``j`` of the mirror is corner ``-j % k``); for
+        :func:`vector_classes` the spelling of its hand that matched.
+    deviation : (p,) float, mm: largest corner distance from the first member after the fit.
+    first : (c,) int: each class's first member.
+    tol : the tolerance (mm).
+    """
+
+    label: np.ndarray
+    hand: np.ndarray
+    shift: np.ndarray
+    deviation: np.ndarray
+    first: np.ndarray
+    tol: float
+
+    def __len__(self) -> int:
+        return len(self.label)
+
+    @property
+    def count(self) -> int:
+        """Different parts, mirror images counted as one."""
+        return len(self.first)
+
+    @property
+    def handed(self) -> np.ndarray:
+        """(c,) bool: classes with members of both hands."""
+        both = np.zeros((self.count, 2), dtype=bool)
+        both[self.label, self.hand] = True
+        return both.all(axis=1)
+
+    @property
+    def positions(self) -> int:
+        """Different parts with mirror images apart (a glass order's positions)."""
+        return self.count + int(self.handed.sum())
+
+    @property
+    def largest(self) -> int:
+        """Members of the largest class (0 without parts)."""
+        return int(np.bincount(self.label).max()) if len(self.label) else 0
+
+    def names(self, prefix: str) -> list[str]:
+        """(p,) the type of every part: ``<prefix>007``, and ``<prefix>007A`` / ``B`` where the class has
+        both hands (3 digits at least)."""
+        width = max(3, len(str(self.count)))
+        handed = self.handed
+        return [f"{prefix}{c + 1:0{width}d}{HANDS[h] if handed[c] else ''}"
+                for c, h in zip(self.label.tolist(), self.hand.tolist())]
+
+    def summary(self) -> dict:
+        """JSON-ready counts."""
+        return {"parts": len(self), "types": self.count, "with_hands": self.positions,
+                "handed_types": int(self.handed.sum()), "most_of_one_type": self.largest,
+                "largest_deviation_mm": float(self.deviation.max()) if len(self) else 0.0, "tolerance_mm": self.tol}
+
+
+def empty(tol: float) -> Classes:
+    z = np.zeros(0, dtype=np.int64)
+    return Classes(z, z, z, np.zeros(0), z, float(tol))
+
+
+def merge(parts: list[tuple[np.ndarray, Classes]], p: int) -> Classes:
+    """One :class:`Classes` of ``p`` parts from classes of disjoint subsets ``(index (q,), classes)``
+    (parts that cannot match: other corner counts, valences), renumbered by first member."""
+    if not parts:
+        return empty(TOLERANCE_MM)
+    label = np.full(p, -1, dtype=np.int64)
+    hand = np.zeros(p, dtype=np.int64)
+    shift = np.zeros(p, dtype=np.int64)
+    dev = np.zeros(p)
+    firsts, base = [], 0
+    for index, c in parts:  # a few subsets (corner counts)
+        label[index] = c.label + base
+        hand[index], shift[index], dev[index] = c.hand, c.shift, c.deviation
+        firsts.append(index[c.first])
+        base += c.count
+    first = np.concatenate(firsts) if firsts else np.zeros(0, dtype=np.int64)
+    if (label < 0).any():
+        raise ValueError(f"merge: {int((label < 0).sum())} of {p} parts in no subset")
+    order = np.argsort(first, kind="stable")               # classes numbered by their first member
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return Classes(rank[label], hand, shift, dev, first[order], parts[0][1].tol)
+
+
+def _leaders(keys: np.ndarray, radius: float, tol: float,
+             fit: Callable[[int, np.ndarray], tuple[np.ndarray, np.ndarray]]) -> Classes:
+    """Leader classification: ``keys (p, q)`` invariants (congruent parts within ``radius``, inf-norm);
+    ``fit(i, J)`` -> ``deviation (j, 2)`` per hand and ``shift (j, 2)`` of parts ``J`` from part ``i``."""
+    from scipy.spatial import cKDTree
+
+    p = len(keys)
+    label = np.full(p, -1, dtype=np.int64)
+    hand = np.zeros(p, dtype=np.int64)
+    shift = np.zeros(p, dtype=np.int64)
+    dev = np.zeros(p)
+    if p == 0:
+        return empty(tol)
+    tree = cKDTree(keys)
+    firsts: list[int] = []
+    for i in range(p):  # a leader per class; members are classified in one array fit
+        if label[i] >= 0:
+            continue
+        J = np.asarray(tree.query_ball_point(keys[i], radius * (1 + 1e-9) + 1e-9, p=np.inf), dtype=np.int64)
+        J = J[(label[J] < 0) & (J != i)]
+        c = len(firsts)
+        firsts.append(i)
+        label[i] = c
+        if not len(J):
+            continue
+        d, s = fit(i, J)
+        h = np.where(d[:, 0] <= tol, 0, 1)
+        ok = d[np.arange(len(J)), h] <= tol
+        J, h = J[ok], h[ok]
+        label[J], hand[J] = c, h
+        shift[J], dev[J] = s[ok, h], d[ok, h]
+    return Classes(label, hand, shift, dev, np.asarray(firsts, dtype=np.int64), float(tol))
+
+
+def mirror_rings(X: np.ndarray) -> np.ndarray:
+    """``X (..., k, 2)`` reflected in the y axis, corners in reverse order from corner 0 (ccw stays ccw)."""
+    k = X.shape[-2]
+    return (X * np.array([-1.0, 1.0]))[..., (-np.arange(k)) % k, :]
+
+
+def _ring_keys(X: np.ndarray, F: np.ndarray | None, translate: bool) -> np.ndarray:
+    p = len(X)
+    L = np.linalg.norm(np.roll(X, -1, axis=2) - X, axis=3)                      # (p, n, k) edge lengths
+    c = X.reshape(p, -1, 2).mean(axis=1)[:, None, None, :] if translate else 0.0
+    R = np.linalg.norm(X - c, axis=3)                                           # distances from the centre
+    keys = [np.sort(L, axis=2).reshape(p, -1), np.sort(R, axis=2).reshape(p, -1)]
+    if F is not None:
+        keys.append(np.sort(F, axis=2).reshape(p, -1))
+    return np.concatenate(keys, axis=1)
+
+
+def ring_classes(X: np.ndarray, tol: float = TOLERANCE_MM, F: np.ndarray | None = None,
+                 translate: bool = True) -> Classes:
+    """Congruence classes of ring sets ``X (p, n, k, 2)`` mm (``n`` polygons of ``k`` corners moved and
+    relabelled together), with per-corner values ``F (p, n, k, c)`` mm that must agree too; rigid
+    motions in the plane (``translate=False``: rotations about the origin).  See the module text."""
+    X = np.asarray(X, dtype=float)
+    p, n, k = X.shape[:3]
+    if F is not None:
+        F = np.asarray(F, dtype=float)
+        if F.shape[:3] != X.shape[:3]:
+            raise ValueError(f"ring_classes: F {F.shape} does not match X {X.shape}")
+    Xh = np.stack([X, mirror_rings(X)], axis=1)                                 # (p, 2, n, k, 2)
+    Fh = None if F is None else np.stack([F, F[:, :, (-np.arange(k)) % k]], axis=1)
+    idx = (np.arange(k)[:, None] + np.arange(k)[None, :]) % k                   # [shift, j] -> corner
+    if translate:
+        Xh = Xh - Xh.reshape(p, 2, n * k, 2).mean(axis=2)[:, :, None, None, :]
+
+    def fit(i: int, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        A = Xh[i, 0].reshape(n * k, 2)                                          # the leader as drawn
+        Y = Xh[J][:, :, :, idx]                                                 # (j, 2, n, k_s, k, 2)
+        Y = np.moveaxis(Y, 3, 2).reshape(len(J), 2, k, n * k, 2)               # (j, hand, shift, pts, 2)
+        cross = (Y[..., 0] * A[:, 1] - Y[..., 1] * A[:, 0]).sum(axis=-1)
+        dotp = (Y * A).sum(axis=(-1, -2))
+        th = np.arctan2(cross, dotp)[..., None]                                 # rotates Y onto A
+        c, s = np.cos(th), np.sin(th)
+        RX = c * Y[..., 0] - s * Y[..., 1]
+        RY = s * Y[..., 0] + c * Y[..., 1]
+        d = np.sqrt((RX - A[:, 0]) ** 2 + (RY - A[:, 1]) ** 2).max(axis=-1)    # (j, 2, k)
+        if Fh is not None:
+            G = np.moveaxis(Fh[J][:, :, :, idx], 3, 2).reshape(len(J), 2, k, n * k, -1)
+            d = np.maximum(d, np.abs(G - Fh[i, 0].reshape(n * k, -1)).max(axis=(-1, -2)))
+        best = d.argmin(axis=2)
+        return np.take_along_axis(d, best[..., None], axis=2)[..., 0], best
+
+    return _leaders(_ring_keys(X, F, translate), 2.0 * tol, tol, fit)
+
+
+def vector_classes(D: np.ndarray, tol: float = TOLERANCE_MM, spellings: int | None = None) -> Classes:
+    """Classes of descriptors ``D (p, v, q)`` mm: part ``j`` matches part ``i`` (as spelt first) when
+    one of its spellings is within ``tol`` of it in every entry.  Spellings ``0 .. spellings-1`` are
+    hand 0, the rest (if any) its mirror image.  Candidates: the entries sorted over the spellings
+    (invariant under the respelling, moved at most ``tol`` each)."""
+    D = np.asarray(D, dtype=float)
+    p, v, q = D.shape
+    spellings = v if spellings is None else spellings
+    own = np.arange(v) < spellings
+
+    def fit(i: int, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        d = np.abs(D[J] - D[i, 0]).max(axis=2)                                   # (j, v)
+        out, best = np.full((len(J), 2), np.inf), np.zeros((len(J), 2), dtype=np.int64)
+        for h, sel in enumerate((own, ~own)):  # the two hands
+            if sel.any():
+                cols = np.flatnonzero(sel)
+                b = d[:, cols].argmin(axis=1)
+                out[:, h], best[:, h] = d[np.arange(len(J)), cols[b]], cols[b]
+        return out, best
+
+    keys = np.sort(D, axis=1).reshape(p, -1)
+    return _leaders(keys, tol, tol, fit)
+
+
+def glass_unit_rings(parts) -> tuple[list[str], np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+    """The rings of every glass unit, for :func:`ring_classes`.
+
+    Returns ``ids (u,)`` the unit ids (of the ply on the beams, ``P0001``), ``element (u,)`` their mesh
+    faces, and per corner count ``(index (q,), X (q, n, k, 2))``: for each glass ply outside in (no
+    interlayers) its cut outline (``PartGroup.flat``) and its bearing line (``bevel_ref``), in the flat
+    frame of the unit's ply on the beams (:func:`bearing_groups`), corner ``j`` of every ring over
+    corner ``j`` of the bearing ply."""
+    from .glass import bearing_groups
+    from .parts import unit_id
+
+    units = bearing_groups(parts)
+    ids = [unit_id(i) for g in units for i in g.ids]
+    element = np.concatenate([g.element for g in units]) if units else np.zeros(0, dtype=np.int64)
+    plies = [g for g in parts.of_kind("panel") if not g.material]
+    order = {m.member: j for j, m in enumerate(parts.spec.glass.solids())} if hasattr(parts.spec, "glass") else {}
+    plies.sort(key=lambda g: order.get(g.member, 0))                             # outside in, stable
+    n_faces = 1 + int(element.max()) if len(element) else 0
+    out, start = [], 0
+    for b in units:  # one bearing group per corner count
+        k = b.flat.shape[1]
+        row = np.full(n_faces, -1, dtype=np.int64)
+        row[b.element] = np.arange(len(b))
+        Minv = np.linalg.inv(b.transform)                                        # model -> bearing frame
+        rings = []
+        for member in dict.fromkeys(g.member for g in plies):  # plies outside in
+            X = np.full((len(b), 2, k, 2), np.nan)
+            for g in plies:
+                if g.member != member or g.flat.shape[1] != k:
+                    continue
+                sel = g.element < n_faces
+                r = np.where(sel, row[np.minimum(g.element, n_faces - 1)], -1)
+                got = r >= 0
+                for j, P in enumerate((g.flat, g.bevel_ref)):  # the outline and the bearing line
+                    H = np.concatenate([P[got], np.zeros(P[got].shape[:2] + (1,)), np.ones(P[got].shape[:2] + (1,))],
+                                       axis=2)
+                    W = np.einsum("pij,pkj->pki", g.transform[got], H)            # to the model
+                    B = np.einsum("pij,pkj->pki", Minv[r[got]], W)                # to the bearing frame
+                    X[r[got], j] = B[..., :2]
+            if np.isnan(X).all():
+                continue
+            if np.isnan(X).any():
+                raise ValueError(f"glass unit rings: ply {member!r} missing on some units of {k} corners")
+            rings.append(X)
+        out.append((np.arange(start, start + len(b)), np.concatenate(rings, axis=1)))
+        start += len(b)
+    return ids, element, out
+
+
+def glass_classes(parts, tol: float = TOLERANCE_MM) -> tuple[list[str], Classes]:
+    """The unit ids (:func:`glass_unit_rings`) and their classes: one class per glass shape (every ply's
+    outline and bearing line within ``tol``), mirror images its other hand."""
+    ids, _, rings = glass_unit_rings(parts)
+    return ids, merge([(index, ring_classes(X, tol)) for index, X in rings], len(ids))
