@@ -184,9 +184,11 @@ def _one_check(name, key, needs, run, paths, skip, written, read) -> dict:
     if key in skip:
         return {"pass": None, "skipped": f"{FILES[key]} not read (skip)"}
     if not paths[key].exists():
-        if FILES[key] in written or (key in FOLDERS and any(n.startswith(f"{FILES[key]}/") for n in written)):
+        inside = sum(n.startswith(f"{FILES[key]}/") for n in written) if key in FOLDERS else 0
+        if FILES[key] in written or inside:
+            size = f"{inside} files" if inside else _bytes(written[FILES[key]])
             return {"pass": False, "missing": FILES[key],
-                    "why": [f"{FILES[key]} is missing: the run wrote it ({_bytes(written.get(FILES[key]))})"]}
+                    "why": [f"{FILES[key]} is missing: the run wrote it ({size})"]}
         return {"pass": None, "skipped": f"{FILES[key]} was not written"}
     if (refused := _refused(paths[key], key in FOLDERS)) is not None:
         return {"pass": False, "error": refused}
@@ -205,6 +207,8 @@ def _one_check(name, key, needs, run, paths, skip, written, read) -> dict:
 
 FOLDERS = frozenset({"nc1"})
 """Keys of :data:`FILES` that name a folder of files (one NC1 file per beam)."""
+
+
 def _refused(path: Path, folder: bool = False) -> str | None:
     """Why the check does not open ``path`` (a file, or with ``folder`` a folder of files): not a
     regular file (or folder), or a folder holding something that is not a regular file."""
@@ -217,7 +221,8 @@ def _refused(path: Path, folder: bool = False) -> str | None:
         inside = sorted(os.scandir(path), key=lambda e: e.name)
     except OSError as exc:
         return f"{path.name}: the folder cannot be listed ({exc.strerror or exc})"
-    odd = [f"{path.name}/{e.name} ({w})" for e in inside if (w := not_regular(e.path)) is not None]
+    odd = [f"{path.name}/{e.name} ({w})" for e in inside
+           if e.name.endswith(f".{path.name}") and (w := not_regular(e.path)) is not None]
     return (f"{', '.join(odd[:5])}{', ...' if len(odd) > 5 else ''}: not a file; refused unopened"
             if odd else None)
 
@@ -239,7 +244,7 @@ def _readable(path: Path) -> Path | None:
 
 
 def _bytes(n) -> str:
-    return f"{n} bytes" if isinstance(n, int) else "listed"
+    return f"{n} bytes" if isinstance(n, int) else "its size not listed"
 
 
 @dataclass(frozen=True)

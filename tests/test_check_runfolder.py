@@ -172,3 +172,12 @@ def test_a_folder_where_a_file_was_fails(run_dir, tmp_path, capsys):
     assert main(["check", str(d)]) == 4
     rows = _rows(capsys)
     assert "model.stl" in rows["stl"] and "a folder" in rows["stl"] and "model.stl" in rows["files"]
+
+
+def test_the_nc1_folder_gone_fails_with_its_count(run_dir, tmp_path, capsys):
+    d = _copy(run_dir, tmp_path)
+    shutil.rmtree(d / "nc1")
+    assert main(["check", str(d)]) == 4
+    rows = _rows(capsys)
+    assert "nc1 is missing: the run wrote it (30 files)" in rows["nc1"], rows["nc1"]
+    assert "30 missing (the run wrote them): nc1/B0001.nc1" in rows["files"], rows["files"]

@@ -75,3 +75,29 @@ def test_an_ifc_file_that_does_not_parse_fails_its_check(run_dir, tmp_path, caps
     assert main(["check", str(d)]) == 4
     out = capsys.readouterr()
     assert "internal error" not in out.err and "FAIL ifc" in out.out
+
+
+def test_a_3mf_whose_packed_model_is_damaged_fails_its_check(tmp_path, capsys):
+    """Bytes of the deflated model changed: the 3MF reader says the file does not read (a zlib error was an
+    internal error); the check's 3mf row fails, exit 4."""
+    from fabricate.export import write_3mf
+    from fabricate.export.threemf_text import read_3mf_text
+
+    parts = build_parts(dome_structure(n_around=6, k=3), PartSpec())
+    write_3mf(parts, tmp_path / "model.3mf")
+    write_bom(parts, tmp_path / "bom.csv")
+    raw = (tmp_path / "model.3mf").read_bytes()
+    kinds = set()
+    for k in range(64):                                    # through the packed data, past the first header
+        at = 80 + k * (len(raw) - 200) // 64
+        (tmp_path / "model.3mf").write_bytes(raw[:at] + bytes([raw[at] ^ 0x5A]) + raw[at + 1:])
+        try:
+            read_3mf_text(tmp_path / "model.3mf")
+            kinds.add("read")
+        except ExportError as exc:
+            assert "model.3mf: " in str(exc)
+            kinds.add(str(exc).split("(")[1][:12])
+    assert len(kinds) > 1, kinds
+    assert main(["check", str(tmp_path)]) == 4
+    out = capsys.readouterr()
+    assert "internal error" not in out.err and "FAIL 3mf" in out.out

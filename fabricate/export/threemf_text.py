@@ -17,6 +17,7 @@ from __future__ import annotations
 import re
 import warnings
 import zipfile
+import zlib
 from pathlib import Path
 from xml.parsers import expat
 from xml.sax.saxutils import unescape
@@ -120,8 +121,8 @@ def read_3mf_text(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     try:
         with zipfile.ZipFile(path) as z, open_model(z, path) as fh:
             model = fh.read()
-    except (OSError, KeyError, zipfile.BadZipFile) as exc:
-        raise ExportError(f"{path}: not a readable 3MF file ({exc})") from None
+    except (OSError, KeyError, EOFError, RuntimeError, NotImplementedError, zipfile.BadZipFile, zlib.error) as exc:
+        raise ExportError(f"{path}: not a readable 3MF file ({exc})") from None   # damaged packed data too
     try:
         expat.ParserCreate().Parse(model, True)
     except expat.ExpatError as exc:
