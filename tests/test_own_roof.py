@@ -157,3 +157,70 @@ def test_every_report_counts_degenerate_faces_as_a_requirement(tmp_path):
     assert m["shrunk_edges"] == 0 and m["straight_corners"] == 0
     out = outcome({"degenerate": dict(m, max=2.0, **{"pass": False}, tolerance=0)})
     assert out.exit_code == 3 and "degenerate 2 > 0" in out.message
+
+
+def _ruled_hypar(tmp_path):
+    """z = x y meshed along its rulings (an asymptotic net: no conical mesh near its own lines), noisy."""
+    from optimize.mesh.io import write_mesh
+    from optimize.modelling import shapes
+
+    mesh = shapes.perturbed(shapes.grid(8, 7, size=(7000.0, 6000.0), height=lambda x, y: 0.5e-3 * x * y),
+                            50.0, seed=14)
+    write_mesh(tmp_path / "hypar.obj", mesh)
+    return tmp_path / "hypar.obj"
+
+
+def test_a_mesh_whose_own_lines_stall_takes_the_principal_remesh_and_says_why(tmp_path):
+    """#30 item 1: the default (no target, input.remesh unset) tries the design's own lines, then a remesh
+    along principal directions, and takes the one that builds; one paragraph says which and why."""
+    src = _ruled_hypar(tmp_path)
+    summary = run_pipeline(tiny_config(tmp_path, "hyp", outputs=MESH_ONLY, input={"mesh": str(src)},
+                                       optimize={}), tmp_path / "out")
+    assert summary.exit_code == 0, summary.message
+    assert summary.decision.startswith("Route: conical by remeshed along principal directions, moving the design")
+    assert "every beam planar to" in summary.decision and "Tried: own lines: stalled" in summary.decision
+    report = json.loads((tmp_path / "out" / "hyp" / "report.json").read_text())
+    routes = report["input"]["routes"]
+    assert [r["chosen"] for r in routes] == [False, True] and routes[1]["target"] == "conical"
+    assert report["decision"] == summary.decision and summary.decision in report["notes"]
+
+
+def test_without_the_remesh_route_the_paragraph_says_pq_was_tried_and_what_may_help(tmp_path):
+    src = _ruled_hypar(tmp_path)
+    summary = run_pipeline(tiny_config(tmp_path, "hyp", outputs=MESH_ONLY, input={"mesh": str(src), "remesh": "never"},
+                                       optimize={}), tmp_path / "out")
+    assert summary.exit_code == 3
+    d = summary.decision
+    assert d.startswith("Route: no route reached its target; the nearest is own lines (stalled)")
+    assert "Tried: PQ on own lines:" in d and d.endswith("What may help: input.remesh: auto (a remesh along "
+                                                         "the principal directions of the design).")
+
+
+def test_an_explicit_target_is_honoured_and_gets_the_same_diagnosis(tmp_path):
+    src = _ruled_hypar(tmp_path)
+    summary = run_pipeline(tiny_config(tmp_path, "hyp", outputs=MESH_ONLY, input={"mesh": str(src)},
+                                       optimize={"target": "pq"}), tmp_path / "out")
+    assert "Route: pq by" in summary.decision and "optimize.target: pq was asked for" in summary.decision
+    assert "PQ on own lines" not in summary.decision  # no fallback route for an explicit target
+
+
+def test_the_report_page_says_check_failed_or_export_failed_and_names_the_parts():
+    from fabricate.report.html import failed_parts, status_words
+
+    clash = {"pass": False, "checks": {"intersections": {"pass": False, "failures": [
+        {"pair": ["B0012", "B0013"], "volume_mm3": 3.0}, {"pair": ["B0013", "N0004.1"], "volume_mm3": 1.0}]},
+        "stl": {"pass": True}}}
+    assert status_words({"status": "export_failed", "check": clash}) == "CHECK FAILED"
+    assert failed_parts(clash) == ["B0012", "B0013", "N0004.1"]
+    lost = {"pass": False, "checks": {"export model.stl": {"pass": False, "why": "model.stl: export failed"}}}
+    assert status_words({"status": "export_failed", "check": lost}) == "EXPORT FAILED"
+    assert status_words({"status": "tolerance_not_reached"}) == "TOLERANCE NOT REACHED"
+    assert failed_parts(None) == [] and failed_parts({"checks": {"x": {"pass": True, "failures": [{"id": "P1"}]}}}) == []
+
+
+def test_the_report_page_shows_the_route_and_names_worst_parts_by_id(tmp_path):
+    run_pipeline(tiny_config(tmp_path, "page", outputs=dict(MESH_ONLY, html=True)), tmp_path / "out")
+    page = (tmp_path / "out" / "page" / "report.html").read_text()
+    report = json.loads((tmp_path / "out" / "page" / "report.json").read_text())
+    worst = report["measures"]["planarity"]["worst"][0]["id"]
+    assert f"{worst}: " in page

@@ -267,11 +267,14 @@ def test_folded_panels_write_no_cut_file_and_end_marked(tmp_path, capsys):
                                         height=lambda x, y: 0.5e-3 * x * y), 50.0, seed=14)
     assert optimize_mesh(mesh, "pq", fixed="boundary", convex=False).status == "folded"
     write_mesh(tmp_path / "hypar.obj", mesh)
-    (tmp_path / "f.yaml").write_text("input: {mesh: hypar.obj}\noptimize: {target: pq, fixed: boundary, "
-                                     "convex: false}\n")
+    (tmp_path / "f.yaml").write_text("input: {mesh: hypar.obj, remesh: never}\noptimize: {target: pq, "
+                                     "fixed: boundary, convex: false}\n")
     code = main(["run", str(tmp_path / "f.yaml"), "--out", str(tmp_path / "out")])
-    err = capsys.readouterr().err
+    cap = capsys.readouterr()
+    err = cap.err
     assert code == 3 and "folded" in err and "no panels or beams built" in err
+    assert cap.out.startswith("Route: no route reached its target; the nearest is own lines (folded)")
+    assert "input.remesh: auto" not in cap.out and "optimize.target: pq was asked for" in cap.out
     out = tmp_path / "out" / "f"
     assert (out / "TOLERANCE_NOT_REACHED.txt").exists() and (out / "mesh.obj").exists()
     for name in ("model.step", "model.stl", "model.3mf", "outlines.dxf", "outlines.svg", "bom.csv"):

@@ -129,7 +129,7 @@ class InputSection(Section):
     irregular: Literal["faces", "vertices", "nearest"] | None = None
     side: Literal["keep"] | tuple[float, float, float] | None = None
     radius: float | None = Field(default=None, gt=0, le=1e7)
-    remesh: Literal["auto", "always", "never"] = "never"
+    remesh: Literal["auto", "always", "never"] | None = None  # None: auto for a mesh input
     layer: str | None = Field(default=None, min_length=1, max_length=500)
     object: str | None = Field(default=None, min_length=1, max_length=500)
 
@@ -158,7 +158,7 @@ class InputSection(Section):
             raise PydanticCustomError("irregular", "irregular applies only to a surface input")
         if self.surface is None and self.side is not None:
             raise PydanticCustomError("side", "side applies only to a surface input")
-        if self.mesh is None and self.remesh != "never":
+        if self.mesh is None and self.remesh not in (None, "never"):
             raise PydanticCustomError("remesh", "remesh applies only to a mesh input (a surface input is "
                                       "remeshed anyway)")
         rhino = self.mesh is not None and self.mesh.suffix.lower() == ".3dm"

@@ -65,6 +65,7 @@ class RunSummary:
     timings: dict[str, float] = field(default_factory=dict)
     failed: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    decision: str = ""
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -150,7 +151,8 @@ def run_stages(config: RunConfig, workdir: Path, progress=None, t_start: float |
     tol = config.tolerances
     measures = collect_measures(config, inp, opt, off)
     measures.update({k: dict(v) for k, v in statics.measures.items()})
-    measures = apply_requirements(measures, off.structure, tol.requirements, inp.target, tol.beam_twist_mm,
+    measures = apply_requirements(measures, off.structure, tol.requirements, opt.target or inp.target,
+                                  tol.beam_twist_mm,
                                   tol.closeness_mm)
     name_worst(measures, opt.mesh)
     limits = built.parts.report.get("limits") if built.parts is not None else None
@@ -246,4 +248,5 @@ def _summary(run: RunRecord, target: Path, timings: dict[str, float]) -> RunSumm
         planarity=measures.get("planarity", {}).get("max"),
         conical=measures.get("conical", {}).get("max"),
         parts=stages.count_parts(parts) if parts is not None else None,
-        seconds=timings["total"], message=out.message, timings=dict(timings), failed=list(out.failed))
+        seconds=timings["total"], message=out.message, timings=dict(timings), failed=list(out.failed),
+        decision=run.optimize.decision)

@@ -71,7 +71,9 @@ class OptimizeRecord:
 
     result : the last level's OptimizeResult (None when nothing was optimized: target none).
     levels : report.json's facts per subdivision level; level_results : their OptimizeResults.
-    routes : facts of the routes tried (``input.remesh``), empty when only one was run.
+    routes : facts of the routes tried for a user's mesh (:mod:`fabricate.app.decide`), empty otherwise.
+    target : the target reached (``pq`` when a user's mesh fell back to it; None: the input's).
+    decision : the paragraph that says which route was taken and why ('' for a built-in design).
     """
 
     mesh: Mesh
@@ -81,6 +83,8 @@ class OptimizeRecord:
     routes: tuple[Mapping[str, Any], ...] = ()
     notes: tuple[str, ...] = ()
     line: str = ""
+    target: str | None = None
+    decision: str = ""
 
 
 @dataclass(frozen=True)

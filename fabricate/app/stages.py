@@ -135,18 +135,22 @@ def stage_optimize(cfg, inp: InputRecord, progress=None) -> OptimizeRecord:
     level_results = tuple(lv.result for lv in hier.levels)
     result = hier.levels[-1].result
     mesh = hier.mesh
-    routes, notes = (), ()
-    if inp.kind == "mesh" and cfg.input.remesh != "never" and levels == 0 and result is not None:
-        from optimize.remesh.routes import optimize_routes  # input.remesh: the remeshed route too
+    routes, notes, decision, reached = (), (), "", target
+    if inp.kind == "mesh" and levels == 0 and result is not None:  # a user's own quad mesh: which route
+        from optimize.remesh.routes import Route
 
-        chosen, tried = optimize_routes(inp.mesh, target, remesh=cfg.input.remesh, original=result, **kwargs)
-        routes = tuple(frozen(_plain(r.as_dict())) for r in tried)
-        notes = tuple(r.line() for r in tried)
-        mesh, result = chosen.mesh, chosen.result
+        from .decide import decide
+
+        chosen, tried, decision = decide(cfg, inp, result, kwargs, auto_target=cfg.optimize.target is None,
+                                         remesh=cfg.input.remesh or "auto")
+        routes = tuple(frozen(_plain(dict(Route(c.name, c.result, c.mesh, c.note).as_dict(), target=c.target,
+                                          twist_mm=c.twist_mm, chosen=c is chosen))) for c in tried)
+        notes = (decision,)
+        mesh, result, reached = chosen.mesh, chosen.result, chosen.target
     line = (f"no optimization ({mesh.n_faces} faces)" if result is None
-            else f"{result.status} after {result.nit} iterations")
+            else f"{result.status} after {result.nit} iterations" + (f" ({reached})" if reached != target else ""))
     return OptimizeRecord(mesh=mesh, result=result, levels=level_facts, level_results=level_results,
-                          routes=routes, notes=notes, line=line)
+                          routes=routes, notes=notes, line=line, target=reached, decision=decision)
 
 
 def _level_facts(level) -> dict[str, Any]:

@@ -100,6 +100,7 @@ def build_report(run, pictures: dict[str, str], own_files: Mapping[str, Mapping]
         "status": out.status,
         "exit_code": out.exit_code,
         "message": out.message,
+        "decision": run.optimize.decision,  # a user's own mesh: the route taken and why (fabricate.app.decide)
         "failed": list(out.failed),
         "created_utc": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "config_file": str(cfg.source) if cfg.source else None,

@@ -114,7 +114,8 @@ def _measure_rows(measures: dict[str, dict]) -> list[list[Any]]:
                                                               ("max_twist_mm", "mm twist"))
                         if m.get(k) is not None), "")
         elem = next((k for k in ("face", "vertex", "beam") if m.get("worst") and k in m["worst"][0]), None)
-        worst = ", ".join(f"{elem} {w[elem]}: {w['value']:.2g}" for w in m.get("worst", [])[:3]) if elem else ""
+        worst = ", ".join(f"{w.get('id') or f'{elem} {w[elem]}'}: {w['value']:.2g}"  # the part id of every file
+                          for w in m.get("worst", [])[:3]) if elem else ""
         rows.append([f"<b>{escape(name)}</b><br><small>{escape(m.get('what', ''))}</small>", m.get("max"),
                      m.get("unit"), alt_txt, m.get("tolerance"), _passfail(m), worst])
     return rows
@@ -126,6 +127,34 @@ def _structure_html(rep) -> str:
     return html_section(rep)
 
 
+def status_words(report: dict[str, Any]) -> str:
+    """The banner's words for a run that is not ok: ``CHECK FAILED`` when the files were written but a
+    check of them failed, ``EXPORT FAILED`` when a file could not be written, else the status."""
+    if report["status"] == "export_failed":
+        checks = (report.get("check") or {}).get("checks") or {}
+        failed = [k for k, v in checks.items() if isinstance(v, dict) and v.get("pass") is False]
+        return "EXPORT FAILED" if failed and all(k.startswith("export ") for k in failed) else "CHECK FAILED"
+    return report["status"].replace("_", " ").upper()
+
+
+def failed_parts(check: dict[str, Any] | None) -> list[str]:
+    """The part ids the failed file checks name (a clashing pair's both parts, a part whose file
+    disagrees), in order, each once."""
+    out: dict[str, None] = {}
+    for v in ((check or {}).get("checks") or {}).values():
+        if not isinstance(v, dict) or v.get("pass") is not False:
+            continue
+        for f in v.get("failures") or ():
+            if isinstance(f, dict):
+                for key in ("pair", "ids"):
+                    for i in f.get(key) or ():
+                        out[str(i)] = None
+                for key in ("id", "part"):
+                    if f.get(key):
+                        out[str(f[key])] = None
+    return list(out)
+
+
 def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: bool) -> str:
     """The page as a string (``pictures``: file name -> caption)."""
     name = escape(report["name"])
@@ -135,8 +164,14 @@ def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: boo
     warn = warnings(report.get("measures", {}), ((report.get("parts") or {}).get("cad_report") or {}).get("limits"))
     head = "OK: every requirement met" if not warn else f"OK with {len(warn)} warning(s): every requirement met"
     banner = (f'<div class="banner {"ok" if not warn else "caution"}">{escape(head)}</div>' if ok else
-              f'<div class="banner warn">{escape(report["status"].replace("_", " ").upper())}: '
+              f'<div class="banner warn">{escape(status_words(report))}: '
               f'{escape(report["message"])} (results written and marked)</div>')
+    ids = failed_parts(report.get("check"))
+    if ids:
+        banner += (f'<p class="failed-parts">parts named by the failed checks: '
+                   f'{escape(", ".join(ids[:24]) + (" ..." if len(ids) > 24 else ""))}</p>')
+    if report.get("decision"):
+        banner += f'<p class="decision">{escape(report["decision"])}</p>'
     if warn:
         banner += "<ul class=\"warnings\">" + "".join(f"<li>warning: {escape(w)}</li>" for w in warn) + "</ul>"
     mesh = report.get("result_mesh") or {}

@@ -85,7 +85,7 @@ def collect_measures(cfg, inp, opt, off) -> dict[str, dict]:
     optimize and offset stages (:mod:`fabricate.app.records`)."""
     tol = cfg.tolerances.to_tolerances()
     mesh: Mesh = opt.mesh
-    target = inp.target
+    target = opt.target or inp.target  # a user's mesh may have fallen back to pq (fabricate.app.decide)
     topo = mesh.topology
     out: dict[str, dict] = {}
 

@@ -48,6 +48,8 @@ def run(args) -> int:
         summary = run_pipeline(config, args.out, progress=progress, force=args.force)
     for note in summary.notes:
         print(f"note: {note}", file=sys.stderr)
+    if summary.decision:  # a user's own mesh: which route was taken, and why
+        print(summary.decision)
     target = summary.out_dir
     line = f"{summary.name}: {summary.status} ({summary.message}) in {summary.seconds:.1f} s -> {target}"
     _print_totals(target)
