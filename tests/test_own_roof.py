@@ -224,3 +224,22 @@ def test_the_report_page_shows_the_route_and_names_worst_parts_by_id(tmp_path):
     report = json.loads((tmp_path / "out" / "page" / "report.json").read_text())
     worst = report["measures"]["planarity"]["worst"][0]["id"]
     assert f"{worst}: " in page
+
+
+def test_a_surface_the_remesher_cannot_take_is_a_route_not_taken_not_bad_input(tmp_path, monkeypatch):
+    """The remesher refusing the surface (it cannot tell which side is in) must not end the run (exit 2)
+    when the design's own lines already gave a result: the route is listed as not taken, with why."""
+    import optimize.remesh.routes as routes
+    from optimize.errors import ConfigError
+
+    def refuses(*args, **kwargs):
+        raise ConfigError("tunnel.off: side vector [0.0, 0.0, -1.0] does not tell the two sides apart")
+
+    monkeypatch.setattr(routes, "optimize_routes", refuses)
+    summary = run_pipeline(tiny_config(tmp_path, "side", outputs=MESH_ONLY, input={"mesh": str(_ruled_hypar(tmp_path))},
+                                       optimize={"target": "pq"}), tmp_path / "out")
+    d = summary.decision
+    assert "remeshed along principal directions: not taken (remeshing failed: tunnel.off: side vector" in d
+    assert d.startswith("Route: no route reached its target; the nearest is own lines (stalled)")
+    assert "the remesh along its principal directions could not be made (why: above)" in d
+    assert "input.remesh: auto" not in d  # it is on: never advised

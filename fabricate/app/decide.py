@@ -98,6 +98,7 @@ def decide(cfg, inp, result, kwargs: dict, *, auto_target: bool, remesh: str) ->
     remesh : ``input.remesh`` (``auto`` | ``always`` | ``never``).
     """
     from optimize.api import optimize_mesh
+    from optimize.errors import ConfigError, MeshError
     from optimize.remesh.routes import optimize_routes
 
     limit = float(cfg.tolerances.beam_twist_mm)
@@ -114,12 +115,16 @@ def decide(cfg, inp, result, kwargs: dict, *, auto_target: bool, remesh: str) ->
     own = judge(Candidate("own lines", target, result, result.mesh))
     best = own
     far = own.moved() is not None and own.moved()[0] > cfg.tolerances.closeness  # moved beyond the tolerance
+    def remeshed(name: str, **kw) -> Candidate:
+        try:
+            _, routes = optimize_routes(inp.mesh, target, remesh="always", original=result, **kw)
+        except (ConfigError, MeshError) as exc:  # the remesher cannot take this surface (which side is in)
+            return Candidate(name, target, None, None, note=f"remeshing failed: {exc}")
+        re = next(r for r in routes if r.name == "remeshed")
+        return Candidate(name, target, re.result, re.mesh, note=re.note)
+
     if (not own.buildable(limit) or far or remesh == "always") and remesh != "never":
-        chosen, routes = optimize_routes(inp.mesh, target, remesh="always", original=result, **kwargs)
-        re = next((r for r in routes if r.name == "remeshed"), None)
-        if re is not None:
-            best = _better(best, judge(Candidate("remeshed along principal directions", target, re.result,
-                                                 re.mesh, note=re.note)), limit)
+        best = _better(best, judge(remeshed("remeshed along principal directions", **kwargs)), limit)
     tfb = kwargs.get("torsion_free_beams")
     if not best.buildable(limit) and best.converged and tfb is not None and tfb != "on" and target != "pq":
         on = dict(kwargs, torsion_free_beams="on")
@@ -127,12 +132,8 @@ def decide(cfg, inp, result, kwargs: dict, *, auto_target: bool, remesh: str) ->
             res = optimize_mesh(inp.mesh, target, reference=None, **on)
             c = Candidate("own lines, node axes solved with the mesh", target, res, res.mesh)
         else:
-            _, routes = optimize_routes(inp.mesh, target, remesh="always", original=result, **on)
-            re = next((r for r in routes if r.name == "remeshed"), None)
-            c = (Candidate("remeshed, node axes solved with the mesh", target, re.result, re.mesh, note=re.note)
-                 if re is not None else None)
-        if c is not None:
-            best = _better(best, judge(c), limit)
+            c = remeshed("remeshed, node axes solved with the mesh", **on)
+        best = _better(best, judge(c), limit)
     if auto_target and not best.converged and target != "pq":
         pq = dict(kwargs)
         pq.pop("torsion_free_beams", None)
@@ -171,7 +172,10 @@ def paragraph(best: Candidate, tried: list[Candidate], limit: float, *, auto_tar
             beam = f" (worst {part_ids('beam', np.array([best.twist_beam, n_edges - 1]))[0]})"
         head = (f"Route: {best.target} by {best.name}{where}: planar glass, but beams twist up to "
                 f"{best.twist_mm:.3g} mm{beam}, more than the {limit:g} mm a shop takes.")
-        if best.target == "pq":
+        if best.target == "pq" and not auto_target:
+            head += (" Beams are planar only on a conical mesh: optimize.target: conical (or no target) would "
+                     "look for one near this design.")
+        elif best.target == "pq":
             head += (" Beams are planar only on a conical mesh: no conical mesh was reached near this design"
                      + ("" if remesh != "never" else "; input.remesh: auto would also try a remesh along "
                         "principal directions") + ".")
@@ -181,10 +185,15 @@ def paragraph(best: Candidate, tried: list[Candidate], limit: float, *, auto_tar
     others = [c.line() for c in tried if c is not best]
     text = head + (" Tried: " + "; ".join(others) + "." if others else "")
     if not best.converged:  # what would help: never a setting already in force
-        text += (" What may help: input.remesh: auto (a remesh along the principal directions of the design)."
-                 if remesh == "never" else
-                 " Neither the design's own lines nor its principal directions lead to a nearby "
-                 f"{target} mesh: a smoother design, or a finer or coarser net, may.")
+        taken = any(c.name.startswith("remeshed") and c.result is not None for c in tried)
+        if remesh == "never":
+            text += " What may help: input.remesh: auto (a remesh along the principal directions of the design)."
+        elif taken:
+            text += (" Neither the design's own lines nor its principal directions lead to a nearby "
+                     f"{target} mesh: a smoother design, or a finer or coarser net, may.")
+        else:
+            text += (f" The design's own lines lead to no nearby {target} mesh, and the remesh along its principal "
+                     "directions could not be made (why: above).")
     if not auto_target:
         text += f" (optimize.target: {target} was asked for; other targets were not tried.)"
     return text
