@@ -325,3 +325,74 @@ def test_3mf_gives_the_interlayer_a_material_of_its_own(tmp_path):
     assert bases[-1] == "PVB interlayer"
     pindex = dict(re.findall(r'name="(P\d+\.\d)" type="model" pid="1" pindex="(\d)"', model))
     assert pindex["P0001.2"] == str(len(bases) - 1) and bases[int(pindex["P0001.1"])] == "glass"
+
+
+# -- the glass order's vocabulary (issue 36 item 1) -----------------------------------------------------
+def test_overhead_defaults_per_ply_and_surface_numbers():
+    from fabricate.cad.glass import BuildUp
+
+    igu = BuildUp.from_config(INSULATED)
+    plies = igu.plies()
+    assert [p.treatment for p in plies] == ["toughened-heat-soaked", "heat-strengthened", "heat-strengthened"]
+    assert [p.surfaces for p in plies] == [(1, 2), (3, 4), (5, 6)] and [p.pane for p in plies] == ["outer", "inner",
+                                                                                                    "inner"]
+    assert plies[0].coatings == ((2, "solar-control"),) and all(p.edge == "smooth-ground" for p in plies)
+    assert (igu.spacer, igu.spacer_colour, igu.secondary_seal, igu.gas_fill_pct) == ("warm-edge", "black",
+                                                                                     "silicone", 90.0)
+    assert igu.overhead_warnings() == [] and igu.standards() == ["EN 14179-1", "EN 1863-1", "EN ISO 12543-2",
+                                                                 "EN 1279-5"]
+    given = BuildUp.from_config(dict(INSULATED, coatings={"#3": "low-E"}, spacer="TPS", gas_fill_pct=85,
+                                     outer={"type": "monolithic", "thickness_mm": 10, "treatment": "toughened",
+                                            "edge_work": "polished"},
+                                     inner=dict(INSULATED["inner"], treatment=["float", "heat-strengthened"])))
+    assert [p.treatment for p in given.plies()] == ["toughened", "float", "heat-strengthened"]
+    assert given.plies()[1].coatings == ((3, "low-E"),) and given.plies()[0].describe() == \
+        "10 mm toughened, edge polished (KPO)"
+    assert BuildUp.from_config(given.as_config()) == given                            # the config as run reloads
+
+
+def test_a_monolithic_pane_overhead_is_warned_by_unit_id():
+    from fabricate.cad import PartSpec, build_parts
+    from fabricate.cad.glass import BuildUp
+    from fabricate.report.measures import warnings
+
+    assert "DIN 18008-2" in BuildUp.from_config(None).overhead_warnings()[0]
+    assert "little residual strength" in BuildUp.from_config(
+        dict(LAMINATED, treatment="toughened")).overhead_warnings()[0]
+    mono = build_parts(dome_structure(n_around=6, k=3), PartSpec())
+    over = mono.report["limits"]["overhead"]
+    steep = [g for g in mono.of_kind("panel")][0]
+    tilt = np.degrees(np.arcsin(np.abs(steep.normals[:, steep.outline_face, 2])))
+    assert over["ids"] == [i for i, t in zip(steep.ids, tilt) if t > 10.0] and over["count"] == 12
+    assert any("overhead limit" in w and "P0001" in w for w in warnings({}, mono.report["limits"]))
+    assert "overhead" not in parts_of("lam").report["limits"]                         # laminated: no warning
+
+
+@pytest.mark.parametrize("glass, words", [
+    (dict(LAMINATED, treatment="tempered"), ["parts.glass.treatment", "'tempered'", "toughened-heat-soaked"]),
+    (dict(LAMINATED, treatment=["float"]), ["parts.glass.treatment", "a list of 2 (one per ply)"]),
+    (dict(LAMINATED, edge_work="as-cut", treatment="toughened"), ["edge_work = as-cut", "EN 12150-1"]),
+    (dict(LAMINATED, coatings={5: "low-E"}), ["parts.glass.coatings", "surface 5", "1 .. 4"]),
+    (dict(LAMINATED, spacer="TPS"), ["parts.glass.spacer", "insulated unit"]),
+    (dict(INSULATED, gas_fill_pct=120), ["parts.glass.gas_fill_pct", "[0, 100] %"]),
+    (dict(INSULATED, spacer_colour=""), ["parts.glass.spacer_colour", "colour name"]),
+])
+def test_bad_glass_order_words_name_the_key(glass, words):
+    from fabricate.cad.glass import BuildUp
+
+    with pytest.raises(ConfigError) as err:
+        BuildUp.from_config(glass)
+    assert all(w in str(err.value) for w in words), str(err.value)
+
+
+def test_the_config_takes_the_vocabulary():
+    from fabricate.app.config import RunConfig
+
+    glass = dict(INSULATED, coatings={3: "low-E"}, spacer_colour="grey", secondary_seal="polysulphide",
+                 inner=dict(INSULATED["inner"], edge_work=["ground", "polished"]))
+    cfg = RunConfig.model_validate({"input": {"shape": {"name": "dome"}}, "parts": {"glass": glass}})
+    unit = cfg.parts.to_options().glass
+    assert [p.edge for p in unit.plies()] == ["smooth-ground", "ground", "polished"]
+    assert unit.coatings == ((3, "low-E"),) and unit.secondary_seal == "polysulphide"
+    again = RunConfig.model_validate({"input": {"shape": {"name": "dome"}}, "parts": {"glass": unit.as_config()}})
+    assert again.parts.to_options().glass == unit

@@ -6,11 +6,14 @@ from typing import Annotated, Literal
 from pydantic import Field, ValidationInfo, field_validator, model_serializer, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..cad.glass import BOUNDS, GASES, INTERLAYER_DENSITY, TYPES
+from ..cad.glass import (BOUNDS, COATINGS, COLOUR_CHARS, EDGES, GAS_FILL_PCT, GASES, INTERLAYER_DENSITY, SEALS,
+                         SPACERS, TREATMENTS, TYPES)
 from ..cad.spec import BeamSpec, Limits, NodeSpec, PartSpec
 from .config_section import Section, section_base, tuples
 
 _Interlayer = Literal[tuple(INTERLAYER_DENSITY)]
+_Treatment = Literal[tuple(TREATMENTS)]
+_Edge = Literal[tuple(EDGES)]
 
 
 def _mm(key: str):
@@ -28,6 +31,8 @@ class PaneSection(Section):
     plies_mm: tuple[float, ...] | None = None
     interlayer: _Interlayer | None = None
     interlayer_mm: float | None = _mm("interlayer_mm")
+    treatment: _Treatment | list[_Treatment] | None = None
+    edge_work: _Edge | list[_Edge] | None = None
 
     _plies = tuples("plies_mm")
 
@@ -48,6 +53,13 @@ class GlassSection(Section):
     gas: Literal[GASES] | None = None
     edge_seal_mm: float | None = _mm("edge_seal_mm")
     step_mm: float | None = _mm("step_mm")
+    treatment: _Treatment | list[_Treatment] | None = None      # the glass order's vocabulary: fabricate.cad.glass
+    edge_work: _Edge | list[_Edge] | None = None
+    coatings: dict[int, Literal[COATINGS]] | None = None
+    spacer: Literal[SPACERS] | None = None
+    spacer_colour: str | None = Field(default=None, min_length=1, max_length=COLOUR_CHARS)
+    secondary_seal: Literal[SEALS] | None = None
+    gas_fill_pct: float | None = Field(default=None, **GAS_FILL_PCT)
 
     _plies = tuples("plies_mm")
 

@@ -19,6 +19,7 @@ from .beams import BEVEL_FACE, FACE_NAMES, FACES, OUTLINE_FACE, RING, _face_cent
 from .errors import PartError
 from .diagnose import CONVEX_MIN, beam_hint, min_turn, panel_failure
 from .flat import flat_data
+from .glass import overhead_limit
 from .limits import check_limits
 from .geometry import dot, polygon_area_2d, unit, volumes
 from .hubs import tube_hubs
@@ -169,6 +170,7 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
         node_facts["sizing"] = sizing
     report = _report(groups, spec, mode, s_beam, d, beams, node_facts)
     report["limits"] = check_limits(groups, spec)
+    report["limits"].update(overhead_limit(groups, spec))  # a monolithic pane over people (fabricate.cad.glass)
     hub = hub_limit(structure, spec, sizing, P0, bp["normal"])
     if hub is not None:
         report["limits"]["hub"] = hub

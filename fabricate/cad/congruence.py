@@ -195,39 +195,55 @@ def _ring_keys(X: np.ndarray, F: np.ndarray | None, translate: bool) -> np.ndarr
     return np.concatenate(keys, axis=1)
 
 
+def ring_deviation(A: np.ndarray, Y: np.ndarray, FA: np.ndarray | None = None, FY: np.ndarray | None = None,
+                   translate: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """How far ring sets ``Y (m, n, k, 2)`` are from ``A (n, k, 2)`` (mm): for every cyclic relabelling
+    ``s`` of the corners (corner ``j`` of ``A`` against corner ``(j + s) % k`` of ``Y``) the least-squares
+    rigid fit (a rotation about the centroids, or about the origin with ``translate=False``), then the
+    largest corner distance, and of per-corner values ``FA (n, k, c)`` / ``FY (m, n, k, c)`` the largest
+    difference.  Returns ``deviation (m,)`` and ``shift (m,)`` of the best relabelling (no reflection:
+    compare :func:`mirror_rings` of ``Y`` for the other hand)."""
+    A = np.asarray(A, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    m, n, k = Y.shape[:3]
+    if A.shape != Y.shape[1:]:
+        raise ValueError(f"ring_deviation: A {A.shape} and Y {Y.shape} differ in rings or corners")
+    idx = (np.arange(k)[:, None] + np.arange(k)[None, :]) % k                   # [shift, j] -> corner
+    A = A.reshape(n * k, 2)
+    Ys = np.moveaxis(Y[:, :, idx], 2, 1).reshape(m, k, n * k, 2)               # (m, shift, points, 2)
+    if translate:
+        A = A - A.mean(axis=0)
+        Ys = Ys - Ys.mean(axis=2, keepdims=True)
+    cross = (Ys[..., 0] * A[:, 1] - Ys[..., 1] * A[:, 0]).sum(axis=-1)
+    th = np.arctan2(cross, (Ys * A).sum(axis=(-1, -2)))[..., None]             # rotates Y onto A
+    c, s = np.cos(th), np.sin(th)
+    d = np.hypot(c * Ys[..., 0] - s * Ys[..., 1] - A[:, 0], s * Ys[..., 0] + c * Ys[..., 1] - A[:, 1]).max(axis=-1)
+    if FA is not None and FY is not None:
+        G = np.moveaxis(np.asarray(FY, dtype=float)[:, :, idx], 2, 1).reshape(m, k, n * k, -1)
+        d = np.maximum(d, np.abs(G - np.asarray(FA, dtype=float).reshape(n * k, -1)).max(axis=(-1, -2)))
+    best = d.argmin(axis=1)
+    return d[np.arange(m), best], best
+
+
 def ring_classes(X: np.ndarray, tol: float = TOLERANCE_MM, F: np.ndarray | None = None,
                  translate: bool = True) -> Classes:
     """Congruence classes of ring sets ``X (p, n, k, 2)`` mm (``n`` polygons of ``k`` corners moved and
     relabelled together), with per-corner values ``F (p, n, k, c)`` mm that must agree too; rigid
     motions in the plane (``translate=False``: rotations about the origin).  See the module text."""
     X = np.asarray(X, dtype=float)
-    p, n, k = X.shape[:3]
+    k = X.shape[2]
     if F is not None:
         F = np.asarray(F, dtype=float)
         if F.shape[:3] != X.shape[:3]:
             raise ValueError(f"ring_classes: F {F.shape} does not match X {X.shape}")
-    Xh = np.stack([X, mirror_rings(X)], axis=1)                                 # (p, 2, n, k, 2)
-    Fh = None if F is None else np.stack([F, F[:, :, (-np.arange(k)) % k]], axis=1)
-    idx = (np.arange(k)[:, None] + np.arange(k)[None, :]) % k                   # [shift, j] -> corner
-    if translate:
-        Xh = Xh - Xh.reshape(p, 2, n * k, 2).mean(axis=2)[:, :, None, None, :]
+    Xm = mirror_rings(X)
+    Fm = None if F is None else F[:, :, (-np.arange(k)) % k]
 
     def fit(i: int, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        A = Xh[i, 0].reshape(n * k, 2)                                          # the leader as drawn
-        Y = Xh[J][:, :, :, idx]                                                 # (j, 2, n, k_s, k, 2)
-        Y = np.moveaxis(Y, 3, 2).reshape(len(J), 2, k, n * k, 2)               # (j, hand, shift, pts, 2)
-        cross = (Y[..., 0] * A[:, 1] - Y[..., 1] * A[:, 0]).sum(axis=-1)
-        dotp = (Y * A).sum(axis=(-1, -2))
-        th = np.arctan2(cross, dotp)[..., None]                                 # rotates Y onto A
-        c, s = np.cos(th), np.sin(th)
-        RX = c * Y[..., 0] - s * Y[..., 1]
-        RY = s * Y[..., 0] + c * Y[..., 1]
-        d = np.sqrt((RX - A[:, 0]) ** 2 + (RY - A[:, 1]) ** 2).max(axis=-1)    # (j, 2, k)
-        if Fh is not None:
-            G = np.moveaxis(Fh[J][:, :, :, idx], 3, 2).reshape(len(J), 2, k, n * k, -1)
-            d = np.maximum(d, np.abs(G - Fh[i, 0].reshape(n * k, -1)).max(axis=(-1, -2)))
-        best = d.argmin(axis=2)
-        return np.take_along_axis(d, best[..., None], axis=2)[..., 0], best
+        FA = None if F is None else F[i]
+        d0, s0 = ring_deviation(X[i], X[J], FA, None if F is None else F[J], translate)
+        d1, s1 = ring_deviation(X[i], Xm[J], FA, None if Fm is None else Fm[J], translate)
+        return np.stack([d0, d1], axis=1), np.stack([s0, s1], axis=1)
 
     return _leaders(_ring_keys(X, F, translate), 2.0 * tol, tol, fit)
 

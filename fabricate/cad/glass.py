@@ -21,6 +21,28 @@ beams) to the inside (on the beams), the order a glazier writes a build-up
   back by that much from the outer pane's edge; the inner pane still bears on
   the beams, so the step must stay below the bearing width.
 
+What a glass order needs besides the sizes (the vocabulary of EN 572-2, EN 1863-1,
+EN 12150-1, EN 14179-1, EN ISO 12543, EN 1279 and DIN 1249-11, README "Glass order"):
+
+- per ply its heat **treatment** (:data:`TREATMENTS`: ``float``, ``heat-strengthened``,
+  ``toughened``, ``toughened-heat-soaked``) and its **edge work** (:data:`EDGES`:
+  ``as-cut`` ... ``polished``, with the DIN 1249-11 code), given per pane as one word or a
+  list of one per ply (``treatment``, ``edge_work``);
+- the unit's **coatings** by glass surface, ``{2: low-E}`` (:data:`COATINGS`): surfaces
+  are numbered from the outside, two per glass ply (``#1`` the weather face of the outer
+  ply; an insulated ``10/16/66.2`` has ``#1`` to ``#6``);
+- an insulated unit's **spacer** (:data:`SPACERS`) and its colour, its **secondary seal**
+  (:data:`SEALS`) and the **gas fill** (% of the cavity, argon or krypton).
+
+Left out, the defaults are those a facade engineer writes for an overhead roof: a
+laminated pane of heat-strengthened plies (it holds together and stays in place when
+broken), a monolithic pane toughened and heat-soaked (EN 14179: nickel sulphide
+breakage screened), smooth ground edges, and for an insulated unit a selective
+solar-control coating on ``#2``, a black warm-edge spacer, a silicone secondary seal
+(UV-resistant) and 90 % gas.  :meth:`BuildUp.overhead_warnings` names the choices that
+are unsafe over people (a monolithic lower pane: DIN 18008-2 asks laminated safety glass
+there), and :func:`overhead_limit` the units they concern.
+
 ``layers()`` gives each layer's distance from the bearing face (``offset_mm``,
 to its beam-side face), its thickness and its edge inset: the panels of
 :mod:`fabricate.cad.panels` are built from exactly these numbers.
@@ -46,15 +68,42 @@ GLASS_THICKNESS = dict(gt=0.0, le=200.0)
 BOUNDS = {"thickness_mm": dict(ge=PLY_MM[0], le=PLY_MM[1]), "interlayer_mm": dict(gt=0.0, le=10.0),
           "cavity_mm": dict(ge=4.0, le=50.0), "edge_seal_mm": dict(ge=5.0, le=50.0), "step_mm": dict(ge=0.0, le=200.0)}
 """Bounds of the ``parts.glass`` keys (mm): one place, which the config section reads too."""
+GAS_FILL_PCT = dict(ge=0.0, le=100.0)
+"""Bounds of ``parts.glass.gas_fill_pct``."""
+TREATMENTS = {"float": ("annealed float glass", "EN 572-2"),
+              "heat-strengthened": ("heat-strengthened glass (HSG, TVG)", "EN 1863-1"),
+              "toughened": ("thermally toughened safety glass (FTG, ESG)", "EN 12150-1"),
+              "toughened-heat-soaked": ("heat-soaked thermally toughened safety glass (ESG-H)", "EN 14179-1")}
+"""Heat treatment of a ply: what it is, its product standard."""
+EDGES = {"as-cut": ("KG", "cut edge, not worked"),
+         "arrissed": ("KGS", "arrissed (seamed): the sharp arrises chamfered"),
+         "ground": ("KMG", "ground to size, blank spots allowed"),
+         "smooth-ground": ("KGN", "smooth ground all over, matt"),
+         "polished": ("KPO", "polished, glossy")}
+"""Edge work of a ply (EN 12150-1 / EN 1863-1 terms) and its DIN 1249-11 code."""
+COATINGS = ("low-E", "solar-control", "self-cleaning", "anti-reflective", "enamel")
+"""Coatings a surface may carry (``solar-control``: a selective coating, low emissivity too)."""
+SPACERS = ("warm-edge", "aluminium", "stainless-steel", "TPS")
+"""Spacer of an insulated unit (TPS: thermoplastic spacer extruded onto the glass)."""
+SEALS = ("silicone", "polysulphide", "polyurethane")
+"""Secondary (outer) edge seal of an insulated unit: silicone where it sees UV (a stepped or exposed edge)."""
+COLOUR_CHARS = 40
+"""Longest spacer colour text."""
+WORKED_BEFORE = ("heat-strengthened", "toughened", "toughened-heat-soaked")
+"""Treatments whose edges must be worked (at least arrissed) before the furnace (EN 1863-1, EN 12150-1)."""
+OVERHEAD_DEG = 10.0
+"""A unit inclined more than this from the vertical is overhead glazing (DIN 18008-1)."""
+LAMINATED_STANDARD = "EN ISO 12543-2"
+INSULATED_STANDARD = "EN 1279-5"
 
 
-def _number(key: str, value, bounds: dict) -> float:
+def _number(key: str, value, bounds: dict, unit: str = "mm") -> float:
     """``value`` as a float within ``bounds`` (``ge`` or ``gt``, and ``le``), else ConfigError naming ``key``."""
     lo, hi, low_open = bounds.get("ge", bounds.get("gt")), bounds["le"], "gt" in bounds
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
     if not ok or value > hi or value < lo or (low_open and value <= lo):
         rng = f"({lo:g}, {hi:g}]" if low_open else f"[{lo:g}, {hi:g}]"
-        raise ConfigError(f"{key} = {value!r}: expected a number in {rng} mm")
+        raise ConfigError(f"{key} = {value!r}: expected a number in {rng} {unit}")
     return float(value)
 
 
@@ -77,6 +126,12 @@ class Layer:
     solid: bool
 
 
+def default_treatment(n_plies: int) -> str:
+    """The overhead default of a pane of ``n_plies``: a laminated pane of heat-strengthened plies (it stays
+    in place when broken), a monolithic one toughened and heat-soaked (EN 14179-1)."""
+    return "heat-strengthened" if n_plies > 1 else "toughened-heat-soaked"
+
+
 @dataclass(frozen=True)
 class Pane:
     """A monolithic pane (one ply) or a laminated one (plies with one interlayer between each two)."""
@@ -84,6 +139,17 @@ class Pane:
     plies_mm: tuple[float, ...]
     interlayer: str = "PVB"
     interlayer_mm: float = 0.0
+    treatment: tuple[str, ...] = ()
+    """per ply (:data:`TREATMENTS`); not given: the overhead default (:func:`default_treatment`)."""
+    edge: tuple[str, ...] = ()
+    """per ply (:data:`EDGES`); not given: smooth-ground."""
+
+    def __post_init__(self):
+        n = len(self.plies_mm)
+        if not self.treatment:
+            object.__setattr__(self, "treatment", (default_treatment(n),) * n)
+        if not self.edge:
+            object.__setattr__(self, "edge", ("smooth-ground",) * n)
 
     @property
     def laminated(self) -> bool:
@@ -137,6 +203,12 @@ class BuildUp:
     gas: str = ""
     edge_seal_mm: float = 0.0
     step_mm: float = 0.0
+    coatings: tuple[tuple[int, str], ...] = ()
+    """``(surface, coating)`` pairs, surfaces numbered from the outside (two per glass ply)."""
+    spacer: str = ""
+    spacer_colour: str = ""
+    secondary_seal: str = ""
+    gas_fill_pct: float = 0.0
 
     @classmethod
     def monolithic(cls, thickness_mm: float) -> "BuildUp":
@@ -159,11 +231,13 @@ class BuildUp:
         if kind not in TYPES:
             raise ConfigError(f"{key}.type = {kind!r}: expected one of {', '.join(TYPES)}")
         if kind != "insulated":
-            extra = sorted(set(data) & {"outer", "inner", "cavity_mm", "gas", "edge_seal_mm", "step_mm"})
+            extra = sorted(set(data) & {"outer", "inner", "cavity_mm", "gas", "edge_seal_mm", "step_mm", *IGU_KEYS})
             if extra:
                 raise ConfigError(f"{key}.{extra[0]}: applies to an insulated unit, not to type {kind}")
-            return cls(kind, _pane(data, key, kind))
-        extra = sorted(set(data) & {"thickness_mm", "plies_mm", "interlayer", "interlayer_mm"})
+            unit = cls(kind, _pane(data, key, kind))
+            return unit.with_coatings(_coatings(data.get("coatings"), key, unit.n_plies))
+        extra = sorted(set(data) & {"thickness_mm", "plies_mm", "interlayer", "interlayer_mm", "treatment",
+                                    "edge_work"})
         if extra:
             raise ConfigError(f"{key}.{extra[0]}: an insulated unit takes its panes as {key}.outer and "
                               f"{key}.inner (each monolithic or laminated)")
@@ -181,11 +255,17 @@ class BuildUp:
         gas = data.get("gas", "argon")
         if gas not in GASES:
             raise ConfigError(f"{key}.gas = {gas!r}: expected one of {', '.join(GASES)}")
-        return cls("insulated", panes["outer"], panes["inner"],
+        unit = cls("insulated", panes["outer"], panes["inner"],
                    cavity_mm=_number(f"{key}.cavity_mm", data.get("cavity_mm", 16.0), BOUNDS["cavity_mm"]),
                    gas=gas, edge_seal_mm=_number(f"{key}.edge_seal_mm", data.get("edge_seal_mm", 16.0),
                                                       BOUNDS["edge_seal_mm"]),
-                   step_mm=_number(f"{key}.step_mm", data.get("step_mm", 0.0), BOUNDS["step_mm"]))
+                   step_mm=_number(f"{key}.step_mm", data.get("step_mm", 0.0), BOUNDS["step_mm"]),
+                   spacer=_word(f"{key}.spacer", data.get("spacer", "warm-edge"), SPACERS),
+                   spacer_colour=_colour(f"{key}.spacer_colour", data.get("spacer_colour", "black")),
+                   secondary_seal=_word(f"{key}.secondary_seal", data.get("secondary_seal", "silicone"), SEALS),
+                   gas_fill_pct=0.0 if gas == "air" else _number(f"{key}.gas_fill_pct", data.get("gas_fill_pct", 90.0),
+                                                                 GAS_FILL_PCT, unit="%"))
+        return unit.with_coatings(_coatings(data.get("coatings", {2: "solar-control"}), key, unit.n_plies))
 
     @property
     def thickness_mm(self) -> float:
@@ -252,17 +332,160 @@ class BuildUp:
     def as_config(self) -> dict:
         """The ``parts.glass`` mapping of this build-up."""
         def pane(p: Pane) -> dict:
+            work = {"treatment": list(p.treatment), "edge_work": list(p.edge)}
             if not p.laminated:
-                return {"type": "monolithic", "thickness_mm": p.plies_mm[0]}
+                return {"type": "monolithic", "thickness_mm": p.plies_mm[0], **work}
             return {"type": "laminated", "plies_mm": list(p.plies_mm), "interlayer": p.interlayer,
-                    "interlayer_mm": p.interlayer_mm}
+                    "interlayer_mm": p.interlayer_mm, **work}
+        coatings = {"coatings": {s: c for s, c in self.coatings}}
         if self.inner is None:
-            return pane(self.outer)
+            return {**pane(self.outer), **coatings}
         return {"type": "insulated", "outer": pane(self.outer), "cavity_mm": self.cavity_mm, "gas": self.gas,
-                "inner": pane(self.inner), "edge_seal_mm": self.edge_seal_mm, "step_mm": self.step_mm}
+                "inner": pane(self.inner),
+                "edge_seal_mm": self.edge_seal_mm, "step_mm": self.step_mm, **coatings, "spacer": self.spacer,
+                "spacer_colour": self.spacer_colour, "secondary_seal": self.secondary_seal,
+                "gas_fill_pct": self.gas_fill_pct}
+
+    # -- what a glass order names besides sizes ------------------------------------------------------
+    @property
+    def n_plies(self) -> int:
+        """Glass plies in the unit."""
+        return len(self.outer.plies_mm) + (len(self.inner.plies_mm) if self.inner is not None else 0)
+
+    def with_coatings(self, coatings: tuple[tuple[int, str], ...]) -> "BuildUp":
+        from dataclasses import replace
+
+        return replace(self, coatings=coatings)
+
+    def plies(self) -> tuple["Ply", ...]:
+        """Every glass ply outside in with its thickness, treatment, edge work, surfaces and coatings."""
+        out = []
+        panes = [("outer", self.outer)] + ([("inner", self.inner)] if self.inner is not None else [])
+        coat = dict(self.coatings)
+        for side, p in panes:  # one or two panes
+            for t, treat, edge in zip(p.plies_mm, p.treatment, p.edge):
+                k = len(out) + 1
+                surfaces = (2 * k - 1, 2 * k)
+                out.append(Ply(k, side if self.inner is not None else "", t, treat, edge, surfaces,
+                               tuple((s, coat[s]) for s in surfaces if s in coat)))
+        return tuple(out)
+
+    def lower_pane(self) -> Pane:
+        """The pane over people: the inner one of an insulated unit, else the unit."""
+        return self.inner if self.inner is not None else self.outer
+
+    def overhead_warnings(self) -> list[str]:
+        """Why this build-up is unsafe or weak as overhead glazing (empty: none)."""
+        out = []
+        low = self.lower_pane()
+        side = "inner pane" if self.inner is not None else "pane"
+        kind = self.plies()[-1].treatment
+        if not low.laminated:
+            out.append(f"a monolithic {kind} {side} overhead falls when it breaks (toughened glass in small "
+                       "pieces, others in shards): DIN 18008-2 asks laminated safety glass for the lower pane "
+                       "of overhead glazing")
+        else:
+            if set(low.treatment) <= {"toughened", "toughened-heat-soaked"}:
+                out.append(f"the laminated {side} is toughened in every ply: when all its plies break it has "
+                           "little residual strength and may sag out of its supports (heat-strengthened or "
+                           "float plies stay in place)")
+        return out
+
+    def standards(self) -> list[str]:
+        """The product standards of the unit and its plies."""
+        out = sorted({TREATMENTS[p.treatment][1] for p in self.plies()})
+        if self.outer.laminated or (self.inner is not None and self.inner.laminated):
+            out.append(LAMINATED_STANDARD)
+        if self.inner is not None:
+            out.append(INSULATED_STANDARD)
+        return out
+
+
+@dataclass(frozen=True)
+class Ply:
+    """One glass ply of a unit for the glass order: ``k`` from 1 outside in, the ``pane`` it belongs to
+    (``outer`` / ``inner`` of an insulated unit, else empty), thickness, treatment, edge work, its two
+    surface numbers and the coatings on them."""
+
+    k: int
+    pane: str
+    thickness_mm: float
+    treatment: str
+    edge: str
+    surfaces: tuple[int, int]
+    coatings: tuple[tuple[int, str], ...]
+
+    def describe(self) -> str:
+        """``8 mm heat-strengthened, edge smooth-ground (KGN), #2 low-E``."""
+        coat = "".join(f", #{s} {c}" for s, c in self.coatings)
+        return f"{self.thickness_mm:g} mm {self.treatment}, edge {self.edge} ({EDGES[self.edge][0]}){coat}"
+
+
+IGU_KEYS = ("spacer", "spacer_colour", "secondary_seal", "gas_fill_pct")
+"""Keys of an insulated unit only."""
+
+
+def _word(key: str, value, allowed) -> str:
+    if value not in allowed:
+        raise ConfigError(f"{key} = {value!r}: expected one of {', '.join(allowed)}")
+    return value
+
+
+def _colour(key: str, value) -> str:
+    if not isinstance(value, str) or not value.strip() or len(value) > COLOUR_CHARS or not value.isprintable():
+        raise ConfigError(f"{key} = {value!r}: expected a colour name of 1 to {COLOUR_CHARS} printable characters")
+    return value.strip()
+
+
+def _per_ply(key: str, value, n: int, allowed) -> tuple[str, ...]:
+    """One word for every ply, or a list of one per ply; () when not given."""
+    if value is None:
+        return ()
+    words = list(value) if isinstance(value, (list, tuple)) else [value] * n
+    if len(words) != n:
+        raise ConfigError(f"{key} = {value!r}: expected one word or a list of {n} (one per ply)")
+    return tuple(_word(f"{key}[{j}]" if isinstance(value, (list, tuple)) else key, w, allowed)
+                 for j, w in enumerate(words))
+
+
+def _coatings(value, key: str, n_plies: int) -> tuple[tuple[int, str], ...]:
+    """``{surface: coating}`` as sorted pairs; surfaces 1 .. 2 n_plies."""
+    if value is None:
+        return ()
+    if not isinstance(value, dict):
+        raise ConfigError(f"{key}.coatings = {value!r}: expected a mapping of surface number to coating, "
+                          "e.g. {2: low-E}")
+    out = []
+    for s, c in value.items():
+        num = int(s.removeprefix("#")) if isinstance(s, str) and s.removeprefix("#").isdigit() else s
+        if isinstance(num, bool) or not isinstance(num, int) or not 1 <= num <= 2 * n_plies:
+            raise ConfigError(f"{key}.coatings: surface {s!r}: expected a glass surface 1 .. {2 * n_plies} "
+                              f"(two per ply, #1 the weather face)")
+        out.append((num, _word(f"{key}.coatings.{num}", c, COATINGS)))
+    return tuple(sorted(out))
+
+
+def _worked(key: str, treatment: tuple[str, ...], edge: tuple[str, ...]) -> None:
+    for j, (t, e) in enumerate(zip(treatment, edge)):
+        if e == "as-cut" and t in WORKED_BEFORE:
+            raise ConfigError(f"{key}.edge_work = as-cut on a {t} ply (ply {j + 1}): its edges are worked before "
+                              "the furnace (EN 12150-1, EN 1863-1); expected arrissed, ground, smooth-ground or "
+                              "polished")
 
 
 def _pane(data: dict, key: str, kind: str) -> Pane:
+    pane = _pane_sizes(data, key, kind)
+    n = len(pane.plies_mm)
+    treat = _per_ply(f"{key}.treatment", data.get("treatment"), n, tuple(TREATMENTS))
+    edge = _per_ply(f"{key}.edge_work", data.get("edge_work"), n, tuple(EDGES))
+    from dataclasses import replace
+
+    pane = replace(pane, treatment=treat, edge=edge)
+    _worked(key, pane.treatment, pane.edge)
+    return pane
+
+
+def _pane_sizes(data: dict, key: str, kind: str) -> Pane:
     if kind == "monolithic":
         for bad in ("plies_mm", "interlayer", "interlayer_mm"):
             if bad in data:
@@ -314,3 +537,30 @@ def unit_blank(parts) -> np.ndarray:
         if not g.material:
             np.maximum.at(out, g.element, g.rect)
     return out
+
+
+def overhead_limit(groups, spec) -> dict:
+    """``{"overhead": entry}`` in the form of the shop limits (:func:`fabricate.cad.limits.check_limits`):
+    the glass units inclined more than :data:`OVERHEAD_DEG` from the vertical (overhead glazing) whose
+    build-up :meth:`BuildUp.overhead_warnings` finds unsafe there, by unit id; ``worst`` the steepest
+    inclination (degrees from vertical).  Empty for a build-up with no such warning."""
+    build_up = getattr(spec, "glass", None)
+    if build_up is None or not build_up.overhead_warnings():
+        return {}
+    solids = build_up.solids()
+    last = solids[-1].member if len(solids) > 1 else ""
+    ids, tilt = [], []
+    for g in groups:  # the bearing ply of every unit, a few groups
+        if g.kind != "panel" or g.member != last or not len(g):
+            continue
+        n_z = np.abs(g.normals[:, g.outline_face, 2])
+        deg = np.degrees(np.arcsin(np.clip(n_z, 0.0, 1.0)))       # from the vertical
+        over = deg > OVERHEAD_DEG
+        ids += [i.split(".", 1)[0] for i in np.asarray(g.ids)[over]]
+        tilt += deg[over].tolist()
+    entry = {"limit": f"laminated lower pane overhead: over {OVERHEAD_DEG:g} deg from vertical, DIN 18008-2",
+             "count": len(ids), "ids": ids, "why": "; ".join(build_up.overhead_warnings())}
+    if ids:
+        j = int(np.argmax(tilt))
+        entry.update(worst=round(float(tilt[j]), 2), worst_id=ids[j])
+    return {"overhead": entry}
