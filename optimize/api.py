@@ -22,7 +22,7 @@ from .proximity.curve import BoundaryCurve
 from .proximity.surface import Reference
 from .remesh.conjugacy import record_net
 from .result import OptimizeResult, check_folds, record_shape
-from .solvers import guided
+from .solvers import fairing, guided
 from .solvers.guided import Convex, Glide, solve
 from .terms import convexity
 from .terms import fixed as fixed_mod
@@ -67,7 +67,9 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
     fairness, closeness : weights of the scale-free fairness and tangent-plane
         closeness energies relative to the constraints (halved every iteration; the
         fairness weight also scaled by the worst defect over ``guided.FAR``, so a mesh
-        nearly there keeps its shape).
+        nearly there keeps its shape).  With ``optimize.solvers.fairing.ENABLED`` (off by
+        default) a converged run then minimizes fairness relative to the input plus
+        closeness, balanced by their ratio, with every constraint kept exact.
     tol : Tolerances; the run converges when every defect of the target is within it.
     max_iter : iteration budget.
     callback : ``callback(entry: dict)`` after each iteration.
@@ -149,6 +151,9 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     t_setup = time.perf_counter() - t0
     run = solve(form, x0, ref=ref, glide=glide, tol=tol, max_iter=int(max_iter), callback=callback,
                 backend=linear_solver, convex=keep, far=guided.FAR)
+    if fairing.ENABLED:  # exact, fair and close: the constrained fairing phase from the converged iterate
+        run = fairing.refine(form, run, x0, ref=ref, glide=glide, convex=keep, tol=tol, fairness=fairness,
+                             closeness=closeness, callback=callback)
     L = form.layout
     Xn = L.view(run.x, "vertices")
     V = Xn * h + centre if run.nit else mesh.V.copy()  # no step taken: bit-exact input

@@ -131,6 +131,21 @@ def target_defects(form: Formulation, V: np.ndarray) -> dict[str, np.ndarray]:
     return {name: DEFECTS[name](form.mesh, V) for name in form.spec.tests}
 
 
+def measured(form: Formulation, x: np.ndarray, glide: Glide | None) -> dict[str, np.ndarray]:
+    """Every defect the run is held to at ``x``: the target's (:func:`target_defects`), the node
+    axes' (``form.axis_defects``) and, with a gliding boundary, the distance to the boundary
+    curve and the edges' shortfall below their floor (``glide``, ``short_edge``)."""
+    V = form.layout.view(x, "vertices")
+    out = target_defects(form, V)
+    out.update(form.axis_defects(x))
+    if glide is not None:
+        Y, _ = glide.curve.closest(V[glide.vertices])
+        out["glide"] = np.linalg.norm(V[glide.vertices] - Y, axis=1)  # mean edge length is 1
+        if len(glide.edges):
+            out["short_edge"] = edgefloor.shortfall(V, glide.edges, glide.floor)
+    return out
+
+
 def _score(defects: dict, tol: Tolerances) -> float:
     """log10 of the worst defect / tolerance ratio (<= 0 means converged).
 
@@ -232,14 +247,7 @@ def solve(form: Formulation, x0: np.ndarray, *, ref: Reference | None,
 
     def measure(x):
         tm = time.perf_counter()
-        V = L.view(x, "vertices")
-        out = target_defects(form, V)
-        out.update(form.axis_defects(x))
-        if glide is not None:
-            Y, _ = glide.curve.closest(V[glide.vertices])
-            out["glide"] = np.linalg.norm(V[glide.vertices] - Y, axis=1)  # mean edge length is 1
-            if len(glide.edges):
-                out["short_edge"] = edgefloor.shortfall(V, glide.edges, glide.floor)
+        out = measured(form, x, glide)
         timings["measure"] += time.perf_counter() - tm
         return out
 
