@@ -65,6 +65,7 @@ class OutputsOptions:
     svg: bool = option(True, help="outlines.svg")
     flat: bool | None = option(None, help="flat.json (null: as dxf)")
     schedules: bool | None = option(None, help="glass, steel and node schedules (null: as bom)")
+    glass_order: bool = option(True, help="glass_order.csv and glass_order/: positions, R12 drawings, labels")
     cut_files: bool | None = option(None, help="nested cut files per material and thickness (null: as dxf)")
     stl_parts: bool = option(False, help="one STL per part in stl/")
     layout_plan: bool | None = option(None, help="layout_plan.dxf with the part ids (null: as dxf)")

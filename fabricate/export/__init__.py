@@ -10,6 +10,7 @@ _EXPORTS = {
     "write_cut_files": ".cutfiles", "write_layout_plan": ".cutfiles", "nest_cut_files": ".cutfiles",
     "write_dxf": ".dxf",
     "write_flat": ".flatdata",
+    "write_glass_order": ".glass_order",
     "write_glass_schedule": ".schedules", "write_node_schedule": ".schedules",
     "write_steel_cut_list": ".schedules",
     "write_parts_gltf": ".gltf",
