@@ -18,7 +18,7 @@ def dome_igu():
     return build_parts(dome_structure(n_around=8, k=4), PartSpec(glass=INSULATED))
 
 
-def leaning_row():
+def leaning_row(glass=None):
     """Four panels whose joints lean out on the left half and in on the right: two shapes, two hands."""
     from optimize.mesh import Mesh
 
@@ -29,7 +29,7 @@ def leaning_row():
     V = np.array([[1200.0 * i, 0.0, 0.0] for i in range(5)] + [[x, 1500.0, 0.0] for x in top])
     F = [[i, i + 1, i + 6, i + 5] for i in range(4)]
     return build_parts(offset_structure(Mesh(V, F), (0.0, -200.0)),
-                       PartSpec(glass={"type": "laminated", "plies_mm": [8, 8]}))
+                       PartSpec(glass=glass))
 
 
 def _rows(path):
@@ -65,14 +65,19 @@ def test_one_row_per_position_with_every_field(tmp_path):
     assert check_glass_order(parts, tmp_path)["pass"]
 
 
-def test_mirror_images_are_positions_of_their_own(tmp_path):
+@pytest.mark.parametrize("glass", [None, {"type": "laminated", "plies_mm": [8, 8]}])
+def test_mirror_images_are_positions_of_their_own(tmp_path, glass):
     from fabricate.export import write_glass_order
+    from fabricate.export.check_glass_order import check_glass_order
 
-    parts = leaning_row()
+    parts = leaning_row(glass)
     write_glass_order(parts, tmp_path / "glass_order.csv")
     rows = {r["position"]: r for r in _rows(tmp_path / "glass_order.csv")}
     assert sorted(rows) == ["G001A", "G001B", "G002A", "G002B"]
     assert rows["G001A"]["units"] == "P0001" and rows["G001B"]["units"] == "P0004"
+    n = int(rows["G001A"]["plies"])
+    assert all(float(r[f"ply{k}_blank_w_mm"]) > 1000.0 for r in rows.values() for k in range(1, n + 1))
+    assert check_glass_order(parts, tmp_path)["pass"]
     a, b = rows["G001A"]["edge_lengths_mm"].split(), rows["G001B"]["edge_lengths_mm"].split()
     assert b == a[::-1] and a != b                                                  # the mirror, edges run back
 

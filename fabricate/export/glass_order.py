@@ -117,7 +117,8 @@ def positions(parts, tol: float = TOLERANCE_MM) -> dict:
 def _ply_blanks(parts, element: np.ndarray) -> np.ndarray:
     """(u, n_plies, 2) each unit's blank per glass ply (``PartGroup.rect``), outside in."""
     plies = parts.spec.glass.plies()
-    members = [m.member for m in parts.spec.glass.solids() if m.material == "glass"]
+    solids = parts.spec.glass.solids()
+    members = [m.member if len(solids) > 1 else "" for m in solids if m.material == "glass"]  # one solid: ""
     row = np.full(1 + int(element.max()), -1, dtype=np.int64)
     row[element] = np.arange(len(element))
     out = np.zeros((len(element), len(plies), 2))
