@@ -21,6 +21,9 @@ from _pipeline_fixtures import REPO, tiny_config
 
 PY = [sys.executable]
 ENV = dict(os.environ, PYTHONPATH=str(REPO))
+HANG_GUARD_S = 120.0
+"""The longest any wait here may take: only a guard against a hang (the waits end in a second or two
+on an idle machine and a few on a loaded one); no test here asserts how long something took."""
 
 
 def snapshot(folder):
@@ -217,29 +220,37 @@ def _start_stuck_run(tmp_path):
     return cfg, out, proc
 
 
-def test_sigint_inside_native_code_ends_in_two_seconds_with_130(tmp_path):
+def test_sigint_inside_native_code_kills_the_work_after_the_grace_with_130(tmp_path):
+    """The work never returns to Python (SIGINT held pending inside one C call): the supervisor does
+    not wait for it but kills it :data:`GRACE` seconds after the signal, says so, removes what it
+    left and ends 130.  Asserted by what happened (the supervisor's own message that it killed the
+    work, the working process gone, nothing left), not by a clock: a loaded machine only delays it."""
+    from fabricate.app.cli.supervise import GRACE
+
     cfg, out, proc = _start_stuck_run(tmp_path)
     try:
         assert proc.stdout.readline().strip() == "IN CAD"
         assert sorted(p.name[:6] for p in out.iterdir()) == [".slow.", ".slow."], list(out.iterdir())
-        t0 = time.monotonic()
+        part = next(p for p in out.iterdir() if p.suffix == ".part")
+        worker = json.loads((part / PART_OWNER).read_text())["pid"]
         proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=30)
-        seconds = time.monotonic() - t0
+        proc.wait(timeout=HANG_GUARD_S)
     finally:
         if proc.poll() is None:
             proc.kill()
     err = proc.stderr.read()
     assert proc.returncode == 130, err
-    assert "Traceback" not in err and err.strip().startswith("interrupted (stopped after 1 s; removed "), err
+    assert "Traceback" not in err and err.strip().startswith(f"interrupted (stopped after {GRACE:g} s; removed "), err
+    assert str(part) in err
+    assert not os.path.exists(f"/proc/{worker}")  # killed (and reaped) by the supervisor, not left running
     assert list(out.iterdir()) == []  # the killed run's temporary folder and lock are gone
-    print(f"SIGINT inside native code: exit 130 after {seconds:.2f} s: {err.strip()}")
 
 
 # -- honest outcomes -----------------------------------------------------------------------------
 def test_unconverged_mesh_whose_parts_cannot_be_built_is_exit_3_written(tmp_path, monkeypatch):
     """The CAD stage refuses the stalled mesh (as it does a folding panel): the run still writes the
-    mesh, the layers and the report, marked, and ends 3 (it used to end 2 with nothing)."""
+    mesh, the layers and the report, marked, and ends 3 (it used to end 2 with nothing).  (A converged
+    mesh whose parts cannot be built is written and ends 3 as well since #30: test_own_roof.py.)"""
     import fabricate.cad as cad
     from fabricate.cad.errors import PartError
 
@@ -258,11 +269,6 @@ def test_unconverged_mesh_whose_parts_cannot_be_built_is_exit_3_written(tmp_path
     assert not (out / "model.step").exists()
     report = json.loads((out / "report.json").read_text())
     assert report["exit_code"] == 3
-    # a converged mesh whose parts cannot be built is the design's fault: bad input, nothing written
-    good = tiny_config(tmp_path, "good")
-    with pytest.raises(PartError, match="P0007"):
-        run_pipeline(good, tmp_path / "out")
-    assert not (tmp_path / "out" / "good").exists()
 
 
 @pytest.mark.parametrize("check_pass,tol_pass,expected", [
@@ -326,19 +332,24 @@ def test_sigint_during_a_batch_stops_the_workers_and_leaves_nothing(tmp_path):
     proc = subprocess.Popen(PY + ["-m", "fabricate", "batch", *map(str, cfgs), "--workers", "2", "--out", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV)
     try:
-        deadline = time.monotonic() + 120
-        while not (out.is_dir() and any(p.suffix == ".part" for p in out.iterdir())):
+        deadline = time.monotonic() + HANG_GUARD_S
+        while not (out.is_dir() and any((p / PART_OWNER).is_file() for p in out.glob(".*.part"))):
             assert time.monotonic() < deadline and proc.poll() is None, proc.stderr.read()
             time.sleep(0.05)
-        proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=30)
+        proc.send_signal(signal.SIGINT)    # a worker is writing its run folder
+        proc.wait(timeout=HANG_GUARD_S)
     finally:
         if proc.poll() is None:
             proc.kill()
     err = proc.stderr.read()
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
-    assert [p for p in out.iterdir() if p.name.startswith(".")] == []
+    # nothing left but, at most, the empty folder of a worker stopped between making it and writing its
+    # owner record into it (the other worker may be there at the signal, at any load): without a record,
+    # it is not provably a dead run's, and the next run removes it once it is a minute old
+    left = [p for p in out.iterdir() if p.name.startswith(".")]
+    assert all(p.suffix == ".part" and p.is_dir() and not any(p.iterdir()) for p in left), \
+        [(p.name, sorted(c.name for c in p.iterdir()) if p.is_dir() else "file") for p in left]
 
 
 def test_killing_the_command_kills_its_work_too(tmp_path):
@@ -351,8 +362,8 @@ def test_killing_the_command_kills_its_work_too(tmp_path):
         worker = json.loads((part / PART_OWNER).read_text())["pid"]
         assert worker != proc.pid
         proc.kill()
-        proc.wait(timeout=30)
-        deadline = time.monotonic() + 10
+        proc.wait(timeout=HANG_GUARD_S)
+        deadline = time.monotonic() + HANG_GUARD_S
         while os.path.exists(f"/proc/{worker}") and time.monotonic() < deadline:
             time.sleep(0.05)
         assert not os.path.exists(f"/proc/{worker}")
