@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .proximity.surface import TIE  # closest-point ties: the lowest triangle index wins
+
 
 @njit(cache=True, inline="always")
 def _cross(a0, a1, a2, b0, b1, b2):
@@ -142,7 +144,7 @@ def closest_candidates(P, A, B, C, owner, cand, skip, lo, hi, prev):
     triangle tried first for each point (its last closest one; -1: none): a
     candidate whose box is farther than the best distance so far cannot be
     closer and is not tested.  Squared distances are compared, as in
-    ``Footpoints._pick``; of equally close triangles the first tested wins."""
+    ``Footpoints._pick``; of triangles within ``TIE`` of the closest the lowest index wins."""
     q = P.shape[0]
     Y = np.empty((q, 3))
     tri = np.full(q, -1, dtype=np.int64)
@@ -166,13 +168,14 @@ def closest_candidates(P, A, B, C, owner, cand, skip, lo, hi, prev):
         b0 = max(max(lo[f, 0] - p0, p0 - hi[f, 0]), 0.0)
         b1 = max(max(lo[f, 1] - p1, p1 - hi[f, 1]), 0.0)
         b2 = max(max(lo[f, 2] - p2, p2 - hi[f, 2]), 0.0)
-        if b0 * b0 + b1 * b1 + b2 * b2 > best[o]:
+        b = best[o]
+        if b0 * b0 + b1 * b1 + b2 * b2 > b * (1 + TIE):
             continue
         y0, y1, y2 = _closest_on_triangle(p0, p1, p2, A[f, 0], A[f, 1], A[f, 2],
                                           B[f, 0], B[f, 1], B[f, 2], C[f, 0], C[f, 1], C[f, 2])
         e0, e1, e2 = y0 - p0, y1 - p1, y2 - p2
         d = e0 * e0 + e1 * e1 + e2 * e2
-        if d < best[o]:
+        if tri[o] < 0 or d < b * (1 - TIE) or (d <= b * (1 + TIE) and f < tri[o]):
             best[o] = d
             Y[o, 0], Y[o, 1], Y[o, 2] = y0, y1, y2
             tri[o] = f
@@ -329,7 +332,7 @@ def scan_triangles(P, idx, t0, margin, slack, A, B, C, lo, hi):
     distance to triangle ``t0[s]`` (its bounding box ``lo, hi (t, 3)`` is tested
     first; ``Footpoints._renew``).  Returns ``owner, cand (m,)`` sorted by owner,
     then triangle, and every point's closest point ``Y (k, 3)`` and triangle
-    ``tri (k,)`` among those passing the box test (the first at ties)."""
+    ``tri (k,)`` among those passing the box test (the lowest index within ``TIE``)."""
     k, t = idx.shape[0], A.shape[0]
     reach = np.empty(k)
     for s in range(k):
@@ -360,7 +363,7 @@ def scan_triangles(P, idx, t0, margin, slack, A, B, C, lo, hi):
                                               B[f, 0], B[f, 1], B[f, 2], C[f, 0], C[f, 1], C[f, 2])
             e0, e1, e2 = y0 - p0, y1 - p1, y2 - p2
             d = e0 * e0 + e1 * e1 + e2 * e2
-            if d < best:
+            if tri[s] < 0 or d < best * (1 - TIE) or (d <= best * (1 + TIE) and f < tri[s]):
                 best = d
                 Y[s, 0], Y[s, 1], Y[s, 2] = y0, y1, y2
                 tri[s] = f

@@ -69,10 +69,13 @@ def test_trefoil_moebius_band_becomes_a_pq_strip(method):
     assert not m.topology.orientable
     assert measures.planarity(m).max() > 1e-3
     res = run_paper_method(m, "strip", method)
-    # every tolerance met, but the penalty method turns one corner of faces 1 and 58 straight (93.6 ->
-    # 179.99995 deg): a quad with a straight corner is a triangle, so the run is degenerate, no success
-    assert res.status == "degenerate" and res.defects["straight_corners"]["faces"] == [1, 58], res.message
-    assert not res.missed() and res.defects["folded"]["count"] == 0
+    # every tolerance met, but the faces at the Moebius seam turn over (penalty: faces 0 and 59; hybrid's
+    # SQP phase more): folded, no success.  While the seam's reference normals were directions rounding
+    # chose, penalty turned a corner of faces 1 and 58 straight instead (degenerate)
+    assert res.status == "folded" and res.defects["folded"]["faces"][0] == 0, res.message
+    assert not res.missed()
+    if method == "penalty":
+        assert res.defects["folded"]["faces"] == [0, 59]
     assert measures.planarity(res.mesh).max() <= 1e-6
     assert np.abs(det_local(res.mesh.V[m.F])[0]).max() <= 1e-6
     assert res.max_distance < 0.05

@@ -23,10 +23,12 @@ bounding box is farther than the best distance found.
 
 The answers equal :meth:`optimize.proximity.surface.Reference.closest`'s: the same
 distances and footpoints to rounding, normals by the reference's own
-interpolation (``Reference._interpolated_normals``).  Only ties between
-equally close triangles may be broken differently: on a shared edge or
-vertex footpoint and normal agree anyway; a point equidistant from two
-separate parts of the surface gets either (as with ``Reference.closest``).
+interpolation (``Reference._interpolated_normals``).  Ties are broken the same
+way: of the triangles whose squared distance is within
+:data:`optimize.proximity.surface.TIE` of the least the lowest index wins, so a
+point as close to two triangles (on a symmetry plane of the reference, or
+equidistant from two separate parts of it) gets the same answer whatever the
+rounding and the order of the candidates.
 When the candidate sets would be large (very unequal triangle sizes make
 ``R`` loose), or a query point is not finite, queries are handed to
 ``Reference.closest`` unchanged.
@@ -39,7 +41,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .. import kernels
-from .surface import Reference, closest_on_triangles
+from .surface import TIE, Reference, closest_on_triangles
 
 MAX_CANDIDATES = 64  # mean candidates per point beyond which Reference.closest is used
 SCAN_MAX = 2_000_000  # (points x triangles) up to which renewals test every triangle (compiled)
@@ -59,7 +61,7 @@ class Footpoints:
         self.compiled = bool(compiled)
         X = ref.mesh.V[ref.triangles]  # (t, 3, 3)
         self.A, self.B, self.C = (np.ascontiguousarray(X[:, i]) for i in range(3))
-        self.T = np.ascontiguousarray(ref.triangles, dtype=np.int64)
+        self.T = np.ascontiguousarray(ref.normal_corners, dtype=np.int64)  # rows of ref.normal_table
         self.lo, self.hi = X.min(axis=1), X.max(axis=1)  # bounding boxes: a cheap lower bound first
         self.rmax = float(np.linalg.norm(X - ref.centroids[:, None, :], axis=2).max(initial=0.0))
         self.tree = cKDTree(ref.centroids)
@@ -111,7 +113,7 @@ class Footpoints:
         self.tri = tri
         if k is not None:
             r = self.ref
-            return Y, k.interpolated_normals(Y, tri, self.A, self.B, self.C, self.T, r.vertex_normals, r.normals)
+            return Y, k.interpolated_normals(Y, tri, self.A, self.B, self.C, self.T, r.normal_table, r.normals)
         return Y, self.ref._interpolated_normals(Y, tri)
 
     def _pairs(self, P: np.ndarray, o: np.ndarray, f: np.ndarray):
@@ -124,10 +126,11 @@ class Footpoints:
     @staticmethod
     def _pick(o: np.ndarray, f: np.ndarray, Y: np.ndarray, d: np.ndarray):
         """For pairs sorted by point ``o``: the points, and their nearest pair's closest point
-        ``(k, 3)`` and triangle ``(k,)`` (the first one at ties)."""
+        ``(k, 3)`` and triangle ``(k,)`` (the lowest triangle at ties: ``TIE``)."""
         starts = np.flatnonzero(np.concatenate([[True], o[1:] != o[:-1]]))
         counts = np.diff(np.append(starts, len(o)))
-        hit = np.flatnonzero(d == np.repeat(np.minimum.reduceat(d, starts), counts))
+        hit = np.flatnonzero(d <= np.repeat(np.minimum.reduceat(d, starts), counts) * (1 + TIE))
+        hit = hit[np.lexsort((f[hit], o[hit]))]
         first = hit[np.concatenate([[True], o[hit[1:]] != o[hit[:-1]]])]
         return o[first], Y[first], f[first]
 

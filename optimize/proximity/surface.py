@@ -21,6 +21,12 @@ from scipy.spatial import cKDTree
 
 from ..mesh import Mesh
 
+# Squared distances within TIE (relative) of the least are a tie, which the lowest triangle index
+# wins, in every closest-point search (here, optimize.proximity.footpoints and its compiled kernels):
+# the answer for a point as close to two triangles (on a symmetry plane of the reference) then does
+# not depend on rounding, nor on the order in which the triangles were tested.
+TIE = 1e-6
+
 
 def closest_on_triangles(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
     """(k, 3) float: closest point to ``P[i]`` on triangle ``(A[i], B[i], C[i])``; all inputs (k, 3)."""
@@ -57,6 +63,45 @@ def closest_on_triangles(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndar
     return np.select([c[:, None] for c in conds], choices, default=inside)
 
 
+def _vertex_normals(mesh: Mesh, T: np.ndarray, nrm: np.ndarray):
+    """Unit vertex normals ``(n, 3)``: the sums of the area-weighted triangle normals ``nrm (t, 3)``
+    of the triangles ``T (t, 3)`` around each vertex; and the normals the interpolation over each
+    triangle uses at its corners: rows ``(t, 3)`` of a table ``(m, 3)``.
+
+    Where the faces around a vertex disagree on their orientation (the ends of an edge whose two
+    faces run along it in the same direction: the seam of a Moebius band) the triangle normals are
+    summed turned to the side of the vertex's first triangle (the lowest index); summed as they
+    are they cancel (to 1e-15 of a normal at the trefoil band's seam, a direction rounding chose).
+    A triangle whose corner normal at such a vertex points away from its own normal interpolates
+    the opposite one (a row added to the table), so that its normals do not pass through zero.
+    A consistently oriented mesh has no such vertex: the table is the vertex normals and the rows
+    are ``T``.
+    """
+    t, n = mesh.topology, mesh.n_vertices
+    c0, c1 = t.edge_corners[~t.is_boundary_edge].T
+    same = t.corner_vertex[c0] == t.corner_vertex[c1]  # the two faces run the edge the same way
+    seam = np.zeros(n, dtype=bool)
+    seam[t.corner_vertex[c0[same]]] = seam[t.corner_next_vertex[c0[same]]] = True
+    sign = np.ones(T.shape)
+    if seam.any():
+        first = np.full(n, len(T))
+        for j in range(3):
+            np.minimum.at(first, T[:, j], np.arange(len(T)))
+        facing = np.einsum("tjk,tk->tj", nrm[np.minimum(first, len(T) - 1)[T]], nrm)
+        sign = np.where(seam[T] & (facing < 0), -1.0, 1.0)
+    vn = np.zeros((n, 3))
+    for j in range(3):  # three scatter-adds, not a loop over triangles
+        np.add.at(vn, T[:, j], sign[:, j, None] * nrm)
+    vn /= np.maximum(np.linalg.norm(vn, axis=1, keepdims=True), 1e-300)
+    if not seam.any():
+        return vn, T, vn
+    away = seam[T] & (np.einsum("tjk,tk->tj", vn[T], nrm) < 0)
+    extra = np.flatnonzero(seam)
+    row = np.full(n, -1, dtype=np.int64)
+    row[extra] = n + np.arange(len(extra))
+    return vn, np.where(away, row[T], T), np.concatenate([vn, -vn[extra]])
+
+
 class Reference:
     """A reference surface for closest-point queries.
 
@@ -87,11 +132,7 @@ class Reference:
         fallback = face_normals(mesh)[self.triangle_face]
         ok = length > 1e-14 * max(self.radius, 1e-300) ** 2
         self.normals = np.where(ok[:, None], nrm / np.where(ok, length, 1.0)[:, None], fallback)
-        vn = np.zeros_like(mesh.V)
-        for j in range(3):  # three scatter-adds, not a loop over triangles
-            np.add.at(vn, T[:, j], nrm)
-        vlen = np.linalg.norm(vn, axis=1, keepdims=True)
-        self.vertex_normals = vn / np.maximum(vlen, 1e-300)
+        self.vertex_normals, self.normal_corners, self.normal_table = _vertex_normals(mesh, T, nrm)
         # triangles grouped by size (radii within a factor 2), one k-d tree each, so
         # that the exactness bound uses the largest radius of the group, not of the mesh
         level = np.floor(np.log2(np.maximum(radii, 1e-300) / max(radii.min(), 1e-300))).astype(int)
@@ -143,18 +184,21 @@ class Reference:
         if not len(f):
             return
         Y = closest_on_triangles(P[owner], self._A[f], self._B[f], self._C[f])
-        d = np.linalg.norm(Y - P[owner], axis=1)
-        # owner is sorted: segment minima, then the first position reaching each
+        d2 = np.einsum("ij,ij->i", Y - P[owner], Y - P[owner])
+        # owner is sorted: segment minima, then the lowest triangle within TIE of each
         starts = np.flatnonzero(np.concatenate([[True], owner[1:] != owner[:-1]]))
-        seg_min = np.minimum.reduceat(d, starts)
-        counts = np.diff(np.append(starts, len(d)))
-        at_min = np.flatnonzero(d == np.repeat(seg_min, counts))
+        seg_min = np.minimum.reduceat(d2, starts)
+        counts = np.diff(np.append(starts, len(d2)))
+        at_min = np.flatnonzero(d2 <= np.repeat(seg_min, counts) * (1 + TIE))
+        at_min = at_min[np.lexsort((f[at_min], owner[at_min]))]
         _, pos = np.unique(owner[at_min], return_index=True)
         first = at_min[pos]
         o = owner[first]
-        better = d[first] < dbest[o]
+        b2 = dbest[o] ** 2
+        better = (d2[first] < b2 * (1 - TIE)) | ((d2[first] <= b2 * (1 + TIE)) & (f[first] < tri[o]))
+        better |= ~np.isfinite(dbest[o])
         o, pick = o[better], first[better]
-        dbest[o], Yb[o], tri[o] = d[pick], Y[pick], f[pick]
+        dbest[o], Yb[o], tri[o] = np.sqrt(d2[pick]), Y[pick], f[pick]
 
     def _interpolated_normals(self, Y: np.ndarray, tri: np.ndarray) -> np.ndarray:
         """(k, 3) unit normals at footpoints ``Y (k, 3)`` on triangles ``tri (k,)``:
@@ -170,8 +214,8 @@ class Reference:
         den = np.where(ok, den, 1.0)
         v = (d11 * d20 - d01 * d21) / den
         w = (d00 * d21 - d01 * d20) / den
-        Tv = self.triangles[tri]
-        vn = self.vertex_normals
+        Tv = self.normal_corners[tri]
+        vn = self.normal_table
         N = (1 - v - w)[:, None] * vn[Tv[:, 0]] + v[:, None] * vn[Tv[:, 1]] + w[:, None] * vn[Tv[:, 2]]
         length = np.linalg.norm(N, axis=1)
         ok &= length > 1e-6

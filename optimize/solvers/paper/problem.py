@@ -5,10 +5,15 @@ What the run solves comes from its problem description
 the default method's too): the layout, the normalization, the fixed vertices, the
 rows and the energies.  Named variable layout (:class:`optimize.terms.variables.Layout`, the default
 method's): the unknown vector has one block, ``vertices (n, 3)``, the vertex
-positions centred at their mean ``c`` and divided by the mean edge length ``h``
+positions centred at their mean ``c``, divided by the mean edge length ``h``
 (:func:`optimize.mesh.measures.normalization`, the default method's
-normalization), so that every residual and step is scale-free (angles and
-determinants do not change, fairness is ``K x`` and closeness ``((v - y) . n) / h``).
+normalization) and turned to the input's canonical axes ``R``
+(:func:`optimize.solvers.paper.frame.canonical_rotation`): ``x = ((V - c) / h) R``.
+Every residual and step is scale-free (angles and determinants do not change,
+fairness is ``K x`` and closeness ``(x - y) . n`` with footpoints and normals on the
+reference in the same coordinates), and a rigid motion or a uniform scale of the
+input changes the solver's input by rounding only: the methods move with their input
+(the penalty method's per-coordinate damping would not, in the model's axes).
 Fixed vertices are removed: Jacobians are restricted to the ``free``
 coordinates and steps are scattered back with :meth:`Problem.step`.
 
@@ -40,10 +45,11 @@ from ...terms.determinants import det_values
 from ...terms.fairness import fairness_matrix
 from ...terms.problem import ProblemSpec, describe
 from ...tolerances import DEFAULT, Tolerances
+from .frame import canonical_rotation
 from .system import ConstraintSystem, Pattern
 from .targets import prepare_all
 
-FOOT_MARGIN = 0.3  # footpoint candidates are renewed for vertices that moved this many mean edges
+FOOT_MARGIN = 0.3  # footpoint candidates are renewed for vertices that moved this many mean edges (x units)
 
 
 class Problem:
@@ -84,7 +90,8 @@ class Problem:
         self.tests = spec.tests
         self.w_fair, self.w_close = spec.energies.fairness, spec.energies.closeness
         self.center, self.h = spec.centre, spec.scale
-        self.layout = spec.layout  # x = ((V - center) / h), named
+        self.R = canonical_rotation((mesh.V - self.center) / self.h)  # (3, 3), columns: the axes
+        self.layout = spec.layout  # x = ((V - center) / h) R, named
         self.fixed = spec.fixed
         mask = np.ones(self.layout.size, dtype=bool)
         mask[self.layout.index("vertices")[self.fixed].ravel()] = False
@@ -170,14 +177,19 @@ class Problem:
     # -- variables ----------------------------------------------------------
     @property
     def ref(self) -> Reference:
-        """The closest-point structure of the reference (built on first use)."""
+        """The closest-point structure of the reference in the unknowns' coordinates
+        (:meth:`scaled`; built on first use)."""
         if self._ref is None:
-            self._ref = Reference(self.reference)
+            self._ref = Reference(self.reference.with_vertices(self.scaled(self.reference.V)))
         return self._ref
+
+    def scaled(self, V: np.ndarray) -> np.ndarray:
+        """(n, 3) float: model positions ``V (n, 3)`` in the unknowns' coordinates ``((V - c) / h) R``."""
+        return ((np.asarray(V, dtype=np.float64) - self.center) / self.h) @ self.R
 
     def x0(self) -> np.ndarray:
         """(3 n,) float: the scaled input positions."""
-        return self.layout.pack(vertices=(self.mesh.V - self.center) / self.h)
+        return self.layout.pack(vertices=self.scaled(self.mesh.V))
 
     def vertices(self, x: np.ndarray) -> np.ndarray:
         """(n, 3) float: the ``vertices`` block of ``x`` (scaled positions; a view)."""
@@ -185,7 +197,7 @@ class Problem:
 
     def positions(self, x: np.ndarray) -> np.ndarray:
         """(n, 3) float: model positions of the scaled vector ``x (3 n,)``."""
-        return self.center + self.h * self.vertices(x)
+        return self.center + self.h * (self.vertices(x) @ self.R.T)
 
     def step(self, x: np.ndarray, s: np.ndarray, alpha: float = 1.0) -> np.ndarray:
         """(3 n,) float: ``x`` moved by ``alpha * s`` on the free coordinates (``s (k,)``)."""
@@ -229,22 +241,23 @@ class Problem:
     def foot_search(self) -> Footpoints:
         """Exact closest points with candidates kept between iterations (built on first use)."""
         if self._foot is None:
-            self._foot = Footpoints(self.ref, FOOT_MARGIN * self.h)
+            self._foot = Footpoints(self.ref, FOOT_MARGIN)
         return self._foot
 
     def footpoints(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Closest points ``Y (n, 3)`` (model units) and unit normals ``N (n, 3)`` on the reference."""
-        return self.foot_search.closest(self.positions(x))
+        """Closest points ``Y (n, 3)`` and unit normals ``N (n, 3)`` on the reference, both in the
+        unknowns' coordinates (:meth:`scaled`)."""
+        return self.foot_search.closest(self.vertices(x))
 
     def closeness(self, x: np.ndarray, foot=None, jac: bool = True):
         """Unweighted tangent-plane closeness rows ``(r (n,), J (n, k))`` at footpoints ``foot``.
 
         ``foot = (Y, N)`` from :meth:`footpoints` (recomputed at ``x`` when None).  The rows
-        are :func:`optimize.terms.closeness.closeness_terms`'s over ``h`` (``J`` the same matrix,
-        on the free columns, its values set on a pattern built once).
+        are :func:`optimize.terms.closeness.closeness_terms`'s in the unknowns' coordinates (``J``
+        the same matrix, on the free columns, its values set on a pattern built once).
         """
         Y, N = self.footpoints(x) if foot is None else foot
-        r = closeness_residual(self.positions(x), Y, N) / self.h
+        r = closeness_residual(self.vertices(x), Y, N)
         if not jac:
             return r
         if self._close is None:
@@ -265,7 +278,7 @@ class Problem:
                 g += w1 * kernels.matvec(self.Kt, r)
         if w2 > 0:
             Y, N = self.footpoints(x) if foot is None else foot
-            r = closeness_residual(self.positions(x), Y, N) / self.h
+            r = closeness_residual(self.vertices(x), Y, N)
             f += w2 * float(r @ r)
             if grad:
                 G = N * r[:, None]
@@ -324,8 +337,12 @@ class Problem:
 
     def max_distance(self, V: np.ndarray) -> float:
         """Largest distance of ``V (n, 3)`` to the reference, relative to its bbox diagonal."""
-        Y, _ = self.foot_search.closest(V)
-        return float(np.linalg.norm(V - Y, axis=1).max(initial=0.0) / self.ref.bbox_diagonal)
+        return float(self._distances(V).max(initial=0.0) / self.ref.bbox_diagonal)
+
+    def _distances(self, V: np.ndarray) -> np.ndarray:
+        """(n,) float: distances of the model positions ``V (n, 3)`` to the reference, in ``h``."""
+        Vs = self.scaled(V)
+        return np.linalg.norm(Vs - self.foot_search.closest(Vs)[0], axis=1)
 
     def result(self, x: np.ndarray, *, status: str, nit: int, history: list, timings: dict,
                method: str, message: str, multipliers: np.ndarray | None = None) -> OptimizeResult:
@@ -342,16 +359,16 @@ class Problem:
         success = status == "converged" and self.converged(m)
         if status == "converged" and not success:
             status = "stalled"
+        dist = self._distances(V)  # in h
         axes = cones = None
         if self.target == "conical":
             axes, cones = node_axes(out)
         res = OptimizeResult(
             mesh=out, success=success, status=status, message=message, nit=nit, history=history,
-            defects=defects, max_distance=self.max_distance(V),
+            defects=defects, max_distance=float(dist.max(initial=0.0) / self.ref.bbox_diagonal),
             normals=measures.face_normals(out), axes=axes, cone_angles=cones,
             multipliers=multipliers, timings=timings, method=method, target=self.target)
-        Y, _ = self.foot_search.closest(V)
-        record_shape(res, self.mesh, np.linalg.norm(V - Y, axis=1), self.ref.bbox_diagonal)
+        record_shape(res, self.mesh, dist * self.h, self.ref.bbox_diagonal * self.h)
         record_net(res, self.mesh, self.target)
         return check_folds(res, self.mesh.V, fold_advice(self.target, method), self.tol.fold)
 
