@@ -243,3 +243,17 @@ def test_a_surface_the_remesher_cannot_take_is_a_route_not_taken_not_bad_input(t
     assert d.startswith("Route: no route reached its target; the nearest is own lines (stalled)")
     assert "the remesh along its principal directions could not be made (why: above)" in d
     assert "input.remesh: auto" not in d  # it is on: never advised
+
+
+def test_an_export_error_names_the_run_folder_not_the_temporary_one(tmp_path, monkeypatch):
+    import fabricate.export as export
+    from optimize.errors import ExportError
+
+    def fails(parts, path, **kwargs):
+        raise ExportError(f"disk full writing {path}: cannot write the STL file (No space left on device)")
+
+    monkeypatch.setattr(export, "write_stl", fails)
+    cfg = tiny_config(tmp_path, "named", outputs=dict(MESH_ONLY, stl=True))
+    summary = run_pipeline(cfg, tmp_path / "out")  # an exporter's own error: the rest is written, exit 4
+    assert summary.exit_code == 4 and ".part" not in summary.message
+    assert "export failed: disk full writing model.stl: cannot write the STL file" in summary.message

@@ -162,9 +162,11 @@ def test_a_full_disk_while_exporting_still_leaves_nothing(tmp_path, monkeypatch)
     monkeypatch.setattr(export, "write_stl", full)
     cfg = tiny_config(tmp_path, "full", outputs={"stl": True, "step": False, "3mf": False, "dxf": False,
                                                  "svg": False, "bom": False, "pictures": False, "html": False})
-    with pytest.raises(OSError, match="No space left"):
+    with pytest.raises(OSError, match="No space left") as err:
         run_pipeline(cfg, tmp_path / "out")
     assert list((tmp_path / "out").iterdir()) == []
+    # the message names the run folder's file, not the hidden temporary folder that is gone
+    assert err.value.filename == str(tmp_path / "out" / "full" / "model.stl")
 
 
 def test_failed_output_check_is_exit_4_written_and_marked(tmp_path, monkeypatch):

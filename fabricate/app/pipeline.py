@@ -114,8 +114,9 @@ def run_pipeline(config: RunConfig, out_root: str | Path | None = None, progress
                                          "config_sha256": runfolder.config_hash(config)})
             previous = runfolder.check_target(target, force)  # again: a person may have changed it since
             dest, beside = runfolder.publish_run(tmp, target, previous, out.exit_code)
-        except BaseException:
+        except BaseException as exc:
             remove_part(tmp)
+            _name_target(exc, tmp, target)
             raise
     timings["total"] = time.perf_counter() - t_start
     summary = _summary(run, dest, timings)
@@ -161,6 +162,19 @@ def run_stages(config: RunConfig, workdir: Path, progress=None, t_start: float |
     return RunRecord(config=config, workdir=workdir, input=inp, optimize=opt, offset=off, parts=built,
                      structure=statics, exports=files, measures=frozen(measures), outcome=result,
                      timings=frozen(timings))
+
+
+def _name_target(exc: BaseException, tmp: Path, target: Path) -> None:
+    """Say the run folder's own name in the one line of ``exc`` where it names a file in the hidden
+    temporary folder the run was writing (``out/.roof.x6_oe.part/model.stl`` -> ``out/roof/model.stl``):
+    that folder is gone, the user knows the other."""
+    if isinstance(exc, OSError):
+        for attr in ("filename", "filename2"):
+            name = getattr(exc, attr, None)
+            if isinstance(name, str) and str(tmp) in name:
+                setattr(exc, attr, name.replace(str(tmp), str(target)))
+    elif exc.args and isinstance(exc.args[0], str) and str(tmp) in exc.args[0]:
+        exc.args = (exc.args[0].replace(str(tmp), str(target)),) + exc.args[1:]
 
 
 PRECEDENCE = ("lost", "error", "bad_input", "export_failed", "tolerance_not_reached", "ok")
