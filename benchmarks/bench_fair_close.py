@@ -4,9 +4,11 @@ Prints, per mesh, target and variant: status, iterations, max distance to the in
 in % of its bbox diagonal, roughness ratio (result / input, ``fairness.roughness``), folded
 faces and seconds, every variant measured in the same run.
 
-Variants: ``default`` (as shipped), ``far-off`` (the fairness weight not scaled by the defect,
-``guided.FAR = None``), ``fairing`` (the constrained fairing phase of
-:mod:`optimize.solvers.fairing` after the guided solve) and ``fairing-far-off`` (both).
+Variants: ``plain`` (the guided solve alone, ``refine=False``), ``default`` (as shipped: the
+constrained fairing phase of :mod:`optimize.solvers.fairing` when the result moved further than
+the closeness tolerance, ``refine="auto"``), ``fairing`` (the phase always, ``refine=True``),
+``far-off`` (no phase, the fairness weight not scaled by the defect, ``guided.FAR = None``) and
+``fairing-far-off`` (both).
 
 Cases: the two COMPAS roofs and the tunnel of ``configs/meshes`` (metres), a noisy height-field
 canopy, a noisy translational vault (a conjugate net: PQ exactly before the noise) and, with
@@ -64,29 +66,28 @@ def design_canopy():
 @contextlib.contextmanager
 def variant(name: str):
     """Module settings of one variant, restored afterwards."""
-    from optimize.solvers import fairing
-
-    saved = guided.FAR, fairing.ENABLED
+    saved = guided.FAR
     try:
-        if name == "default":
-            pass
+        if name in ("plain", "default"):  # plain: no fairing phase; default: the package's (refine: auto)
+            yield {"refine": False} if name == "plain" else {}
         elif name == "far-off":
             guided.FAR = None
+            yield {"refine": False}
         elif name == "fairing":
-            fairing.ENABLED = True
+            yield {"refine": True}
         elif name == "fairing-far-off":
-            fairing.ENABLED, guided.FAR = True, None
+            guided.FAR = None
+            yield {"refine": True}
         else:
             raise ValueError(name)
-        yield
     finally:
-        guided.FAR, fairing.ENABLED = saved
+        guided.FAR = saved
 
 
 def one(mesh, target: str, name: str) -> dict:
-    with variant(name):
+    with variant(name) as kw:
         t = time.perf_counter()
-        res = optimize_mesh(mesh, target)
+        res = optimize_mesh(mesh, target, **kw)
         sec = time.perf_counter() - t
     d = res.defects
     return {"status": res.status, "nit": res.nit, "dist": 100 * d["distance"]["max_relative"],
@@ -100,7 +101,7 @@ def main(argv=None) -> None:
     ap.add_argument("--halftunnel", help="path of halftunnel.off (libigl's tutorial data)")
     ap.add_argument("--only", help="run only meshes whose name contains this")
     ap.add_argument("--targets", default="pq,conical,circular")
-    ap.add_argument("--variants", default="default,far-off,fairing,fairing-far-off")
+    ap.add_argument("--variants", default="plain,default,fairing,far-off")
     args = ap.parse_args(argv)
     cases = [read_mesh(MESHES / "compas_quadmesh.obj"), read_mesh(MESHES / "compas_tubemesh.obj"),
              read_mesh(MESHES / "tunnel.off"), canopy(), vault(), design_canopy()]

@@ -47,7 +47,7 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
                   tol: Tolerances = DEFAULTS.tol, max_iter: int = DEFAULTS.max_iter, callback=None,
                   linear_solver: str = DEFAULTS.linear_solver, formulation: str = DEFAULTS.formulation,
                   torsion_free_beams=DEFAULTS.torsion_free_beams, convex: bool = DEFAULTS.convex,
-                  **options) -> OptimizeResult:
+                  refine=DEFAULTS.refine, **options) -> OptimizeResult:
     """Move the vertices of ``mesh`` so that it becomes ``target``; never mutates ``mesh``.
 
     mesh : Mesh, quads with n-gons and triangles allowed, boundary allowed.
@@ -67,9 +67,9 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
     fairness, closeness : weights of the scale-free fairness and tangent-plane
         closeness energies relative to the constraints (halved every iteration; the
         fairness weight also scaled by the worst defect over ``guided.FAR``, so a mesh
-        nearly there keeps its shape).  With ``optimize.solvers.fairing.ENABLED`` (off by
-        default) a converged run then minimizes fairness relative to the input plus
-        closeness, balanced by their ratio, with every constraint kept exact.
+        nearly there keeps its shape).  With ``refine`` a converged run then minimizes
+        fairness relative to the input plus closeness, balanced by their ratio, with every
+        constraint kept exact.
     tol : Tolerances; the run converges when every defect of the target is within it.
     max_iter : iteration budget.
     callback : ``callback(entry: dict)`` after each iteration.
@@ -100,8 +100,20 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
     opts = OptimizeOptions(target=target, method=method, fairness=fairness, closeness=closeness,
                            max_iter=max_iter, tol=tol, linear_solver=linear_solver, formulation=formulation,
                            torsion_free_beams=torsion_free_beams, convex=convex, glide_boundary=glide_boundary,
-                           paper=options)
+                           refine=refine, paper=options)
     return run(mesh, opts, reference=reference, fixed=fixed, callback=callback)
+
+
+def _refines(refine, run, ref, form, tol: Tolerances) -> bool:
+    """Whether the constrained fairing phase follows the guided solve: ``refine`` True, or ``"auto"``
+    and the converged result lies further from the reference than ``tol.closeness`` (a result that
+    is close already is left as it is: the phase costs 5-30 x the solve)."""
+    if refine is False or run.status != "converged" or ref is None:
+        return False
+    if refine is True:
+        return True
+    V = form.layout.view(run.x, "vertices")
+    return float(ref.distance(V).max() / ref.bbox_diagonal) > tol.closeness
 
 
 def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None = None, fixed=None,
@@ -151,7 +163,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     t_setup = time.perf_counter() - t0
     run = solve(form, x0, ref=ref, glide=glide, tol=tol, max_iter=int(max_iter), callback=callback,
                 backend=linear_solver, convex=keep, far=guided.FAR)
-    if fairing.ENABLED:  # exact, fair and close: the constrained fairing phase from the converged iterate
+    if _refines(opts.refine, run, ref, form, tol):  # exact, fair and close: the constrained fairing phase
         run = fairing.refine(form, run, x0, ref=ref, glide=glide, convex=keep, tol=tol, fairness=fairness,
                              closeness=closeness, callback=callback)
     L = form.layout

@@ -45,7 +45,7 @@ MAX_WEIGHT = 1e6
 
 CHOICES: Mapping[str, tuple] = MappingProxyType({
     "target": TARGETS, "method": METHODS, "linear_solver": LINEAR_SOLVERS, "formulation": FORMULATIONS,
-    "torsion_free_beams": ("auto", True, False),
+    "torsion_free_beams": ("auto", True, False), "refine": ("auto", True, False),
 })
 """The allowed values of the settings that take one of a few."""
 
@@ -69,6 +69,9 @@ class OptimizeOptions:
     formulation : one of :data:`FORMULATIONS` (default method only).
     torsion_free_beams : ``"auto"``, True or False (default method, conical target).
     convex : keep every corner convex in the input convex (default method).
+    refine : ``"auto"``, True or False (default method): the constrained fairing phase after a
+        converged solve (:mod:`optimize.solvers.fairing`); ``"auto"`` runs it when the result lies
+        further than ``tol.closeness`` from the reference.
     glide_boundary : free boundary vertices glide on the reference's boundary curve.
     paper : extras of the paper's methods, names from :data:`PAPER_EXTRAS` (which method takes
         which is checked by ``optimize.solvers.paper.run_paper_method``); read-only mapping.
@@ -88,11 +91,15 @@ class OptimizeOptions:
     torsion_free_beams: Literal["auto"] | bool = option("auto", help="conical: node axes solved with every "
                                                         "interior beam planar (auto: where needed)")
     convex: bool = option(True, help="default method: corners convex in the input stay convex")
+    refine: Literal["auto"] | bool = option("auto", help="default method: after converging, minimize fairness "
+                                            "(relative to the input) + closeness with every constraint exact "
+                                            "(optimize.solvers.fairing); auto: when the result moved further than "
+                                            "tolerances.closeness")
     glide_boundary: bool = option(False, help="free boundary vertices glide on the reference's boundary")
     paper: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self):
-        for key in ("target", "method", "linear_solver", "formulation", "torsion_free_beams"):
+        for key in ("target", "method", "linear_solver", "formulation", "torsion_free_beams", "refine"):
             val = getattr(self, key)
             if not any(val is c or (type(val) is type(c) and val == c) for c in CHOICES[key]):
                 raise ConfigError(f"{key}: {val!r} is not known, expected one of {CHOICES[key]}")

@@ -20,12 +20,7 @@ def _vault():
 
 
 def _run(mesh, target="pq", on=True):
-    saved = fairing.ENABLED
-    fairing.ENABLED = on
-    try:
-        return optimize_mesh(mesh, target)
-    finally:
-        fairing.ENABLED = saved
+    return optimize_mesh(mesh, target, refine=on)
 
 
 @pytest.fixture(scope="module")

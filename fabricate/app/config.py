@@ -187,7 +187,7 @@ class SubdivisionSection(Section):
 
 
 _OPTIMIZE_KEYS = ["target", "method", "formulation", "linear_solver", "torsion_free_beams", "fairness", "closeness",
-                  "max_iter", "fixed", "glide_boundary", "convex"]
+                  "max_iter", "fixed", "glide_boundary", "convex", "refine"]
 
 
 class OptimizeSection(section_base(OPT.OptimizeOptions, order=_OPTIMIZE_KEYS, extra={

@@ -16,6 +16,7 @@ stage_report(run)                                  -> the report files (names)
 from __future__ import annotations
 
 import logging
+import os
 from pathlib import Path
 from typing import Any
 
@@ -108,7 +109,7 @@ def optimizer_call(cfg, target: str) -> tuple[str, dict[str, Any]]:
                   max_iter=opt.max_iter)
     if opt.method == "default":  # asked for: the paper's method refuses a formulation other than auto
         kwargs.update(formulation=opt.formulation, linear_solver=opt.linear_solver,
-                      torsion_free_beams=opt.torsion_free_beams, convex=opt.convex)
+                      torsion_free_beams=opt.torsion_free_beams, convex=opt.convex, refine=opt.refine)
     return method, kwargs
 
 
@@ -269,6 +270,7 @@ EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl
            ("schedules", "glass_schedule.csv", "write_glass_schedule"),
            ("schedules", "steel_cut_list.csv", "write_steel_cut_list"),
            ("schedules", "node_schedule.csv", "write_node_schedule"),
+           ("glass_order", "glass_order.csv", "write_glass_order"),
            ("layout_plan", "layout_plan.dxf", "write_layout_plan"), ("bom", "bom.csv", "write_bom"),
            ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"), ("nc1", "nc1", "write_nc1"),
            ("gltf", "parts.glb", "write_parts_gltf"))
@@ -324,6 +326,7 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
             if _write_failed(exc):
                 raise  # the disk (full, read-only): nothing more can be written, the report neither
             msg = str(exc) if isinstance(exc, ExportError) else f"{fname}: export failed: {type(exc).__name__}: {exc}"
+            msg = msg.replace(f"{out}{os.sep}", "")  # the run folder's own names: the temporary folder goes
             log.warning("%s", msg)
             export_failed[fname] = {"pass": False, "why": msg}
             continue

@@ -44,6 +44,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..mesh import measures
 from ..proximity.footpoints import Footpoints
 from ..terms import convexity, edgefloor
 from ..terms import glide as glide_mod
@@ -55,15 +56,6 @@ from . import guided
 
 log = logging.getLogger(__name__)
 
-ENABLED = False
-"""Run the phase after a converged guided solve (the default path, :func:`optimize.api.run`).
-Off by default: measured (``benchmarks/bench_fair_close.py``; max distance % of the bbox diagonal /
-roughness ratio, guided alone -> with the phase) it is closer and fairer on the COMPAS roofs
-(tube PQ 0.63 / 1.13 -> 0.41 / 1.04, tube conical 1.88 / 1.12 -> 0.65 / 1.08, quad roof conical
-3.25 / 1.53 -> 1.92 / 1.12, circular 4.02 / 1.03 -> 1.39 / 1.13), but less close on noisy
-height fields, where keeping the input's second differences resists removing the noise
-(6 x 6 noisy vault PQ 1.25% -> 1.37%), and 5-30x slower (Gauss-Newton SQP without the
-constraints' curvature converges linearly: often the 40 iterations)."""
 MAX_ITER = 40
 EPS = 1e-10  # the KKT's dual regularization: redundant constraint rows stay solvable
 PROJECT = 8  # corrections back onto the constraints per trial
@@ -72,6 +64,14 @@ STOP = 1e-4  # relative decrease of E below which the phase ends
 MU_START, MU_MIN, MU_MAX = 1e-4, 1e-10, 1e4
 ANCHOR = 0.01  # weight of the displacement |v - v_in|^2 beside the tangent-plane closeness (relative)
 HINGE = 10.0  # weight of the one-sided convexity / edge-floor rows in E
+
+
+def _degenerate_faces(form: Formulation, x: np.ndarray, x_in: np.ndarray) -> int:
+    """How many faces of the iterate ``x`` are degenerate against the input ``x_in``
+    (:func:`optimize.mesh.measures.degenerate`: a shrunk edge or a straight corner)."""
+    L = form.layout
+    d = measures.degenerate(form.mesh, L.view(x, "vertices"), L.view(x_in, "vertices"))
+    return int(d["shrunk_edges"]["count"] + d["straight_corners"]["count"])
 
 
 def off_surface(V: np.ndarray, Y: np.ndarray, N: np.ndarray) -> tuple[np.ndarray, sp.csr_matrix]:
@@ -229,10 +229,13 @@ def refine(form: Formulation, run: guided.RunState, x_in: np.ndarray, *, ref, gl
     score = guided._score(defects, tol)
     timings = dict(run.timings)
     timings["fairing"] = time.perf_counter() - t0
-    if score > 0 or not nit:
+    slivers = _degenerate_faces(form, x, x_in) - _degenerate_faces(form, run.x, x_in)
+    if score > 0 or not nit or slivers > 0:
         note = (f"; the fairing phase kept no step ({reason})" if not nit else
                 f"; the fairing phase was dropped: after {nit} iterations a defect was 10^{score:.2f} "
-                f"of its tolerance")
+                f"of its tolerance" if score > 0 else
+                f"; the fairing phase was dropped: it left {slivers} more degenerate face(s) (a shrunk edge "
+                "or a straight corner)")
         return guided.RunState(x=run.x, status=run.status, message=run.message + note, nit=run.nit,
                                history=run.history, timings=timings, defects=run.defects)
     message = (f"{run.message}, then {nit} fairing iteration(s) with every constraint kept ({reason})")
