@@ -558,7 +558,8 @@ def overhead_limit(groups, spec) -> dict:
         over = deg > OVERHEAD_DEG
         ids += [i.split(".", 1)[0] for i in np.asarray(g.ids)[over]]
         tilt += deg[over].tolist()
-    entry = {"limit": f"laminated lower pane overhead: over {OVERHEAD_DEG:g} deg from vertical, DIN 18008-2",
+    entry = {"limit": f"a laminated lower pane, not toughened in every ply, where over {OVERHEAD_DEG:g} deg from "
+                      "vertical (DIN 18008-2)",
              "count": len(ids), "ids": ids, "why": "; ".join(build_up.overhead_warnings())}
     if ids:
         j = int(np.argmax(tilt))
