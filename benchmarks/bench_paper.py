@@ -104,7 +104,7 @@ def slow_paths():
 
     band, foot = Problem.band, Problem.footpoints
     Problem.band = lambda self, name, factory: None
-    Problem.footpoints = lambda self, x: self.ref.closest(self.positions(x))
+    Problem.footpoints = lambda self, x: self.ref.closest(self.vertices(x))
     enabled, reuse = kernels.ENABLED, cache.REUSE
     kernels.ENABLED = cache.REUSE = False
     try:
@@ -120,7 +120,8 @@ def row(name, seconds, res, paper=None, note=""):
     cells = [f"{name:<9}", f"{seconds:8.3f}", f"{TIMES.get('cpu', np.nan):7.3f}", f"{res.nit:5d}",
              f"{'yes' if res.success else 'NO':>4}", f"{measures.planarity(m).max():9.2e}", f"{det:9.2e}",
              f"{measures.conical_defect(m).max(initial=0.0):9.2e}",
-             f"{measures.circular_defect(m).max(initial=0.0):9.2e}", f"{res.max_distance:9.2e}"]
+             f"{measures.circular_defect(m).max(initial=0.0):9.2e}", f"{res.max_distance:9.2e}",
+             f"{res.status:>10}", f"{res.defects.get('folded', {}).get('count', 0):6d}"]
     if paper is not None:
         goal = "(goal 10x met)" if paper / seconds >= 10 else "(goal 10x NOT met)"
         cells.append(f"{paper:7.2f}  {paper / seconds:6.1f}x {goal}")
@@ -128,7 +129,7 @@ def row(name, seconds, res, paper=None, note=""):
 
 
 HEADER = ("method       seconds  cpu s  iters  ok   planarity        det    conical   circular   distance"
-          "  paper s   paper/ours")
+          "      status  folded  paper s   paper/ours")
 
 
 def warm_up():
