@@ -203,7 +203,8 @@ def test_fabricate_run_with_input_remesh_reports_both_routes(tmp_path):
     summary = run_pipeline(load_config(tmp_path / "r.yaml"), tmp_path / "out")
     report = json.loads((tmp_path / "out" / "r" / "report.json").read_text())
     routes = report["input"]["routes"]
-    assert [r["route"] for r in routes] == ["original", "remeshed"]
+    assert [r["route"] for r in routes] == ["own lines", "remeshed along principal directions"]
+    assert [r["chosen"] for r in routes] == [False, True]
     assert routes[1]["success"] and routes[1]["folded"] == 0  # the original: exact but 4% away, or held
     assert routes[1]["distance"]["max_relative"] < min(0.005, routes[0]["distance"]["max_relative"])
     assert summary.faces == routes[1]["faces"], summary

@@ -217,6 +217,7 @@ def refine(form: Formulation, run: guided.RunState, x_in: np.ndarray, *, ref, gl
         entry = {"iteration": run.nit + nit, "phase": "fairing", "step": step, "mu": mu, "energy": Et,
                  "constraint_residual": theta, "seconds": time.perf_counter() - t_it}
         entry.update({k: float(d.max(initial=0.0)) for k, d in guided.measured(form, x, glide).items()})
+        entry["folded"] = int(folds.faces(L.view(x, "vertices")).sum())  # as every guided entry has it
         history.append(entry)
         log.info("fairing iteration %d: energy %.6g, constraints %.3g, step %.3g", nit, Et, theta, step)
         if callback is not None:
