@@ -40,18 +40,24 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
 import time
 
 import numpy as np
 
 ENABLED = os.environ.get("CONICAL_FAB_NUMBA", "1") != "0"  # False: the NumPy paths
 _KERNELS = None  # module namespace once compiled, False when numba is missing
+_THREAD = threading.local()  # .off: within disabled() in this thread
+
+
+def _on() -> bool:
+    return ENABLED and not getattr(_THREAD, "off", False)
 
 
 def get():
     """The compiled kernels (an object with the functions below as attributes), or None."""
     global _KERNELS
-    if not ENABLED:
+    if not _on():
         return None
     if _KERNELS is None:
         try:
@@ -71,7 +77,7 @@ def load(module: str):
     """Another compiled kernel module (``fabricate.export._nest_kernel`` ...), imported on first use, or None
     without numba or when the kernels are switched off (:data:`ENABLED`, ``CONICAL_FAB_NUMBA=0``: one switch
     for the optimizer's kernels and every other)."""
-    if not ENABLED:
+    if not _on():
         return None
     if module not in _LOADED:
         import importlib
@@ -94,13 +100,13 @@ def matvec(M, x: np.ndarray) -> np.ndarray:
 
 @contextlib.contextmanager
 def disabled():
-    """Within the block, :func:`get` returns None (the NumPy paths)."""
-    global ENABLED
-    was, ENABLED = ENABLED, False
+    """Within the block, in this thread, :func:`get` and :func:`load` return None (the NumPy paths);
+    other threads (a batch's jobs on one Dask worker) keep the kernels."""
+    was, _THREAD.off = getattr(_THREAD, "off", False), True
     try:
         yield
     finally:
-        ENABLED = was
+        _THREAD.off = was
 
 
 def warm_up() -> float:
