@@ -270,6 +270,7 @@ EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl
            ("schedules", "glass_schedule.csv", "write_glass_schedule"),
            ("schedules", "steel_cut_list.csv", "write_steel_cut_list"),
            ("schedules", "node_schedule.csv", "write_node_schedule"),
+           ("schedules", "weld_schedule.csv", "write_weld_schedule"),
            ("glass_order", "glass_order.csv", "write_glass_order"),
            ("layout_plan", "layout_plan.dxf", "write_layout_plan"), ("bom", "bom.csv", "write_bom"),
            ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"), ("nc1", "nc1", "write_nc1"),

@@ -20,6 +20,7 @@ _EXPORTS = {
     "write_stl": ".stl", "write_stl_parts": ".stl",
     "write_svg": ".svg",
     "write_3mf": ".threemf",
+    "write_weld_schedule": ".welds",
 }
 
 def write_ifc(parts, path, **kwargs) -> dict:
