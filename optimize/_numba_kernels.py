@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .proximity.surface import TIE  # closest-point ties: the lowest triangle index wins
+from .tolerances import CLOSEST_TIE as TIE  # closest-point ties: the lowest triangle index wins
 
 
 @njit(cache=True, inline="always")

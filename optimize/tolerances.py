@@ -8,6 +8,11 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
 
+CLOSEST_TIE = 1e-6
+"""Squared distances to a reference within this (relative) of the least are a tie among closest points,
+which the lowest triangle index wins in every search path (``optimize.proximity.surface``,
+``Footpoints``, the compiled kernels), so mirror-image footpoints are not picked by rounding."""
+
 HELD_TO = {"det": "planarity", "glide": "planarity", "short_edge": "planarity",
            "node_cone": "conical", "beam": "conical"}
 """Derived defects of the solvers and the tolerance each is held to: ``det`` (the paper's strip

@@ -51,7 +51,8 @@ def finished_run(tmp_path_factory) -> FinishedRun:
 
 
 NO_FILES = {"step": False, "stl": False, "3mf": False, "dxf": False, "svg": False, "bom": False,
-            "pictures": False, "html": False, "ifc": False, "3dm": False, "nc1": False, "gltf": False}
+            "pictures": False, "html": False, "ifc": False, "3dm": False, "nc1": False, "gltf": False,
+            "glass_order": False}
 
 
 def tiny_config(folder: Path, name: str = "tiny", *, outputs: dict | None = None, **sections):

@@ -10,7 +10,7 @@ from _pipeline_fixtures import tiny_config
 from fabricate.app.pipeline import moved_sentence, outcome, run_pipeline
 
 MESH_ONLY = {"step": False, "stl": False, "3mf": False, "dxf": False, "svg": False, "bom": False,
-             "pictures": False, "html": False}
+             "pictures": False, "html": False, "glass_order": False}
 
 
 def test_a_converged_mesh_whose_parts_cannot_be_built_is_written_and_ends_3(tmp_path, monkeypatch):
@@ -117,8 +117,9 @@ def test_the_shipped_rhino_roof_in_metres_builds_and_warns_how_far_it_moved(tmp_
     report = json.loads((tmp_path / "out" / "own_roof" / "report.json").read_text())
     close = report["measures"]["closeness"]
     assert report["input"]["mm_per_unit"] == 1000.0 and 7000 < close["diagonal_mm"] < 7600
-    assert "1 warning(s): closeness" in summary.message and "design moved up to" in summary.message
+    assert "warning(s): closeness" in summary.message and "design moved up to" in summary.message
     assert close["pass"] is False and close["role"] == "information" and close["max_mm"] > 50
+    assert summary.decision.startswith("Route: conical by own lines")
     assert report["measures"]["planarity"]["max"] <= 1e-6 and report["measures"]["folded"]["max"] == 0
 
 
@@ -129,8 +130,9 @@ def test_the_shipped_tube_shell_that_cannot_be_built_says_why_and_keeps_the_mesh
     summary = run_pipeline(cfg, tmp_path / "out")
     out = tmp_path / "out" / "own_roof_tube"
     assert (summary.status, summary.exit_code) == ("tolerance_not_reached", 3)
-    assert "no panels or beams built from the optimized mesh: beam B" in summary.message
-    assert "reduce parts.beam_depth" in summary.message and "design moved up to" in summary.message
+    # 200 mm deep beams on a shell this tightly curved: the offset faces turn over (or the beams fold), named
+    assert "no panels or beams built" in summary.message and "design moved up to" in summary.message
+    assert "mm" in summary.message.split("no panels or beams built", 1)[1]
     assert (out / "mesh.obj").is_file() and (out / "TOLERANCE_NOT_REACHED.txt").is_file()
 
 

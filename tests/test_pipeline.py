@@ -276,7 +276,7 @@ def test_folded_panels_write_no_cut_file_and_end_marked(tmp_path, capsys):
     err = cap.err
     assert code == 3 and "folded" in err and "no panels or beams built" in err
     assert cap.out.startswith("Route: no route reached its target; the nearest is own lines (folded)")
-    assert "input.remesh: auto" not in cap.out and "optimize.target: pq was asked for" in cap.out
+    assert "What may help: input.remesh: auto" in cap.out and "optimize.target: pq was asked for" in cap.out
     out = tmp_path / "out" / "f"
     assert (out / "TOLERANCE_NOT_REACHED.txt").exists() and (out / "mesh.obj").exists()
     for name in ("model.step", "model.stl", "model.3mf", "outlines.dxf", "outlines.svg", "bom.csv"):

@@ -20,12 +20,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..mesh import Mesh
-
-# Squared distances within TIE (relative) of the least are a tie, which the lowest triangle index
-# wins, in every closest-point search (here, optimize.proximity.footpoints and its compiled kernels):
-# the answer for a point as close to two triangles (on a symmetry plane of the reference) then does
-# not depend on rounding, nor on the order in which the triangles were tested.
-TIE = 1e-6
+from ..tolerances import CLOSEST_TIE as TIE  # closest-point ties: the lowest triangle index wins
 
 
 def closest_on_triangles(P: np.ndarray, A: np.ndarray, B: np.ndarray, C: np.ndarray) -> np.ndarray:
