@@ -221,7 +221,12 @@ def stage_cad(cfg, opt: OptimizeRecord, off: OffsetRecord) -> PartsRecord:
     if not turned["ok"]:  # a layer past the focal distance: panels and beams would cross
         from fabricate.offset.turnover import turnover_sentence
 
-        return skipped("no panels or beams built: " + turnover_sentence(turned), "skipped: offset faces turn over")
+        why = turnover_sentence(turned)
+        lo = turned["safe_range_mm"][0]
+        if cfg.offset.distances is None and lo is not None and lo < 0:  # the layers are [0, -beam_depth]
+            why += (f" The layers come from parts.beam_depth = {spec.beam_depth:g} mm: at most {np.floor(-lo):.0f} mm "
+                    "fits this design")
+        return skipped("no panels or beams built: " + why, "skipped: offset faces turn over")
     try:
         parts = build_parts(off.structure, spec)
     except (ConfigError, MeshError) as exc:
