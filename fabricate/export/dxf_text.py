@@ -21,12 +21,12 @@ from __future__ import annotations
 
 import binascii
 import re
-import warnings
 from pathlib import Path
 
 import numpy as np
 
 from optimize.errors import ExportError
+from optimize.warnfilter import filtered
 
 APPID = "CONICAL_FAB"
 NUMBER_CODES = ((10, 79), (90, 99), (110, 149), (160, 179), (210, 239), (270, 299), (370, 389), (400, 409), (420, 429),
@@ -92,8 +92,7 @@ def _codes(buf: np.ndarray, data: bytes, cs: np.ndarray, ce: np.ndarray, path, k
             v = (v * np.uint64(100) + (v >> np.uint64(16))) & np.uint64(0x0000FFFF0000FFFF)
             v = (v * np.uint64(10000) + (v >> np.uint64(32))) & np.uint64(0xFFFFFFFF)
             return v.astype(np.int64)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
+    with filtered("ignore", DeprecationWarning):
         try:
             codes = np.fromstring(b" ".join([data[a:b] for a, b in zip(cs.tolist(), ce.tolist())]),
                                   dtype=np.int64, sep=" ")
@@ -172,8 +171,7 @@ def read_outlines_text(path, *, sheets: bool = False) -> tuple[dict[str, np.ndar
     def numbers(idx, dtype, what: str) -> np.ndarray:
         idx = np.flatnonzero(idx)
         text = b" ".join([data[a:b] for a, b in zip(vs[idx].tolist(), ve[idx].tolist())])
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
+        with filtered("ignore", DeprecationWarning):
             try:
                 x = np.fromstring(text, dtype=np.float64, sep=" ") if idx.size else np.zeros(0)
             except ValueError:
@@ -335,8 +333,7 @@ def _first_not_number(buf: np.ndarray, data: bytes, vs: np.ndarray, ve: np.ndarr
     text = b"\n".join([data[a:b] for a, b in zip(vs[rows].tolist(), ve[rows].tolist())]) + b"\n"
     good = text[:_NUMBERS.match(text).end()]                # the values up to the first that is none
     n_good = good.count(b"\n")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
+    with filtered("ignore", DeprecationWarning):
         x = np.fromstring(good, dtype=np.float64, sep=" ") if n_good else np.zeros(0)
     if x.size != n_good:                                    # each a number, one a line: not seen
         x = np.array([float(v) for v in good.split(b"\n")[:-1]])

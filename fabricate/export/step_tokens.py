@@ -22,12 +22,12 @@ expression pass: slower, same result).
 from __future__ import annotations
 
 import re
-import warnings
 
 import numpy as np
 from numpy.lib.stride_tricks import as_strided
 
 from optimize.errors import ExportError
+from optimize.warnfilter import filtered
 
 QUOTE, SEMI, HASH, EQ, LPAR, RPAR, COMMA, NL = 39, 59, 35, 61, 40, 41, 44, 10
 PAD = 32                       # bytes after the data, so that windows never run off the end
@@ -448,8 +448,7 @@ class Records:
         self._fail(rows, commas.sum(axis=1) == per - 1, what, f"expected {per} numbers separated by commas")
         W[commas] = 32
         self._fail(rows, NUMBER_CHARS[W].all(axis=1), what, "a character that is not part of a number")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
+        with filtered("ignore", DeprecationWarning):
             try:
                 x = np.fromstring(W.tobytes(), dtype=np.float64, sep=" ")
             except ValueError:

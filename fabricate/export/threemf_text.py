@@ -15,7 +15,6 @@ quoting) is read by :func:`fabricate.export.threemf.read_3mf` (ElementTree).
 from __future__ import annotations
 
 import re
-import warnings
 import zipfile
 import zlib
 from pathlib import Path
@@ -25,6 +24,7 @@ from xml.sax.saxutils import unescape
 import numpy as np
 
 from optimize.errors import ExportError
+from optimize.warnfilter import filtered
 
 MODEL = "3D/3dmodel.model"
 MAX_UNPACK = 100
@@ -69,8 +69,7 @@ def _numbers(text: bytes, count: int, dtype, what: str, path) -> np.ndarray:
     for lit in LITERALS[what]:
         text = text.replace(lit, b" ")
     text = text.translate(BLANK[what])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
+    with filtered("ignore", DeprecationWarning):
         try:
             x = np.fromstring(text, dtype=np.float64, sep=" ") if count else np.zeros(0)
         except ValueError:

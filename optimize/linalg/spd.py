@@ -18,7 +18,6 @@ What we do about (near-)singular systems (the paper falls back to an SVD):
 from __future__ import annotations
 
 import logging
-import warnings
 
 import numpy as np
 import scipy.sparse as sp
@@ -26,6 +25,7 @@ import scipy.sparse.linalg as sla
 
 from .banded import BandOrder, band_array, band_order, cholesky_solve, lower_positions
 from .superlu import superlu
+from ..warnfilter import filtered
 
 log = logging.getLogger(__name__)
 
@@ -100,8 +100,7 @@ class Factor:
             raise ValueError(f"Factor: matrix has shape {self.M.shape}, expected a square matrix")
         self.lu = None
         try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("error", sla.MatrixRankWarning)
+            with filtered("error", sla.MatrixRankWarning):
                 self.lu = superlu(self.M, symmetric=symmetric)
         except (RuntimeError, sla.MatrixRankWarning) as exc:  # singular to working precision
             log.debug("sparse LU failed (%s); LSQR will be used", exc)
