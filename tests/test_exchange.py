@@ -91,7 +91,7 @@ def test_ifc_hierarchy_materials_quantities_and_fabrication_figures(ifc_file, pa
     assert psets["Pset_ConicalFabFabrication"]["Planarity_mm"] == pytest.approx(panel.planarity_mm)
     beam = parts.beams[0]
     member = next(e for e in f.by_type("IfcMember") if e.Name == beam.id)
-    assert member.PredefinedType == "MULLION" and eu.get_material(member).Name == "S355"
+    assert member.PredefinedType == "MULLION" and eu.get_material(member).Name == "S355J2"
     q = eu.get_psets(member)
     assert q["Qto_MemberBaseQuantities"]["Length"] == pytest.approx(beam.length_mm)
     assert q["Pset_ConicalFabFabrication"]["Twist_mm"] == pytest.approx(beam.planarity_mm)
@@ -220,7 +220,7 @@ def test_nc1_per_beam_reads_back_to_the_dxf_contour_and_the_bom(parts, bom, tmp_
     for path in files:
         nc = read_nc1(path)
         h, row = nc["header"], rows[path.stem]
-        assert h["piece"] == path.stem and h["code"] == "B" and h["grade"] == "S355" and h["quantity"] == 1
+        assert h["piece"] == path.stem and h["code"] == "B" and h["grade"] == "S355J2" and h["quantity"] == 1
         (face, pts), = nc["contours"]
         assert face == "v" and np.abs(pts[0] - pts[-1]).max() == 0  # closed
         assert _rigid_equal(pts[:-1], outlines[path.stem], 0.01), path.stem

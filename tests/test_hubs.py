@@ -200,7 +200,7 @@ def test_nc1_per_hub_tube_reads_back_to_its_bom_row_and_the_check_holds_it(tmp_p
     for i, pid in enumerate(tube.ids):
         nc = read_nc1(tmp_path / "nc1" / f"{pid}.nc1")
         h, row = nc["header"], tubes[pid]
-        assert (h["piece"], h["code"], h["profile"], h["grade"], h["quantity"]) == (pid, "RO", "RO180x8", "S355", 1)
+        assert (h["piece"], h["code"], h["profile"], h["grade"], h["quantity"]) == (pid, "RO", "RO180x8", "S355J2", 1)
         assert h["height"] == pytest.approx(180.0, abs=1e-3)
         assert h["web_thickness"] == h["flange_thickness"] == float(row["thickness_mm"]) == wall
         assert h["length"] == pytest.approx(float(row["length_mm"]), abs=2e-3)

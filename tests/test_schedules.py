@@ -64,7 +64,7 @@ def test_steel_cut_list_lengths_fit_their_stock_and_dihedrals_are_the_panels(par
             assert float(r["dihedral_deg"]) == pytest.approx(expected, abs=0.01)
         else:
             assert r["dihedral_deg"] == ""
-        assert r["grade"] == "S355" and r["section"].startswith("plate 60 x ")
+        assert r["grade"] == "S355J2" and r["section"].startswith("plate 60 x ")
         assert len(r["end_a_bevel_deg"].split()) == 2 and len(r["nodes"].split()) == 2
         del b
 
@@ -122,7 +122,7 @@ def test_the_quickstart_hubs_are_in_the_steel_cut_list_as_chs_and_caps(tmp_path)
         nid = f"N{v + 1:04d}"
         hub, tube, top, bottom = rows[nid], rows[nid + ".1"], rows[nid + ".2"], rows[nid + ".3"]
         assert hub["section"] == "tube hub CHS 160 x 8 + 2 caps PL12 24-gon D160" and hub["plates"] == "3"
-        assert tube["section"] == "CHS 160 x 8" and tube["member"] == "tube" and tube["grade"] == "S355"
+        assert tube["section"] == "CHS 160 x 8" and tube["member"] == "tube" and tube["grade"] == "S355J2"
         assert top["section"] == bottom["section"] == "PL12" and top["member"] == "top cap"
         assert float(tube["length_mm"]) == pytest.approx(float(bom[nid + ".1"]["length_mm"]), abs=0.05)
         assert float(hub["length_mm"]) == pytest.approx(float(tube["length_mm"]) + 24.0, abs=0.1)

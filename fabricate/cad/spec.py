@@ -121,7 +121,8 @@ class PartSpec:
         node axis, and the beams stop short of it.
     node_sides : number of sides of the node prism (a polygonal cylinder, so
         that STEP, STL and the analytic volume describe the same solid).
-    steel_grade : written on the steel cut list (EN 10025 grade, e.g. S355).
+    steel_grade : written on the steel cut list, the IFC and the NC1 files (EN 10025 grade with its quality,
+        e.g. S355J2, the default).
     beam : :class:`BeamSpec` (the section); node : :class:`NodeSpec` (the connection).
     limits : :class:`Limits` the parts are held to (flagged in the report).
     """
@@ -135,7 +136,8 @@ class PartSpec:
     density_glass: float = option(2500.0, gt=0, le=25000.0, unit="kg/m3")
     density_steel: float = option(7850.0, gt=0, le=25000.0, unit="kg/m3")
     node_sides: int = option(24, ge=6, le=256, help="sides of the polygonal hub")
-    steel_grade: str = option("S355", min_length=1, max_length=40, help="EN 10025 grade on the steel cut list")
+    steel_grade: str = option("S355J2", min_length=1, max_length=40,
+                               help="EN 10025 grade with its quality (S355J2, S355J0, S275JR ...) on the cut list, IFC, NC1")
     limits: Limits = Limits()
     beam: BeamSpec = BeamSpec()
     node: NodeSpec = NodeSpec()

@@ -53,14 +53,53 @@ from optimize.atomic import atomic_dir, umask
 from optimize.errors import ExportError, write_error
 
 NUM = "{:10.3f}"
+TEXT_MAX = 60
+"""The longest text a header line holds here.  A longer value is never cut silently: it is abbreviated by
+:func:`fit` to its first ``TEXT_MAX - 9`` characters, ``~`` and the 8 hex digits of its CRC-32 (the
+same value always gives the same text, two values that differ give different texts), and written
+whole in the file's ``**`` comment line."""
+
+
+def fit(value: str) -> str:
+    """``value`` as a header text of at most :data:`TEXT_MAX` ASCII characters (see there); a character
+    outside printable ASCII becomes ``_``."""
+    import zlib
+
+    text = "".join(c if 32 <= ord(c) < 127 else "_" for c in str(value))
+    if len(text) <= TEXT_MAX:
+        return text
+    return f"{text[:TEXT_MAX - 9]}~{zlib.crc32(text.encode('ascii')):08x}"
+
+
+def _along_axis(group) -> np.ndarray | None:
+    """(p,) angle (rad) of the beam axis in each solid's flat frame, or None for a group without a
+    placement (then x runs along the longer side of the outline's rectangle)."""
+    T = getattr(group, "transform", None)
+    if T is None or getattr(group, "centre_line", None) is None:
+        return None
+    from .schedules import beam_axes
+
+    t = np.einsum("pji,pj->pi", np.asarray(T, dtype=float)[:, :3, :3], beam_axes(group))   # in the part frame
+    return np.arctan2(t[:, 1], t[:, 0])
+
+
+def _frame(F: np.ndarray, angle: np.ndarray | None) -> np.ndarray:
+    """(p, k, 2) the outlines ``F (p, k, 2)`` turned so that x runs along the beam axis (``angle``, from
+    :func:`_along_axis`) or along the longer side, moved to the positive quadrant."""
+    if angle is None:
+        turn = np.ptp(F[:, :, 1], axis=1) > np.ptp(F[:, :, 0], axis=1)
+        F = np.where(turn[:, None, None], np.stack([F[:, :, 1], -F[:, :, 0]], axis=2), F)
+    else:
+        c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+        F = np.stack([c * F[:, :, 0] + s * F[:, :, 1], -s * F[:, :, 0] + c * F[:, :, 1]], axis=2)
+    return F - F.min(axis=1, keepdims=True)
 
 
 def contour(group, i: int) -> np.ndarray:
-    """(k, 2) the flat outline of part ``i`` with its lower-left corner at the origin, x along the length."""
-    Q = np.asarray(group.flat[i], dtype=float)
-    if np.ptp(Q[:, 1]) > np.ptp(Q[:, 0]):  # x along the longer side
-        Q = np.stack([Q[:, 1], -Q[:, 0]], axis=1)
-    return Q - Q.min(axis=0)
+    """(k, 2) the flat outline of part ``i``, x along its beam's axis (a group without placements: along
+    the longer side), lower-left corner at the origin."""
+    angle = _along_axis(group)
+    return _frame(np.asarray(group.flat[i], dtype=float)[None], None if angle is None else angle[i:i + 1])[0]
 
 
 def _signed_max(pair) -> float:
@@ -69,9 +108,28 @@ def _signed_max(pair) -> float:
     return float(pair[np.argmax(np.abs(pair))])
 
 
+def _bevels(group, i: int, k: int) -> np.ndarray:
+    """(k, 2) the weld preparation of each outline edge of part ``i`` (degrees from square on the ``v``
+    face's side and on the back's: ``bevel_deg``), zeros for a group without them; NaN read as 0."""
+    B = getattr(group, "bevel_deg", None)
+    if B is None or np.shape(B)[1] != k:
+        return np.zeros((k, 2))
+    return np.nan_to_num(np.asarray(B[i], dtype=float))
+
+
+def _texts(group, i: int, order: str, kind: str, where: str) -> list[str]:
+    """The four text lines: the order, what the part is, the mesh element, its assembly."""
+    from fabricate.cad.parts import unit_id
+
+    return [fit(order), fit(getattr(group, "member", "") or kind), fit(f"mesh {where} {int(group.element[i])}"),
+            fit(f"assembly {unit_id(group.ids[i])}")]
+
+
 def nc1_text(group, i: int, *, order: str, grade: str, density: float, angles: dict) -> str:
     """The NC1 file of plate ``i`` of ``group`` (a beam group); ``angles``: the group's
     :func:`fabricate.export.schedules.beam_angles` (the steel cut list's end cuts)."""
+    from fabricate.cad.parts import unit_id
+
     Q = contour(group, i)
     length, height = float(Q[:, 0].max()), float(Q[:, 1].max())
     t = float(group.thickness_mm[i])
@@ -81,41 +139,55 @@ def nc1_text(group, i: int, *, order: str, grade: str, density: float, angles: d
     web = angles["mitre"][i]
     bevel = (_signed_max(angles["end_bevel"][i, 0]), _signed_max(angles["end_bevel"][i, 1]))
     pid = group.ids[i]
-    head = [order, "conical-fab", "1", pid, grade, "1", f"PL{t:g}", "B"]
+    head = [fit(order), fit(unit_id(pid)), "1", fit(pid), fit(grade), "1", f"PL{t:g}", "B"]
     numbers = [length, height, 0.0, 0.0, t, 0.0, weight / (length * 1e-3), paint, web[0], web[1],
                bevel[0], bevel[1]]
-    texts = [order, group.member or group.kind, f"mesh edge {int(group.element[i])}", " ".join(group.neighbours[i])[:60]]
-    lines = ["ST", f"** {pid}.nc1 written by conical-fab"]
+    texts = _texts(group, i, order, group.kind, "edge")
+    lines = ["ST", f"** {pid}.nc1 written by conical-fab for {_comment(order)}"]
     lines += [f"  {v}" for v in head] + ["  " + NUM.format(v).strip() for v in numbers] + [f"  {v}" for v in texts]
     lines.append("AK")
     closed = np.vstack([Q, Q[:1]])
-    for j, (x, y) in enumerate(closed.tolist()):
-        lines.append(("  v " if j == 0 else "    ") + f"{NUM.format(x)} {NUM.format(y)} {NUM.format(0.0)}")
+    prep = np.vstack([_bevels(group, i, len(Q)), np.zeros((1, 2))])
+    for j, ((x, y), (b1, b2)) in enumerate(zip(closed.tolist(), prep.tolist())):
+        lines.append(("  v " if j == 0 else "    ") + f"{NUM.format(x)} {NUM.format(y)} {NUM.format(0.0)}"
+                     f" {NUM.format(b1)} {NUM.format(0.0)} {NUM.format(b2)} {NUM.format(0.0)}")
     cx, cy = Q.mean(axis=0)
     lines += ["SI", f"  v {NUM.format(cx)} {NUM.format(cy)} {NUM.format(0.0)} 10 {pid}", "EN", ""]
     return "\n".join(lines)
 
 
+def tube_diameter(group) -> np.ndarray:
+    """(p,) mm: the outside diameter of each hub tube (its ``K``-gon's circumscribed circle, the CHS the
+    cut list orders), to 0.1 mm."""
+    V = np.asarray(group.vertices, dtype=float)
+    ring = V[:, :V.shape[1] // 4]
+    return np.round(2.0 * np.linalg.norm(ring - ring.mean(axis=1, keepdims=True), axis=2).mean(axis=1), 1)
+
+
 def nc1_tube_text(group, i: int, *, order: str, grade: str, density: float) -> str:
     """The NC1 file of hub tube ``i`` of ``group`` (a node group of member ``tube``, vertices outer lower
     ring ``0..K-1`` first: :func:`fabricate.cad.hubs.tube_faces`)."""
-    V = np.asarray(group.vertices[i], dtype=float)
-    k = V.shape[0] // 4
-    ring = V[:k]
-    diameter = 2.0 * float(np.linalg.norm(ring - ring.mean(axis=0), axis=1).mean())
+    from fabricate.cad.parts import unit_id
+
+    diameter = float(tube_diameter(group)[i])
     wall = float(group.thickness_mm[i])
     length = float(group.length_mm[i])
     weight = float(group.volume_mm3[i]) * density * 1e-9
     pid = group.ids[i]
-    head = [order, "conical-fab", "1", pid, grade, "1", f"RO{diameter:g}x{wall:g}", "RO"]
+    head = [fit(order), fit(unit_id(pid)), "1", fit(pid), fit(grade), "1", f"RO{diameter:g}x{wall:g}", "RO"]
     numbers = [length, diameter, 0.0, wall, wall, 0.0, weight / (length * 1e-3), np.pi * diameter * 1e-3,
                0.0, 0.0, 0.0, 0.0]
-    texts = [order, "hub tube", f"mesh vertex {int(group.element[i])}", " ".join(group.neighbours[i])[:60]]
-    lines = ["ST", f"** {pid}.nc1 written by conical-fab"]
+    texts = _texts(group, i, order, "hub tube", "vertex")
+    texts[1] = "hub tube"
+    lines = ["ST", f"** {pid}.nc1 written by conical-fab for {_comment(order)}"]
     lines += [f"  {v}" for v in head] + ["  " + NUM.format(v).strip() for v in numbers] + [f"  {v}" for v in texts]
     lines += ["SI", f"  v {NUM.format(0.5 * length)} {NUM.format(0.5 * diameter)} {NUM.format(0.0)} 10 {pid}",
               "EN", ""]
     return "\n".join(lines)
+
+
+def _comment(order: str) -> str:
+    return "".join(c if 32 <= ord(c) < 127 else "_" for c in str(order))
 
 
 def _bevel_max(pair: np.ndarray) -> np.ndarray:
@@ -127,27 +199,24 @@ def _bevel_max(pair: np.ndarray) -> np.ndarray:
 
 def _template(k: int | None) -> str:
     """The ``%`` template of one file (LF line ends): a plate with a contour of ``k`` corners
-    (``k + 1`` lines, closed), or a tube (``k`` None: no contour)."""
-    st = ["ST", "** %s.nc1 written by conical-fab", "  %s", "  conical-fab", "  1", "  %s", "  %s", "  1"]
+    (``k + 1`` lines, closed, each with the weld preparation of the edge it starts), or a tube (``k``
+    None: no contour)."""
+    st = ["ST", "** %s.nc1 written by conical-fab for %s", "  %s", "  %s", "  1", "  %s", "  %s", "  1"]
     if k is None:
-        st += ["  RO%gx%g", "  RO"] + ["  %.3f"] * 12 + ["  %s", "  hub tube", "  mesh vertex %d", "  %s"]
+        st += ["  RO%gx%g", "  RO"] + ["  %.3f"] * 12 + ["  %s"] * 4
     else:
-        st += ["  PL%g", "  B"] + ["  %.3f"] * 12 + ["  %s", "  %s", "  mesh edge %d", "  %s", "AK"]
-        st += ["  v %10.3f %10.3f      0.000"] + ["    %10.3f %10.3f      0.000"] * k
+        st += ["  PL%g", "  B"] + ["  %.3f"] * 12 + ["  %s"] * 4 + ["AK"]
+        prep = " %10.3f      0.000 %10.3f      0.000"
+        st += ["  v %10.3f %10.3f      0.000" + prep] + ["    %10.3f %10.3f      0.000" + prep] * k
     return "\n".join(st + ["SI", "  v %10.3f %10.3f      0.000 10 %s", "EN", ""])
-
-
-def _neighbours(group) -> list[str]:
-    return [" ".join(n)[:60] for n in group.neighbours]
 
 
 def nc1_texts(group, *, order: str, grade: str, density: float, angles: dict) -> list[str]:
     """:func:`nc1_text` of every plate of ``group`` (the same text): the numbers of the whole group at
     once, ``flat (p, k, 2)`` turned and moved as :func:`contour` does each part."""
     F = np.asarray(group.flat, dtype=float)                                  # (p, k, 2)
-    turn = np.ptp(F[:, :, 1], axis=1) > np.ptp(F[:, :, 0], axis=1)
-    F = np.where(turn[:, None, None], np.stack([F[:, :, 1], -F[:, :, 0]], axis=2), F)
-    Q = F - F.min(axis=1, keepdims=True)
+    Q = _frame(F, _along_axis(group))
+    p, k = Q.shape[:2]
     length, height = Q[:, :, 0].max(axis=1), Q[:, :, 1].max(axis=1)
     t = np.asarray(group.thickness_mm, dtype=float)
     weight = np.asarray(group.volume_mm3, dtype=float) * density * 1e-9
@@ -158,19 +227,28 @@ def nc1_texts(group, *, order: str, grade: str, density: float, angles: dict) ->
     zero = np.zeros(len(t))
     numbers = np.stack([length, height, zero, zero, t, zero, weight / (length * 1e-3), paint, web[:, 0], web[:, 1],
                         _bevel_max(bevel[:, 0]), _bevel_max(bevel[:, 1])], axis=1).tolist()
-    closed = np.concatenate([Q, Q[:, :1]], axis=1).reshape(len(t), -1).tolist()   # (p, 2 (k + 1))
+    B = getattr(group, "bevel_deg", None)
+    prep = np.nan_to_num(np.asarray(B, dtype=float)) if B is not None and np.shape(B)[1] == k else np.zeros((p, k, 2))
+    rows = np.concatenate([Q, prep], axis=2)                                 # (p, k, 4): x y angle1 angle2
+    closed = np.concatenate([rows, np.concatenate([Q[:, :1], np.zeros((p, 1, 2))], axis=2)], axis=1)
+    closed = closed.reshape(p, -1).tolist()
     centre = Q.mean(axis=1).tolist()
-    template, member = _template(Q.shape[1]), group.member or group.kind
-    return [template % (pid, order, pid, grade, th, *num, order, member, int(el), nb, *xy, *c, pid)
-            for pid, th, num, el, nb, xy, c in zip(group.ids, t.tolist(), numbers, group.element.tolist(),
-                                                   _neighbours(group), closed, centre)]
+    template, kind = _template(k), group.kind
+    return [template % (pid, _comment(order), *head, th, *num, *_texts(group, i, order, kind, "edge"), *xy, *c, pid)
+            for i, (pid, th, num, xy, c) in enumerate(zip(group.ids, t.tolist(), numbers, closed, centre))
+            for head in [_head(order, pid, grade)]]
+
+
+def _head(order: str, pid: str, grade: str) -> tuple[str, str, str, str]:
+    """The header's texts before the profile: order, drawing (the assembly), piece (the part), grade."""
+    from fabricate.cad.parts import unit_id
+
+    return fit(order), fit(unit_id(pid)), fit(pid), fit(grade)
 
 
 def nc1_tube_texts(group, *, order: str, grade: str, density: float) -> list[str]:
     """:func:`nc1_tube_text` of every tube of ``group`` (the same text), the numbers of the group at once."""
-    V = np.asarray(group.vertices, dtype=float)                               # (p, nv, 3)
-    ring = V[:, :V.shape[1] // 4]
-    diameter = 2.0 * np.linalg.norm(ring - ring.mean(axis=1, keepdims=True), axis=2).mean(axis=1)
+    diameter = tube_diameter(group)
     wall = np.asarray(group.thickness_mm, dtype=float)
     length = np.asarray(group.length_mm, dtype=float)
     weight = np.asarray(group.volume_mm3, dtype=float) * density * 1e-9
@@ -178,10 +256,10 @@ def nc1_tube_texts(group, *, order: str, grade: str, density: float) -> list[str
     numbers = np.stack([length, diameter, zero, wall, wall, zero, weight / (length * 1e-3), np.pi * diameter * 1e-3,
                         zero, zero, zero, zero], axis=1).tolist()
     mark = np.stack([0.5 * length, 0.5 * diameter], axis=1).tolist()
-    template = _template(None)
-    return [template % (pid, order, pid, grade, d, w, *num, order, int(el), nb, *m, pid)
-            for pid, d, w, num, el, nb, m in zip(group.ids, diameter.tolist(), wall.tolist(), numbers,
-                                                 group.element.tolist(), _neighbours(group), mark)]
+    template, order_text = _template(None), fit(order)
+    return [template % (pid, _comment(order), *_head(order, pid, grade), d, w, *num,
+                        order_text, "hub tube", *_texts(group, i, order, "hub tube", "vertex")[2:], *m, pid)
+            for i, (pid, d, w, num, m) in enumerate(zip(group.ids, diameter.tolist(), wall.tolist(), numbers, mark))]
 
 
 class _Files:
@@ -247,7 +325,7 @@ def write_nc1(parts, folder, *, order: str = "roof", grade: str | None = None) -
     from .schedules import beam_angles
 
     t0 = time.perf_counter()
-    grade = grade or getattr(parts.spec, "steel_grade", "S355")
+    grade = grade or getattr(parts.spec, "steel_grade", "S355J2")
     folder = Path(folder)
     files, tubes, size = 0, 0, 0
 

@@ -57,10 +57,11 @@ from fabricate.cad.limits import corner_angles_deg, edge_lengths
 GLASS_COLUMNS = ("id", "face", "type", "build_up", "thickness_mm", "solids", "spacer_setback_mm", "area_m2", "blank_w_mm",
                  "blank_h_mm", "edge_lengths_mm", "corner_angles_deg", "edge_bevels_deg", "beams", "neighbours",
                  "weight_kg", "warp_mm", "planarity", "flags")
-STEEL_COLUMNS = ("id", "edge", "type", "section", "member", "plates", "grade", "length_mm", "blank_w_mm", "blank_h_mm",
+STEEL_COLUMNS = ("id", "edge", "type", "assembly", "section", "member", "plates", "grade", "length_mm",
+                 "system_length_mm", "blank_w_mm", "blank_h_mm",
                  "end_a_mitre_deg", "end_a_bevel_deg", "end_b_mitre_deg", "end_b_bevel_deg", "top_bevel_deg",
                  "dihedral_deg", "weight_kg", "panels", "nodes", "flags")
-NODE_COLUMNS = ("id", "vertex", "type", "x_mm", "y_mm", "z_mm", "axis_x", "axis_y", "axis_z", "valence", "beams",
+NODE_COLUMNS = ("id", "vertex", "type", "assembly", "x_mm", "y_mm", "z_mm", "axis_x", "axis_y", "axis_z", "valence", "beams",
                 "azimuth_deg", "elevation_deg", "hub", "hub_diameter_mm", "hub_wall_mm", "hub_height_mm")
 
 
@@ -250,6 +251,44 @@ def unit_facts(parts) -> dict[str, np.ndarray]:
             "length": np.linalg.norm(C[:, 1] - C[:, 0], axis=1)}
 
 
+def beam_axes(g) -> np.ndarray:
+    """(p, 3) unit vectors: the axis of the beam each solid of beam group ``g`` belongs to (its centre
+    line ``A0 -> B0``, the glass edge from node axis to node axis)."""
+    C = g.centre_line if g.centre_line is not None else g.vertices[:, :4]
+    return _unit(C[:, 1] - C[:, 0])
+
+
+def flat_in_model(g) -> np.ndarray:
+    """(p, k, 3) the flat outline of every solid of ``g`` (the contour the shop cuts) placed in the model
+    (``transform``)."""
+    F = np.asarray(g.flat, dtype=float)
+    T = np.asarray(g.transform, dtype=float)
+    return np.einsum("pij,pkj->pki", T[:, :3, :2], F) + T[:, None, :3, 3]
+
+
+def beam_lengths(parts) -> tuple[dict[str, float], dict[str, float]]:
+    """The one length of every beam and of its plates (mm): ``(by solid id, by beam id)``.
+
+    A plate's length is the extent of its cut outline (``flat``) along its beam's axis (the NC1 file's
+    length, its contour drawn with x along that axis); a beam's is the extent of all its plates' outlines
+    along the axis: the longest of the assembly as welded, end cut to end cut.  The steel cut list
+    (``length_mm``), the NC1 headers and the IFC members give these figures; the node-axis to node-axis
+    length along the glass edge is the cut list's ``system_length_mm``."""
+    from fabricate.cad.parts import unit_id
+
+    plate: dict[str, float] = {}
+    lo: dict[str, float] = {}
+    hi: dict[str, float] = {}
+    for g in parts.of_kind("beam"):
+        s = np.einsum("pki,pi->pk", flat_in_model(g), beam_axes(g))
+        a, b = s.min(axis=1), s.max(axis=1)
+        for pid, x, y in zip(g.ids, a.tolist(), b.tolist()):  # per solid: dictionaries by id
+            plate[pid] = y - x
+            u = unit_id(pid)
+            lo[u], hi[u] = min(x, lo.get(u, x)), max(y, hi.get(u, y))
+    return plate, {u: hi[u] - lo[u] for u in lo}
+
+
 def write_steel_cut_list(parts, path) -> dict:
     """Write ``steel_cut_list.csv`` (atomic): one row per beam (its section, its weight) and, for a
     section welded from several plates, one row per plate below it (``<beam>.<k>``, ``member`` naming
@@ -268,12 +307,16 @@ def write_steel_cut_list(parts, path) -> dict:
     ids, names, _ = beam_types(parts)
     types = dict(zip(ids, names))
     by_edge: dict[int, list] = {}
+    plate_length, beam_length = beam_lengths(parts)
+    system = uf["length"] if uf is not None else None           # node axis to node axis: the mesh edge
+    if topo is not None and uf is not None:
+        ends = parts.mesh.V[topo.edges]
+        system = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1)
     for g in parts.of_kind("beam"):
         a = beam_angles(g)
         weight = g.volume_mm3 * spec.group_density(g) * 1e-9
-        length = np.linalg.norm(g.bevel_ref[:, 1] - g.bevel_ref[:, 0], axis=1)
         for i, pid in enumerate(g.ids):  # the rows, grouped by beam
-            by_edge.setdefault(int(g.element[i]), []).append((g, i, pid, a, weight[i], length[i]))
+            by_edge.setdefault(int(g.element[i]), []).append((g, i, pid, a, weight[i], system[g.element[i]]))
 
     def angles(a, i, mitre=None):
         m = a["mitre"][i] if mitre is None else mitre
@@ -292,17 +335,18 @@ def write_steel_cut_list(parts, path) -> dict:
             unit_flags = sorted({f for p in plates for f in flags.get(p[2], [])} | set(flags.get(unit, [])))
             if plate:
                 g, i, pid, a, w, L = plates[0]
-                yield (pid, e, types.get(pid, ""), f"plate {spec.beam_width:g} x {g.rect[i, 1]:.0f}", "",
-                       f"{len(plates)}", spec.steel_grade, f"{L:.1f}", f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}",
+                yield (pid, e, types.get(pid, ""), unit, f"plate {spec.beam_width:g} x {g.rect[i, 1]:.0f}", "",
+                       f"{len(plates)}", spec.steel_grade, f"{beam_length[unit]:.1f}", f"{system[e]:.1f}",
+                       f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}",
                        *angles(a, i), dihedral, f"{w:.2f}", " ".join(panels), nodes, "; ".join(unit_flags))
                 continue
             cuts = angles(a0, i0, uf["mitre"][e])[:4] + ("",)   # end cuts of the first plate; ridges: per plate
-            yield (unit, e, types.get(unit, ""), section_text(spec, depth), "beam", f"{len(plates)}", spec.steel_grade,
-                   f"{uf['length'][e]:.1f}", "", "", *cuts, dihedral,
+            yield (unit, e, types.get(unit, ""), unit, section_text(spec, depth), "beam", f"{len(plates)}",
+                   spec.steel_grade, f"{beam_length[unit]:.1f}", f"{system[e]:.1f}", "", "", *cuts, dihedral,
                    f"{uf['weight_kg'][e]:.2f}", " ".join(panels), nodes, "; ".join(unit_flags))
             for g, i, pid, a, w, L in plates:
-                yield (pid, e, types.get(unit, ""), f"PL{g.thickness_mm[i]:g}", g.member, "", spec.steel_grade, f"{L:.1f}",
-                       f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}", *angles(a, i), "", f"{w:.2f}",
+                yield (pid, e, types.get(unit, ""), unit, f"PL{g.thickness_mm[i]:g}", g.member, "", spec.steel_grade,
+                       f"{plate_length[pid]:.1f}", f"{L:.1f}", f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}", *angles(a, i), "", f"{w:.2f}",
                        " ".join(unit_id(n) for n in g.neighbours[i] if n[0] == "P"), nodes, "; ".join(flags.get(pid, [])))
     hubs, hub_weight = hub_rows(parts, flags, dict(zip(*node_types(parts)[:2])))
 
@@ -313,7 +357,7 @@ def write_steel_cut_list(parts, path) -> dict:
     beam_weight = float(uf["weight_kg"].sum()) if uf is not None else 0.0
     return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "beams": len(by_edge),
             "hubs": len({unit_id(r[0]) for r in hubs}), "section": section_text(spec, depth),
-            "hub_section": hubs[0][2] if hubs else "",
+            "hub_section": hubs[0][4] if hubs else "",
             "weight_kg": {"beams": round(beam_weight, 3), "hubs": round(hub_weight, 3),
                           "total": round(beam_weight + hub_weight, 3)},
             "seconds": time.perf_counter() - t0}
@@ -364,14 +408,14 @@ def hub_rows(parts, flags: dict, types: dict | None = None) -> tuple[list[tuple]
         uid = unit_id(own[0][2])
         kind = types.get(uid, "")
         unit_flags = sorted({f for p in own for f in flags.get(p[2], [])} | set(flags.get(uid, [])))  # caps: by hub
-        out.append((uid, "", kind, hub_text, "hub", f"{len(own)}", spec.steel_grade, f"{height[v]:.1f}", *blank,
+        out.append((uid, "", kind, uid, hub_text, "hub", f"{len(own)}", spec.steel_grade, f"{height[v]:.1f}", "", *blank,
                     f"{weight[v]:.2f}", "", uid, "; ".join(unit_flags)))
         if len(own) == 1:
             continue
         for g, i, pid, w in own:
             cap = g.member != "tube"
-            out.append((pid, "", kind, f"PL{g.thickness_mm[i]:g}" if cap else piece, g.member, "", spec.steel_grade,
-                        f"{g.length_mm[i]:.1f}", f"{g.rect[i, 0]:.1f}" if cap else "",
+            out.append((pid, "", kind, uid, f"PL{g.thickness_mm[i]:g}" if cap else piece, g.member, "", spec.steel_grade,
+                        f"{g.length_mm[i]:.1f}", "", f"{g.rect[i, 0]:.1f}" if cap else "",
                         f"{g.rect[i, 1]:.1f}" if cap else "", "", "", "", "", "", "", f"{w:.2f}", "", uid,
                         "; ".join(flags.get(pid, []))))
     return out, float(weight.sum())
@@ -449,7 +493,7 @@ def write_node_schedule(parts, path) -> dict:
             i = int(v[s])
             x = mesh.V[i]
             a = axis[s]
-            yield (nid[i], i, types.get(nid[i], ""), f"{x[0]:.1f}", f"{x[1]:.1f}", f"{x[2]:.1f}", f"{a[0]:.6f}", f"{a[1]:.6f}",
+            yield (nid[i], i, types.get(nid[i], ""), nid[i], f"{x[0]:.1f}", f"{x[1]:.1f}", f"{x[2]:.1f}", f"{a[0]:.6f}", f"{a[1]:.6f}",
                    f"{a[2]:.6f}", e - s, " ".join(beam[s:e]), _num(az[s:e]), _num(elev[s:e]), hub[i],
                    f"{diameter:g}" if diameter else "", f"{wall[i]:g}" if wall[i] else "",
                    f"{height[i]:.1f}" if np.isfinite(height[i]) else "")
