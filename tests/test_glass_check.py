@@ -285,3 +285,4 @@ def test_check_parts_and_the_csv_round_trip(tmp_path):
     assert c.per_unit()["P0001"]["utilization"] == pytest.approx(c.utilization[0])
     m = c.measures()
     assert m["glass_stress"]["count"] == 2 and m["glass_stress"]["pass"]
+    assert {w["panel"] for w in m["glass_deflection"]["worst"]} == {0, 1}

@@ -410,15 +410,16 @@ class GlassCheck:
 
     def measures(self) -> dict[str, dict]:
         """``{name: entry}`` for the run's measures (:func:`fabricate.report.measures.entry`), units by
-        their index in :attr:`ids`; enforced when ``check`` is ``enforce``."""
+        their mesh face (``P0001``: face 0); enforced when ``check`` is ``enforce``."""
         from fabricate.report.measures import entry
 
         enforced = self.options.check == "enforce"
-        return {"glass_stress": entry(self.utilization_stress, 1.0, "ratio", "unit", enforced=enforced,
+        faces = np.array([int(i.lstrip("P")) - 1 for i in self.ids], dtype=np.int64)   # P0001 -> face 0
+        return {"glass_stress": entry(self.utilization_stress, 1.0, "ratio", "panel", ids=faces, enforced=enforced,
                                       extra={"mpa": self.sigma_mpa},
                                       what="glass stress / f_g,d (EN 16612, governing ULS combination)"),
-                "glass_deflection": entry(self.utilization_deflection, 1.0, "ratio", "unit", enforced=enforced,
-                                          extra={"mm": self.deflection_mm},
+                "glass_deflection": entry(self.utilization_deflection, 1.0, "ratio", "panel", ids=faces,
+                                          enforced=enforced, extra={"mm": self.deflection_mm},
                                           what=f"glass deflection / (span/{self.options.deflection_limit:g}) (SLS)")}
 
 

@@ -31,8 +31,6 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from optimize.errors import MeshError
 
@@ -158,6 +156,9 @@ def solve_plate(outline: np.ndarray, nu: float, rings: int = RINGS) -> PlateResp
 def _solve(P0: np.ndarray, nu: float, n: int) -> np.ndarray:
     """``[w_max, m_max, volume]`` of the unit response on the mesh of ``n`` pieces per side of the
     counter-clockwise convex ``P0 (k, 2)``."""
+    import scipy.sparse as sp                                     # light to import: the config reads GlassOptions
+    from scipy.sparse.linalg import splu
+
     W, T, edge = polygon_mesh(len(P0), n)
     X = W @ P0
     G, area = _gradients(X, T)
