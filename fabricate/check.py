@@ -41,6 +41,9 @@ with it:
   ``outlines.dxf`` outline (moved, turned a quarter or not), on one sheet with the margin clear and
   the kerf kept to the others; left out only when too large for the sheet.
 - ``svg``: parses, one group per part cut from sheet.
+- ``welds``: ``weld_schedule.csv`` against the BOM (:func:`fabricate.export.welds.check_weld_schedule`:
+  every part it names exists, a joint joins parts of its assembly, every welded beam's plates are
+  joined, the totals add up).
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
   element / object / file per BOM row with the same id; IFC schema-valid with the volume of
   every element's face set, as ifcopenshell reads it, equal to the BOM's (with ``--occ``: from
@@ -81,7 +84,7 @@ from .export.verify import not_regular
 log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
          "dxf": "outlines.dxf", "svg": "outlines.svg", "flat": "flat.json", "ifc": "model.ifc", "3dm": "model.3dm",
-         "nc1": "nc1"}
+         "nc1": "nc1", "welds": "weld_schedule.csv"}
 REPORT = "report.json"
 
 
@@ -113,6 +116,7 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     from . import check_lanes
     from .export import exchange_check
     from .export.bom import read_bom
+    from .export.welds import check_weld_schedule
 
     t0 = time.perf_counter()
     out = Path(outdir)
@@ -147,7 +151,8 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
                                                                  full="ifc_geometry" not in skip,
                                                                  kernel=step_reader == "occ", tol=tol), None)),
         ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
-        ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None)))
+        ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None)),
+        ("welds", "welds", None, lambda: (check_weld_schedule(paths["welds"], bom), None)))
 
     def run_checks(names) -> None:
         for name, key, needs, run in table:

@@ -90,3 +90,16 @@ def test_schedule_totals_and_the_check(tmp_path):
     assert not bad["pass"]
     assert any("beam B0002" in p and "not welded" in p for p in bad["problems"])
     assert any("B0002 total" in p for p in bad["problems"])
+
+
+def test_fabricate_check_holds_the_weld_schedule_to_the_bom(tmp_path):
+    from fabricate.check import check_outputs
+
+    parts = built("tee")
+    write_bom(parts, tmp_path / "bom.csv")
+    write_weld_schedule(parts, tmp_path / "weld_schedule.csv")
+    assert check_outputs(tmp_path)["checks"]["welds"]["pass"] is True
+    text = (tmp_path / "weld_schedule.csv").read_text(encoding="utf-8")
+    (tmp_path / "weld_schedule.csv").write_text(text.replace("B0003.2", "B9999.2", 1), encoding="utf-8")
+    result = check_outputs(tmp_path)["checks"]["welds"]
+    assert result["pass"] is False and any("B9999.2" in p for p in result["problems"])
