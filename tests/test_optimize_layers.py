@@ -5,7 +5,7 @@ from test_layers import _imported
 
 REPO = Path(__file__).resolve().parents[1]
 RANK = {
-    "errors": 0, "fields": 0, "tolerances": 0, "_lazy": 0, "atomic": 0, "jsontext": 0, "kernels": 0,
+    "errors": 0, "fields": 0, "tolerances": 0, "_lazy": 0, "atomic": 0, "jsontext": 0, "kernels": 0, "warnfilter": 0,
     "_numba_kernels": 0,
     "options": 1, "mesh": 1,
     "linalg": 2, "proximity": 2,

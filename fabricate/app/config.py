@@ -49,7 +49,8 @@ from .config_design import MAX_FACES, DesignParamError, check_design, subdivided
 from .config_errors import format_errors
 from .config_parts import LimitsSection, NestingSection, PartsSection, SheetSection  # noqa: F401 - re-exported
 from .config_section import MAX_MM, Section, section_base, tuples  # noqa: F401 - MAX_MM re-exported
-from .config_set import override_values, set_key, takes_list  # noqa: F401 - the --set API, re-exported
+from . import config_set
+from .config_set import set_key  # noqa: F401 - the --set API, re-exported
 from .config_structure import StructureSection
 from .config_yaml import MAX_DEPTH, read_config
 from .options import (CHECK_AUTO_MAX_PARTS, TOLERANCE_KEYS, UNIT_TO_MM, OffsetOptions,  # noqa: F401 - re-exported
@@ -187,7 +188,7 @@ class SubdivisionSection(Section):
 
 
 _OPTIMIZE_KEYS = ["target", "method", "formulation", "linear_solver", "torsion_free_beams", "fairness", "closeness",
-                  "max_iter", "fixed", "glide_boundary", "convex", "refine"]
+                  "max_iter", "fixed", "glide_boundary", "convex", "refine", "rationalize"]
 
 
 class OptimizeSection(section_base(OPT.OptimizeOptions, order=_OPTIMIZE_KEYS, extra={
@@ -313,6 +314,16 @@ class RunConfig(section_base(RunOptions, extra=_SECTIONS, order=["name", *_SECTI
     def as_dict(self) -> dict[str, Any]:
         """JSON/YAML-ready dict of the config as run (paths absolute, defaults filled)."""
         return self.model_dump(mode="json", by_alias=True)
+
+
+def takes_list(dotted: str) -> bool:
+    """Whether the config key ``dotted`` (``offset.distances``) takes a list of values."""
+    return config_set.takes_list(dotted, RunConfig)
+
+
+def override_values(key: str, texts: list[str]) -> list[Any]:
+    """The values of ``--set key=a,b,...`` for a run config (:func:`fabricate.app.config_set.override_values`)."""
+    return config_set.override_values(key, texts, RunConfig)
 
 
 # -- loading ---------------------------------------------------------------

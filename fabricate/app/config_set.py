@@ -49,11 +49,10 @@ def set_key(data: dict[str, Any], dotted: str, value: Any, *, source: str | Path
         node[parts[-1]] = value
 
 
-def takes_list(dotted: str) -> bool:
-    """Whether the config key ``dotted`` (``offset.distances``) takes a list of values."""
-    from .config import RunConfig
-
-    cls: Any = RunConfig
+def takes_list(dotted: str, model: type[BaseModel]) -> bool:
+    """Whether the key ``dotted`` (``offset.distances``) of the config ``model`` (``RunConfig``) takes a
+    list of values."""
+    cls: Any = model
     parts = dotted.split(".")
     for i, key in enumerate(parts):
         fields = cls.model_fields
@@ -82,14 +81,15 @@ def _has_list(annotation) -> bool:
     return any(a in (list, tuple) or get_origin(a) in (list, tuple) for a in _flatten(annotation))
 
 
-def override_values(key: str, texts: list[str]) -> list[Any]:
-    """The values of ``--set key=a,b,...`` (``texts``: the comma-separated parts, unparsed).
+def override_values(key: str, texts: list[str], model: type[BaseModel]) -> list[Any]:
+    """The values of ``--set key=a,b,...`` (``texts``: the comma-separated parts, unparsed) for the
+    config ``model``.
 
     A key that takes a list and parts that are not themselves lists in brackets:
     one value, the list (``offset.distances=0,-200`` -> ``[[0, -200]]``).
     Otherwise one value per part (``parts.glass_thickness=8,10`` -> ``[8, 10]``:
     a sweep, which ``fabricate batch`` runs and ``fabricate run`` refuses).
     """
-    if len(texts) > 1 and takes_list(key) and not any(t.strip().startswith(("[", "(")) for t in texts):
+    if len(texts) > 1 and takes_list(key, model) and not any(t.strip().startswith(("[", "(")) for t in texts):
         return [[parse_value(t) for t in texts]]
     return [parse_value(t) for t in texts]

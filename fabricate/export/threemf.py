@@ -20,9 +20,8 @@ from optimize.errors import ExportError, write_error
 
 from ..cad.parts import COLOURS, KINDS
 from .meshes import group_triangles, validate_manifold
-from .threemf_text import MODEL, open_model
+from .threemf_text import CORE, MODEL, open_model, read_3mf  # noqa: F401 - read_3mf re-exported
 
-CORE = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"
 CONTENT_TYPES = ('<?xml version="1.0" encoding="UTF-8"?>\n'
                  '<Types xmlns="http://schemas.openxmlformats.org/package/2006/content-types">'
                  '<Default Extension="rels" ContentType="application/vnd.openxmlformats-package.relationships+xml"/>'
@@ -179,27 +178,3 @@ def write_3mf(parts, path, *, origin: np.ndarray | None = None) -> dict:
         raise write_error(path, "3MF file", exc) from exc
     return {"file": path.name, "bytes": path.stat().st_size, "objects": object_id - 2, "triangles": n_tri,
             "origin_mm": origin.tolist(), "seconds": time.perf_counter() - t0}
-
-
-def read_3mf(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """``{name: (V (nv, 3) float, T (t, 3) int)}`` of every object of a 3MF file (vertices as stored)."""
-    import xml.etree.ElementTree as ET
-
-    ns = f"{{{CORE}}}"
-    out = {}
-    try:
-        with zipfile.ZipFile(path) as z, open_model(z, path) as fh:
-            for _, el in ET.iterparse(fh, events=("end",)):
-                if el.tag != ns + "object":
-                    continue
-                verts = el.find(f"{ns}mesh/{ns}vertices")
-                tris = el.find(f"{ns}mesh/{ns}triangles")
-                V = np.array([[float(v.get("x")), float(v.get("y")), float(v.get("z"))] for v in verts],
-                             dtype=float).reshape(-1, 3)
-                T = np.array([[int(t.get("v1")), int(t.get("v2")), int(t.get("v3"))] for t in tris],
-                             dtype=np.int64).reshape(-1, 3)
-                out[el.get("name")] = (V, T)
-                el.clear()
-    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
-        raise ExportError(f"{path}: not a readable 3MF file ({exc})") from None
-    return out

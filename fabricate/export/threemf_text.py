@@ -10,7 +10,7 @@ Each object's vertex and triangle counts are those of its own text (the block be
 ``<object`` tag and the next; every ``<vertex`` of the model must lie in a matched block), so no
 vertex can be given to the wrong object; a triangle index beyond its object's vertices is an error.  A model
 whose elements are written otherwise (attributes in another order, other
-quoting) is read by :func:`fabricate.export.threemf.read_3mf` (ElementTree).
+quoting) is read by :func:`read_3mf` (ElementTree), below.
 """
 from __future__ import annotations
 
@@ -25,6 +25,8 @@ import numpy as np
 
 from optimize.errors import ExportError
 from optimize.warnfilter import filtered
+
+CORE = "http://schemas.microsoft.com/3dmanufacturing/core/2015/02"
 
 MODEL = "3D/3dmodel.model"
 MAX_UNPACK = 100
@@ -131,8 +133,6 @@ def read_3mf_text(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     vb, tb = _blocks(VERTICES, model, starts), _blocks(TRIANGLES, model, starts)
     if vb is None or tb is None or int(vb[1].sum()) != model.count(b"<vertex ") \
             or int(tb[1].sum()) != model.count(b"<triangle "):
-        from .threemf import read_3mf
-
         return read_3mf(path)                       # elements written otherwise: the tree reader
     nv, nt = vb[1], tb[1]
     V = _numbers(vb[0], int(nv.sum()), np.float64, "vertex", path)
@@ -151,4 +151,28 @@ def read_3mf_text(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
         if name is not None and "&" in name:
             name = unescape(name, {"&quot;": '"', "&apos;": "'"})
         out[name] = (V[vo[k]:vo[k + 1]], T[to[k]:to[k + 1]])
+    return out
+
+
+def read_3mf(path) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """``{name: (V (nv, 3) float, T (t, 3) int)}`` of every object of a 3MF file (vertices as stored)."""
+    import xml.etree.ElementTree as ET
+
+    ns = f"{{{CORE}}}"
+    out = {}
+    try:
+        with zipfile.ZipFile(path) as z, open_model(z, path) as fh:
+            for _, el in ET.iterparse(fh, events=("end",)):
+                if el.tag != ns + "object":
+                    continue
+                verts = el.find(f"{ns}mesh/{ns}vertices")
+                tris = el.find(f"{ns}mesh/{ns}triangles")
+                V = np.array([[float(v.get("x")), float(v.get("y")), float(v.get("z"))] for v in verts],
+                             dtype=float).reshape(-1, 3)
+                T = np.array([[int(t.get("v1")), int(t.get("v2")), int(t.get("v3"))] for t in tris],
+                             dtype=np.int64).reshape(-1, 3)
+                out[el.get("name")] = (V, T)
+                el.clear()
+    except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
+        raise ExportError(f"{path}: not a readable 3MF file ({exc})") from None
     return out

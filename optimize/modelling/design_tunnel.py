@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..mesh import Mesh
+from .design_params import Design, int_param as _int, noisy as _noisy, pos_param as _pos
 
 __all__ = ["control_mesh", "flatten", "tunnel"]
 
@@ -159,11 +160,10 @@ def tunnel(*, width: float = 4000.0, height: float = 3200.0, main_length: float 
     noise : vertex noise, fraction of the mean edge length
     seed : noise seed
     """
-    from .designs import Design, _int, _noisy, _pos
     from .subdivision import catmull_clark
 
     p = dict(locals())  # the parameters as given
-    del p["Design"], p["_int"], p["_noisy"], p["_pos"], p["catmull_clark"]
+    del p["catmull_clark"]
     name = "tunnel"
     W, H = _pos(name, "width", width), _pos(name, "height", height)
     L, B = _pos(name, "main_length", main_length), _pos(name, "branch_length", branch_length)

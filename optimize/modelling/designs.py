@@ -30,74 +30,13 @@ import numpy as np
 
 from ..errors import ConfigError
 from ..mesh import Mesh
+from .design_params import (MAX_COUNT, MAX_NOISE, MAX_SIZE_MM, UNITS, Design,  # noqa: F401 (re-exported)
+                            int_param as _int, noise_param as _noise, noisy as _noisy, pos_param as _pos)
 from .design_tunnel import tunnel
 from .shapes import dome_profile, grid, perturbed, revolution, translational
 from .strips import join_meshes, strip_mesh
 
 __all__ = ["Design", "DESIGNS", "describe", "parse_params", "UNITS"]
-
-UNITS = "mm"
-
-
-@dataclass(frozen=True)
-class Design:
-    """A built-in design.
-
-    name : str
-    mesh : Mesh, the starting mesh in mm (control mesh when ``levels > 0``).
-    levels : int, rounds of subdivide-and-perturb.
-    scheme : str, subdivision scheme (``optimize.modelling.subdivision.SCHEMES``).
-    target : str, ``"pq"`` | ``"conical"`` | ``"circular"`` | ``"strip"``.
-    description : str, one sentence.
-    params : dict, every parameter as used (defaults filled in).
-    """
-
-    name: str
-    mesh: Mesh
-    levels: int
-    scheme: str
-    target: str
-    description: str
-    params: dict = field(default_factory=dict)
-    units: str = UNITS
-
-
-# -- parameter checks ----------------------------------------------------------------
-
-def _int(design: str, key: str, value, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= value <= hi:
-        raise ConfigError(f"design {design}: parameter {key}={value!r}, expected an integer in {lo}..{hi}")
-    return int(value)
-
-
-MAX_SIZE_MM = 1e6
-"""Largest length parameter of a design (1 km): beyond it the numbers mean a mistake, not a roof."""
-MAX_NOISE = 1.0
-"""Largest ``noise`` (a fraction of the mean edge length)."""
-MAX_COUNT = 300
-"""Largest quad count along one direction of a design (300 x 300 = 90,000 quads, built in well
-under a second): the counts are bounded so that checking a config, which builds the design, stays
-cheap; the subdivided size is bounded by the config (``fabricate.app.config.MAX_FACES``)."""
-
-
-def _pos(design: str, key: str, value, zero: bool = False, hi: float = MAX_SIZE_MM) -> float:
-    """A finite number in ``(0, hi]`` (``[0, hi]`` with ``zero``); ConfigError naming the range."""
-    ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
-        and bool(np.isfinite(value)) and (value >= 0 if zero else value > 0) and value <= hi
-    if not ok:
-        top = f"{hi:g}".replace("e+0", "e").replace("e+", "e")
-        raise ConfigError(f"design {design}: parameter {key}={value!r}, expected a number in "
-                          f"{'[0' if zero else '(0'}, {top}]")
-    return float(value)
-
-
-def _noise(design: str, value) -> float:
-    return _pos(design, "noise", value, zero=True, hi=MAX_NOISE)
-
-
-def _noisy(mesh: Mesh, noise: float, seed: int) -> Mesh:
-    return perturbed(mesh, noise, seed=seed, name=mesh.name) if noise > 0 else mesh
-
 
 # -- the designs -----------------------------------------------------------------------
 
