@@ -169,14 +169,14 @@ def weld_joints(parts, *, fillet_throat_mm: float | None = None) -> list[dict]:
                     add(unit_id(pa), where="seam", parts=sorted([pa, pb], key=_part_key), joint_type=jt, weld=kind,
                         sides=1, throat_mm=float(a), length_mm=float(L))
     nodes = parts.of_kind("node")
-    hubs = {g.member: g for g in nodes}
+    tubes = [g for g in nodes if g.member == "tube"]            # one group per hub type (sides)
     mesh = parts.mesh
     if spec.connection == "hub" and nodes and beams and mesh is not None:
         from .schedules import beam_units
 
         depth = abs(np.diff(parts.report.get("layers_mm", [0.0, spec.beam_depth]))[0])
         run = outline_mm(spec, depth)
-        tube = hubs.get("tube")
+        tube = tubes[0] if tubes else None
         hub_ids = set(parts.by_id)
         t_plate = {}
         for g in beams:
@@ -200,22 +200,20 @@ def weld_joints(parts, *, fillet_throat_mm: float | None = None) -> list[dict]:
                     add(u, where=end, parts=sorted(members[u], key=_part_key) + [hid], joint_type="T",
                         weld="fillet all round", sides=1,
                         throat_mm=float(fillet_throat(min(t_plate[u], wall), fillet_throat_mm)), length_mm=float(run))
-    if "tube" in hubs:                                   # caps on the tube ends: all round its outside
-        g = hubs["tube"]
+    tube_at: dict[int, tuple] = {}                         # caps on the tube ends: all round its outside
+    for g in tubes:
         k = g.vertices.shape[1] // 4
         ring = g.vertices[:, :k]
         perimeter = np.linalg.norm(np.roll(ring, -1, axis=1) - ring, axis=2).sum(axis=1)
-        tubes = dict(zip(g.element.tolist(), range(len(g))))
-        for name in ("top cap", "bottom cap"):
-            cap = hubs.get(name)
-            if cap is None:
+        for j, e in enumerate(g.element.tolist()):  # per hub: by its vertex
+            tube_at[e] = (g.ids[j], float(g.thickness_mm[j]), float(perimeter[j]))
+    for cap in (g for g in nodes if g.member in ("top cap", "bottom cap")):
+        for r, (pid, e) in enumerate(zip(cap.ids, cap.element.tolist())):
+            if e not in tube_at:
                 continue
-            for r, (pid, e) in enumerate(zip(cap.ids, cap.element.tolist())):
-                j = tubes.get(e)
-                if j is None:
-                    continue
-                add(unit_id(pid), where="cap", parts=[g.ids[j], pid], joint_type="corner", weld="HV", sides=1,
-                    throat_mm=float(min(g.thickness_mm[j], cap.thickness_mm[r])), length_mm=float(perimeter[j]))
+            tid, wall, run = tube_at[e]
+            add(unit_id(pid), where="cap", parts=[tid, pid], joint_type="corner", weld="HV", sides=1,
+                throat_mm=min(wall, float(cap.thickness_mm[r])), length_mm=run)
     out = []
     for assembly in sorted(joints, key=_part_key):
         rows = sorted(joints[assembly], key=lambda r: (_WHERE.index(r["where"]), [_part_key(p) for p in r["parts"]]))
