@@ -16,6 +16,7 @@ import numpy as np
 
 from .errors import ConfigError
 from .mesh import Mesh, measures
+from .mesh import symmetry
 from .mesh.axes import fit_axes
 from .options import DEFAULTS, FORMULATIONS, METHODS, OptimizeOptions  # noqa: F401 (re-exported)
 from .proximity.curve import BoundaryCurve
@@ -23,6 +24,7 @@ from .proximity.surface import Reference
 from .remesh.conjugacy import record_net
 from .result import OptimizeResult, check_folds, record_shape
 from .solvers import fairing, guided
+from .solvers.rationalize import rationalize as rationalize_run
 from .solvers.guided import Convex, Glide, solve
 from .terms import convexity
 from .terms import fixed as fixed_mod
@@ -47,7 +49,7 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
                   tol: Tolerances = DEFAULTS.tol, max_iter: int = DEFAULTS.max_iter, callback=None,
                   linear_solver: str = DEFAULTS.linear_solver, formulation: str = DEFAULTS.formulation,
                   torsion_free_beams=DEFAULTS.torsion_free_beams, convex: bool = DEFAULTS.convex,
-                  refine=DEFAULTS.refine, **options) -> OptimizeResult:
+                  refine=DEFAULTS.refine, rationalize=DEFAULTS.rationalize, **options) -> OptimizeResult:
     """Move the vertices of ``mesh`` so that it becomes ``target``; never mutates ``mesh``.
 
     mesh : Mesh, quads with n-gons and triangles allowed, boundary allowed.
@@ -89,6 +91,13 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
         ``False`` is the earlier behaviour (planar, perhaps dented; then ``folded``).
         Where no fold-free mesh is near, the run ends ``stalled`` / ``max_iter`` and
         ``defects["convexity"]`` names the faces held at their convexity floor.
+    rationalize : None, or the pull (model units): after a converged solve, faces within it of each
+        other at every corner are pulled into exact classes of one shape, every constraint kept
+        (default method; :mod:`optimize.solvers.rationalize`, ``defects["rationalize"]``).
+    The default method keeps the input's rigid symmetries (:mod:`optimize.mesh.symmetry`): a
+    result that is no longer symmetric (the closeness term's footpoints on the fan-triangulated
+    reference are not mirror-invariant) is projected onto the symmetric positions and solved
+    again from there (``defects["symmetry"]``).
     options : extras of the paper's methods (``mu``, ``kkt_tol``, ...), passed on
         to ``optimize.solvers.paper.run_paper_method``; none for the default method.
 
@@ -100,7 +109,7 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
     opts = OptimizeOptions(target=target, method=method, fairness=fairness, closeness=closeness,
                            max_iter=max_iter, tol=tol, linear_solver=linear_solver, formulation=formulation,
                            torsion_free_beams=torsion_free_beams, convex=convex, glide_boundary=glide_boundary,
-                           refine=refine, paper=options)
+                           refine=refine, rationalize=rationalize, paper=options)
     return run(mesh, opts, reference=reference, fixed=fixed, callback=callback)
 
 
@@ -161,11 +170,23 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
         corners, floor = convexity.floors(norm, norm.V, tol.fold)
         keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0
+    group = _group(norm, fixed_idx)
     run = solve(form, x0, ref=ref, glide=glide, tol=tol, max_iter=int(max_iter), callback=callback,
                 backend=linear_solver, convex=keep, far=guided.FAR)
     if _refines(opts.refine, run, ref, form, tol):  # exact, fair and close: the constrained fairing phase
         run = fairing.refine(form, run, x0, ref=ref, glide=glide, convex=keep, tol=tol, fairness=fairness,
                              closeness=closeness, callback=callback)
+    sym = rat = None
+    if not group.trivial:
+        run, sym = _keep_symmetry(form, run, group, glide, keep, tol, linear_solver, callback)
+    if opts.rationalize is not None:
+        limit = tol.closeness_mm if tol.closeness_mm is not None else tol.closeness * ref.bbox_diagonal * h
+        run, rat = rationalize_run(form, run, x0, ref=ref, glide=glide, convex=keep, tol=tol, fairness=fairness,
+                                   closeness=closeness, pull=opts.rationalize, scale=h, limit=limit,
+                                   group=None if group.trivial else group, callback=callback)
+        if not group.trivial and rat["rounds"]:
+            run, sym2 = _keep_symmetry(form, run, group, glide, keep, tol, linear_solver, callback)
+            sym["after_rationalize"] = sym2
     L = form.layout
     Xn = L.view(run.x, "vertices")
     V = Xn * h + centre if run.nit else mesh.V.copy()  # no step taken: bit-exact input
@@ -189,6 +210,10 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
                          max_distance=max_distance, normals=normals, axes=axes, cone_angles=cone_angles,
                          beam_axes=beam_axes, timings=timings, method=method, target=target)
     record_shape(res, mesh, ref.distance(Xn) * h, ref.bbox_diagonal * h)
+    if sym is not None:
+        res.defects["symmetry"] = sym
+    if rat is not None:
+        res.defects["rationalize"] = rat
     record_net(res, mesh, target)
     if keep is not None:
         _held(res, norm, Xn, keep, tol)
@@ -279,3 +304,55 @@ def _paper(mesh, target, **kwargs) -> OptimizeResult:
         raise ConfigError(f"method: {kwargs['method']!r} needs optimize.solvers.paper (the paper's penalty "
                           f"and SQP methods), which is not available: {exc}") from exc
     return paper.run_paper_method(mesh, target, **kwargs)
+
+
+def _group(norm: Mesh, fixed_idx: np.ndarray) -> symmetry.Group:
+    """The input's rigid symmetries (:func:`optimize.mesh.symmetry.detect`) that map the fixed
+    vertices onto fixed vertices (a subgroup: the others cannot be kept with them fixed)."""
+    group = symmetry.detect(norm)
+    if group.trivial or not len(fixed_idx):
+        return group
+    pinned = np.zeros(norm.n_vertices, dtype=bool)
+    pinned[fixed_idx] = True
+    return symmetry.Group(tuple(g for g in group.maps if pinned[g.perm[fixed_idx]].all()), group.tol)
+
+
+def _keep_symmetry(form: Formulation, run, group: symmetry.Group, glide, keep, tol: Tolerances, backend: str,
+                   callback) -> tuple:
+    """The run's iterate projected onto the input's symmetries (``group``, normalized coordinates):
+    the group average of its vertices; when that leaves a defect over its tolerance, a guided solve
+    from there without the closeness term (whose footpoints are not symmetric; every other row is
+    equivariant, so the solve stays symmetric to rounding) and the average again.  Kept when every
+    defect is within tolerance and no face folds; otherwise the run stands and the record says so.
+    Returns the run and a JSON-ready record (deviations over the mean edge length)."""
+    L = form.layout
+    V = L.view(run.x, "vertices")
+    rec = {"order": group.order, "kinds": group.kinds(), "deviation": group.deviation(V), "kept": False,
+           "iterations": 0}
+    if run.status != "converged":
+        rec["note"] = f"the solve ended {run.status}: left as it is"
+        return run, rec
+
+    def averaged(x):
+        y = x.copy()
+        L.view(y, "vertices")[:] = group.symmetrize(L.view(x, "vertices"))
+        return y
+
+    folds = convexity.FoldCheck(form.mesh, keep.V0 if keep is not None else V.copy(), tol.fold)
+    x = averaged(run.x)
+    nit, history = 0, []
+    if guided._score(guided.measured(form, x, glide), tol) > 0:
+        again = solve(form, x, ref=None, glide=glide, tol=tol, max_iter=50, callback=callback, backend=backend,
+                      convex=keep, far=guided.FAR)
+        nit, history = again.nit, [dict(e, phase="symmetry", iteration=run.nit + e["iteration"]) for e in again.history]
+        x = averaged(again.x)
+    defects = guided.measured(form, x, glide)
+    ok = guided._score(defects, tol) <= 0 and not folds.faces(L.view(x, "vertices")).any()
+    rec.update(iterations=nit, result_deviation=group.deviation(L.view(x, "vertices")), kept=bool(ok))
+    if not ok:
+        rec["note"] = "the symmetric projection missed a tolerance or folded a face: the solve's result stands"
+        return run, rec
+    timings = dict(run.timings)
+    return guided.RunState(x=x, status="converged", message=run.message, nit=run.nit + nit,
+                           history=run.history + history, timings=timings,
+                           defects={k: float(d.max(initial=0.0)) for k, d in defects.items()}), rec

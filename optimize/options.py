@@ -40,6 +40,8 @@ MAX_ITER_LIMIT = 100_000
 MAX_ITER = 10_000
 """Largest ``max_iter`` of a configuration file (the upper bound of the field, a plausibility limit
 like every upper bound of :func:`optimize.fields.option`; a run itself takes up to :data:`MAX_ITER_LIMIT`)."""
+MAX_PULL = 1e4
+"""Largest ``rationalize`` pull (model units: mm in ``fabricate``)."""
 MAX_WEIGHT = 1e6
 """Largest fairness or closeness weight of a configuration file (the fields' upper bound)."""
 
@@ -73,6 +75,10 @@ class OptimizeOptions:
         converged solve (:mod:`optimize.solvers.fairing`); ``"auto"`` runs it when the result lies
         further than ``tol.closeness`` from the reference.
     glide_boundary : free boundary vertices glide on the reference's boundary curve.
+    rationalize : None (off) or the pull (model units, > 0): after a converged solve, faces within it
+        of each other at every corner are pulled into exact classes of one shape with every
+        constraint kept, within the closeness limit (``tol.closeness_mm``, else ``tol.closeness`` of
+        the reference's diagonal): :mod:`optimize.solvers.rationalize` (default method).
     paper : extras of the paper's methods, names from :data:`PAPER_EXTRAS` (which method takes
         which is checked by ``optimize.solvers.paper.run_paper_method``); read-only mapping.
     """
@@ -96,6 +102,9 @@ class OptimizeOptions:
                                             "(optimize.solvers.fairing); auto: when the result moved further than "
                                             "tolerances.closeness")
     glide_boundary: bool = option(False, help="free boundary vertices glide on the reference's boundary")
+    rationalize: float | None = option(None, gt=0, le=MAX_PULL, help="default method: pull panels "
+                                       "within this of each other at every corner into exact classes of one "
+                                       "shape, every constraint kept (optimize.solvers.rationalize); null: off")
     paper: Mapping[str, Any] = field(default_factory=dict)
 
     def __post_init__(self):
@@ -120,6 +129,13 @@ class OptimizeOptions:
         for key in ("convex", "glide_boundary"):
             if not isinstance(getattr(self, key), bool):
                 raise ConfigError(f"{key}: {getattr(self, key)!r}, expected true or false")
+        pull = self.rationalize
+        if pull is not None:
+            if isinstance(pull, bool) or not isinstance(pull, numbers.Real) or not (math.isfinite(pull)
+                                                                                   and 0 < pull <= MAX_PULL):
+                raise ConfigError(f"rationalize: {pull!r}, expected null (off) or a pull in mm, > 0 and at most "
+                                  f"{MAX_PULL:g}")
+            object.__setattr__(self, "rationalize", float(pull))
         object.__setattr__(self, "paper", MappingProxyType(dict(self.paper)))
         if self.method == "default":
             if self.paper:
@@ -128,6 +144,9 @@ class OptimizeOptions:
             if self.target == "strip":
                 raise ConfigError("target: 'strip' is solved by the paper's methods only; use "
                                   "method='penalty', 'sqp' or 'hybrid'")
+        elif self.rationalize is not None:
+            raise ConfigError(f"rationalize: {self.rationalize:g} is a setting of the default method, not of "
+                              f"{self.method!r}; leave it null")
         elif self.formulation != "auto" or self.linear_solver != "auto":
             raise ConfigError(f"formulation / linear_solver ({self.formulation!r}, {self.linear_solver!r}) "
                               f"are settings of the default method, not of {self.method!r}; leave them 'auto'")

@@ -123,7 +123,8 @@ def subdivide_and_perturb(control: Mesh, levels: int, *, scheme: str = "catmull_
         ``fixed``, ``fairness``, ``closeness``, ``tol``, ``max_iter``,
         ``callback``...); ``reference`` is set per level.  ``fixed`` as an
         index array refers to control vertices and is kept through
-        Catmull-Clark levels (coarse vertex ``i`` stays fine vertex ``i``);
+        Catmull-Clark levels (coarse vertex ``i`` stays fine vertex ``i``); ``rationalize``
+        goes to the last level only (the panels that are built);
         other schemes renumber, so they accept only ``"boundary"``/``"corners"``.
         For target ``"strip"`` the method ``"default"`` means
         :data:`STRIP_METHOD` (the paper's penalty method).
@@ -147,16 +148,18 @@ def subdivide_and_perturb(control: Mesh, levels: int, *, scheme: str = "catmull_
     tol = optimize_kwargs.get("tol", DEFAULT)
     out = HierarchyResult(control, scheme, target)
     mesh = control
+    early = {k: v for k, v in optimize_kwargs.items() if k != "rationalize"}  # only the last level is the roof
     if perturb_control or levels == 0:
         out.levels.append(_perturb(0, control, sp.identity(control.n_vertices, format="csr"),
-                                   scheme, target, tol, 0.0, optimize_kwargs, surface, optimizer))
+                                   scheme, target, tol, 0.0, optimize_kwargs if levels == 0 else early,
+                                   surface, optimizer))
         mesh = out.levels[-1].mesh
     for level in range(1, levels + 1):
         t0 = time.perf_counter()
         ref, S = subdivide(mesh, scheme, 1)
         ref.name = f"{control.name}-L{level}"
-        lv = _perturb(level, ref, S, scheme, target, tol, time.perf_counter() - t0, optimize_kwargs,
-                      optimizer=optimizer)
+        lv = _perturb(level, ref, S, scheme, target, tol, time.perf_counter() - t0,
+                      optimize_kwargs if level == levels else early, optimizer=optimizer)
         out.levels.append(lv)
         mesh = lv.mesh
         log.info("level %d (%s, %s): %d vertices, %s", level, scheme, target, ref.n_vertices,

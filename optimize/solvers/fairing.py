@@ -96,14 +96,16 @@ def balance(fairness: float, closeness: float) -> tuple[float, float]:
 
 def refine(form: Formulation, run: guided.RunState, x_in: np.ndarray, *, ref, glide: guided.Glide | None,
            convex: guided.Convex | None, tol: Tolerances, fairness: float, closeness: float,
-           max_iter: int = MAX_ITER, callback=None) -> guided.RunState:
+           max_iter: int = MAX_ITER, callback=None, extra=None, phase: str = "fairing") -> guided.RunState:
     """The constrained fairing phase from a converged ``run`` (normalized coordinates);
     ``x_in (layout.size,)`` is the start of the run (its vertices: the input).  Returns ``run``
-    with the phase's iterate, iterations and history added (``"phase": "fairing"`` in each
-    entry, ``timings["fairing"]``), or ``run`` unchanged when there is nothing to do or the
-    phase could not keep every tolerance (the message then says so)."""
+    with the phase's iterate, iterations and history added (``"phase": phase`` in each
+    entry, ``timings[phase]``), or ``run`` unchanged when there is nothing to do or the
+    phase could not keep every tolerance (the message then says so).
+    extra : None, or ``extra(x) -> (r (p,), J (p, layout.size))``: weighted rows added to ``E``
+    (the rationalization's congruence rows, :mod:`optimize.solvers.rationalize`)."""
     wf, wc = balance(fairness, closeness)
-    if run.status != "converged" or (wf == 0 and wc == 0) or max_iter <= 0:
+    if run.status != "converged" or (wf == 0 and wc == 0 and extra is None) or max_iter <= 0:
         return run
     t0 = time.perf_counter()
     L = form.layout
@@ -154,6 +156,10 @@ def refine(form: Formulation, run: guided.RunState, x_in: np.ndarray, *, ref, gl
             rv, Jv = convexity.terms(x, L, form.mesh, convex.corners, convex.floor)
             rs.append(np.sqrt(HINGE) * rv)
             Js.append(np.sqrt(HINGE) * Jv)
+        if extra is not None:
+            rx, Jx = extra(x)
+            rs.append(rx)
+            Js.append(Jx)
         return np.concatenate(rs), sp.vstack(Js, format="csr")
 
     def glide_foot(x):
@@ -214,12 +220,12 @@ def refine(form: Formulation, run: guided.RunState, x_in: np.ndarray, *, ref, gl
         step = float(np.abs(xt - x)[L.slice("vertices")].max())
         x = xt
         mu = max(mu / 10, MU_MIN)
-        entry = {"iteration": run.nit + nit, "phase": "fairing", "step": step, "mu": mu, "energy": Et,
+        entry = {"iteration": run.nit + nit, "phase": phase, "step": step, "mu": mu, "energy": Et,
                  "constraint_residual": theta, "seconds": time.perf_counter() - t_it}
         entry.update({k: float(d.max(initial=0.0)) for k, d in guided.measured(form, x, glide).items()})
         entry["folded"] = int(folds.faces(L.view(x, "vertices")).sum())  # as every guided entry has it
         history.append(entry)
-        log.info("fairing iteration %d: energy %.6g, constraints %.3g, step %.3g", nit, Et, theta, step)
+        log.info("%s iteration %d: energy %.6g, constraints %.3g, step %.3g", phase, nit, Et, theta, step)
         if callback is not None:
             callback(entry)
         if E0 - Et <= STOP * E0:
@@ -229,17 +235,17 @@ def refine(form: Formulation, run: guided.RunState, x_in: np.ndarray, *, ref, gl
     defects = guided.measured(form, x, glide)
     score = guided._score(defects, tol)
     timings = dict(run.timings)
-    timings["fairing"] = time.perf_counter() - t0
+    timings[phase] = timings.get(phase, 0.0) + time.perf_counter() - t0
     slivers = _degenerate_faces(form, x, x_in) - _degenerate_faces(form, run.x, x_in)
     if score > 0 or not nit or slivers > 0:
-        note = (f"; the fairing phase kept no step ({reason})" if not nit else
-                f"; the fairing phase was dropped: after {nit} iterations a defect was 10^{score:.2f} "
+        note = (f"; the {phase} phase kept no step ({reason})" if not nit else
+                f"; the {phase} phase was dropped: after {nit} iterations a defect was 10^{score:.2f} "
                 f"of its tolerance" if score > 0 else
-                f"; the fairing phase was dropped: it left {slivers} more degenerate face(s) (a shrunk edge "
+                f"; the {phase} phase was dropped: it left {slivers} more degenerate face(s) (a shrunk edge "
                 "or a straight corner)")
         return guided.RunState(x=run.x, status=run.status, message=run.message + note, nit=run.nit,
                                history=run.history, timings=timings, defects=run.defects)
-    message = (f"{run.message}, then {nit} fairing iteration(s) with every constraint kept ({reason})")
+    message = (f"{run.message}, then {nit} {phase} iteration(s) with every constraint kept ({reason})")
     return guided.RunState(x=x, status="converged", message=message, nit=run.nit + nit,
                            history=run.history + history, timings=timings,
                            defects={k: float(d.max(initial=0.0)) for k, d in defects.items()})
