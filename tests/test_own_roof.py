@@ -261,3 +261,16 @@ def test_an_export_error_names_the_run_folder_not_the_temporary_one(tmp_path, mo
     summary = run_pipeline(cfg, tmp_path / "out")  # an exporter's own error: the rest is written, exit 4
     assert summary.exit_code == 4 and ".part" not in summary.message
     assert "export failed: disk full writing model.stl: cannot write the STL file" in summary.message
+
+
+def test_the_rationalize_option_reaches_the_run(tmp_path):
+    """optimize.rationalize (#37 item 3) is passed from the config to the optimizer: fewer glass shapes."""
+    outputs = dict(MESH_ONLY, bom=True)
+    plain = run_pipeline(tiny_config(tmp_path, "plain", outputs=outputs), tmp_path / "out")
+    pulled = run_pipeline(tiny_config(tmp_path, "pulled", outputs=outputs,
+                                      optimize={"target": "conical", "max_iter": 60, "rationalize": 100}),
+                          tmp_path / "out")
+    shapes = [json.loads((tmp_path / "out" / n / "report.json").read_text())["totals"]["glass_shapes"]
+              for n in ("plain", "pulled")]
+    assert pulled.exit_code in (0, 3) and plain.exit_code == 0
+    assert shapes[1] < shapes[0], shapes

@@ -109,7 +109,8 @@ def optimizer_call(cfg, target: str) -> tuple[str, dict[str, Any]]:
                   max_iter=opt.max_iter)
     if opt.method == "default":  # asked for: the paper's method refuses a formulation other than auto
         kwargs.update(formulation=opt.formulation, linear_solver=opt.linear_solver,
-                      torsion_free_beams=opt.torsion_free_beams, convex=opt.convex, refine=opt.refine)
+                      torsion_free_beams=opt.torsion_free_beams, convex=opt.convex, refine=opt.refine,
+                      rationalize=opt.rationalize)
     return method, kwargs
 
 
