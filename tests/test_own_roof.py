@@ -274,3 +274,36 @@ def test_the_rationalize_option_reaches_the_run(tmp_path):
               for n in ("plain", "pulled")]
     assert pulled.exit_code in (0, 3) and plain.exit_code == 0
     assert shapes[1] < shapes[0], shapes
+
+
+def test_every_run_holds_its_glass_order_to_the_panels(tmp_path, monkeypatch):
+    """#36 item 5: the run's check reads glass_order.csv and its drawings back (a unit listed twice fails it)."""
+    import fabricate.export.glass_order as order
+
+    outputs = dict(MESH_ONLY, bom=True, glass_order=True, check="fast")
+    good = run_pipeline(tiny_config(tmp_path, "order", outputs=outputs), tmp_path / "out")
+    report = json.loads((tmp_path / "out" / "order" / "report.json").read_text())
+    assert good.exit_code == 0 and report["check"]["checks"]["glass_order"]["pass"] is True
+    real = order.write_glass_order
+
+    def twice(parts, path, **kw):  # the writer lists the first unit in two positions
+        import csv
+
+        facts = real(parts, path, **kw)
+        with open(path, newline="", encoding="utf-8") as fh:
+            rows = list(csv.DictReader(fh))
+        rows[1]["units"] += " " + rows[0]["units"].split()[0]
+        rows[1]["quantity"] = str(len(rows[1]["units"].split()))
+        with open(path, "w", newline="", encoding="utf-8") as fh:
+            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+        return facts
+
+    monkeypatch.setattr(order, "write_glass_order", twice)
+    import fabricate.export as export
+    monkeypatch.setattr(export, "write_glass_order", twice)
+    bad = run_pipeline(tiny_config(tmp_path, "twice", outputs=outputs), tmp_path / "out")
+    report = json.loads((tmp_path / "out" / "twice" / "report.json").read_text())
+    assert bad.exit_code == 4 and "glass_order" in bad.message
+    assert any("in positions" in p for p in report["check"]["checks"]["glass_order"]["problems"])

@@ -368,6 +368,13 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
     check["parts"] = n_parts
     if mode == "off":
         return done(check, f"{len(files)} files, not checked (outputs.check: off)")
+    if "glass_order.csv" in files:  # the order read back and held to the panels it was made from
+        from fabricate.export.check_glass_order import check_glass_order
+
+        order = check_glass_order(built, out)
+        check.setdefault("checks", {})["glass_order"] = order
+        if order["pass"] is False:
+            check["pass"] = False
     failed = [k for k, v in check.get("checks", {}).items() if isinstance(v, dict) and v.get("pass") is False]
     return done(check, f"{len(files)} files, " + (f"{mode} check FAILED: {', '.join(failed)}" if failed
                                                   else f"{mode} check passed"))
