@@ -307,3 +307,31 @@ def test_every_run_holds_its_glass_order_to_the_panels(tmp_path, monkeypatch):
     report = json.loads((tmp_path / "out" / "twice" / "report.json").read_text())
     assert bad.exit_code == 4 and "glass_order" in bad.message
     assert any("in positions" in p for p in report["check"]["checks"]["glass_order"]["problems"])
+
+
+def test_beams_that_still_twist_get_a_route_with_the_node_axes_solved(tmp_path, monkeypatch):
+    """#30 items 1, 4: a converged route whose (boundary) beams twist beyond the limit is tried again
+    with the node axes solved by the optimizer (torsion_free_beams on: True, as the optimizer takes it)."""
+    import fabricate.app.decide as decide
+    import optimize.api as api
+
+    twists = iter([5.0, 0.01])  # the own lines twist, the route with solved axes does not
+    monkeypatch.setattr(decide, "beam_twist", lambda cfg, mesh, result: (next(twists), 0))
+    seen = []
+    real = api.optimize_mesh
+
+    def spy(mesh, target, **kw):
+        seen.append(kw.get("torsion_free_beams"))
+        return real(mesh, target, **kw)
+
+    monkeypatch.setattr(api, "optimize_mesh", spy)
+    from optimize.mesh.io import write_mesh
+    from optimize.modelling import shapes
+
+    dome = shapes.perturbed(shapes.revolution(shapes.dome_profile(5000.0, 2000.0, 3), 6), 0.05, seed=3)
+    write_mesh(tmp_path / "dome.obj", dome)
+    summary = run_pipeline(tiny_config(tmp_path, "axes", outputs=MESH_ONLY,
+                                       input={"mesh": str(tmp_path / "dome.obj"), "remesh": "never"},
+                                       optimize={}), tmp_path / "out")
+    assert True in seen
+    assert "Route: conical by own lines, node axes solved with the mesh" in summary.decision

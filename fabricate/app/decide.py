@@ -126,8 +126,8 @@ def decide(cfg, inp, result, kwargs: dict, *, auto_target: bool, remesh: str) ->
     if (not own.buildable(limit) or far or remesh == "always") and remesh != "never":
         best = _better(best, judge(remeshed("remeshed along principal directions", **kwargs)), limit)
     tfb = kwargs.get("torsion_free_beams")
-    if not best.buildable(limit) and best.converged and tfb is not None and tfb != "on" and target != "pq":
-        on = dict(kwargs, torsion_free_beams="on")
+    if not best.buildable(limit) and best.converged and tfb is not None and tfb is not True and target != "pq":
+        on = dict(kwargs, torsion_free_beams=True)
         if best is own:
             res = optimize_mesh(inp.mesh, target, reference=None, **on)
             c = Candidate("own lines, node axes solved with the mesh", target, res, res.mesh)
