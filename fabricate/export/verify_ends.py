@@ -19,9 +19,6 @@ END_COS = 0.25
 """A triangle is an end face when ``|normal . direction| >`` this (75.5 deg from the beam's faces:
 a cope onto a tube's facet leans at most ``asin(half width / radius)``)."""
 
-CANDIDATES = 3
-"""An end is measured against this many nodes nearest to it and held to the one it rests on best."""
-
 CHUNK = 256
 """Points measured at a time (memory: ``CHUNK x node triangles x 9`` floats)."""
 
@@ -115,9 +112,6 @@ def end_gaps(objects: dict, tol_mm: float = 1.0) -> dict:
         ends = _two_nearest(V.mean(axis=1), centre)                       # (p, 2): the nodes it runs between
         along = centre[ends[:, 1]] - centre[ends[:, 0]]
         along /= np.maximum(np.linalg.norm(along, axis=1), 1e-300)[:, None]
-        _, sv, vt = np.linalg.svd(V - V.mean(axis=1, keepdims=True), full_matrices=False)
-        long = (sv[:, 0] > 1.5 * sv[:, 1]) & (np.abs((vt[:, 0] * along).sum(-1)) > 0.7)   # agreeing: the plate's own
-        along = np.where(long[:, None], vt[:, 0], along)
         c = (n * along[:, None, :]).sum(-1)
         sample = np.concatenate([tri, 0.5 * (tri + np.roll(tri, -1, axis=2)), tri.mean(axis=2, keepdims=True)],
                                 axis=2)                                   # (p, t, 7, 3)
@@ -133,23 +127,14 @@ def end_gaps(objects: dict, tol_mm: float = 1.0) -> dict:
         return empty
     P = np.concatenate(pts)
     own = np.concatenate(owner)
-    mid = np.array([p.mean(axis=0) for p in pts])                            # one per end
-    cands = _near(mid, centre, CANDIDATES)                                   # (ends, c): its node is one of them
-    best = np.full(len(names), np.inf)
-    node_of_end = np.zeros(len(names), dtype=np.int64)
-    for c in range(cands.shape[1]):                                          # the node it rests on best
-        node_of = cands[own, c]
-        gap = np.empty(len(P))
-        for s in range(0, len(P), CHUNK):
-            tr = NT[node_of[s:s + CHUNK]]
-            gap[s:s + CHUNK] = closest_on_triangles(P[s:s + CHUNK], tr[:, :, 0], tr[:, :, 1],
-                                                    tr[:, :, 2]).min(axis=1)
-        w = np.full(len(names), -np.inf)
-        np.maximum.at(w, own, gap)
-        better = w < best
-        best = np.where(better, w, best)
-        node_of_end = np.where(better, cands[:, c], node_of_end)
-    worst = best
+    node_of_end = np.array(node_of_end)
+    node_of = node_of_end[own]
+    gap = np.empty(len(P))
+    for s in range(0, len(P), CHUNK):
+        tr = NT[node_of[s:s + CHUNK]]
+        gap[s:s + CHUNK] = closest_on_triangles(P[s:s + CHUNK], tr[:, :, 0], tr[:, :, 1], tr[:, :, 2]).min(axis=1)
+    worst = np.full(len(names), -np.inf)
+    np.maximum.at(worst, own, gap)
     k = int(np.argmax(worst))
     order = np.argsort(-worst)
     over = [(names[j], node_ids[node_of_end[j]], float(worst[j])) for j in order if worst[j] > tol_mm]
@@ -158,39 +143,13 @@ def end_gaps(objects: dict, tol_mm: float = 1.0) -> dict:
             "per_end": (names, [node_ids[j] for j in node_of_end], worst)}
 
 
-def _near(X: np.ndarray, C: np.ndarray, k: int) -> np.ndarray:
-    """``(p, k)``: the ``k`` rows of ``C`` nearest to every row of ``X`` (in blocks: memory)."""
-    k = min(k, len(C))
-    out = np.empty((len(X), k), dtype=np.int64)
+def _two_nearest(X: np.ndarray, C: np.ndarray) -> np.ndarray:
+    """``(p, 2)``: the two rows of ``C`` nearest to every row of ``X`` (in blocks: memory)."""
+    out = np.empty((len(X), 2), dtype=np.int64)
     step = max(1, int(2e7 // max(len(C), 1)))
     for s in range(0, len(X), step):
-        out[s:s + step] = np.argsort(((X[s:s + step, None, :] - C[None]) ** 2).sum(-1), axis=1)[:, :k]
-    return out
-
-
-def _two_nearest(X: np.ndarray, C: np.ndarray, V: np.ndarray | None = None, k: int = 6) -> np.ndarray:
-    """``(p, 2)``: the two node centres ``C`` a beam runs between: of the ``k`` nearest to its centroid
-    ``X (p, 3)``, the pair whose segment its vertices ``V (p, nv, 3)`` lie closest to (the two nearest
-    alone miss a long beam passing short ones); computed in blocks (memory)."""
-    out = np.zeros((len(X), 2), dtype=np.int64)
-    if len(C) < 2:
-        return out
-    k = min(k, len(C))
-    ii, jj = np.triu_indices(k, 1)
-    step = max(1, int(2e7 // max(len(C), 1)))
-    for s in range(0, len(X), step):
-        near = np.argsort(((X[s:s + step, None, :] - C[None]) ** 2).sum(-1), axis=1)[:, :k]   # (b, k)
-        if V is None:
-            out[s:s + step] = near[:, :2]
-            continue
-        A, B = C[near[:, ii]], C[near[:, jj]]                                    # (b, pairs, 3)
-        P = V[s:s + step, None, :, :]                                            # (b, 1, nv, 3)
-        d = (B - A)[:, :, None, :]
-        t = np.clip(((P - A[:, :, None]) * d).sum(-1) / np.maximum((d * d).sum(-1), 1e-300), 0, 1)
-        dist = np.linalg.norm(P - A[:, :, None] - t[..., None] * d, axis=-1).mean(axis=2)   # (b, pairs)
-        best = np.argmin(dist, axis=1)
-        rows = np.arange(len(best))
-        out[s:s + step] = np.stack([near[rows, ii[best]], near[rows, jj[best]]], axis=1)
+        d2 = ((X[s:s + step, None, :] - C[None]) ** 2).sum(-1)
+        out[s:s + step] = np.argsort(d2, axis=1)[:, :2] if len(C) > 1 else 0
     return out
 
 
