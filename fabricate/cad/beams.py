@@ -155,8 +155,7 @@ def _end_planes(A0, A1, toward, n, alpha, setback):
 
 
 def beam_solids(structure, P0: np.ndarray, width: float, node_radius: float, s_beam: float,
-                half_width: float | None = None, square: bool | None = None,
-                setback: np.ndarray | None = None) -> dict:
+                half_width: float | None = None, square: bool | None = None) -> dict:
     """Vertices and face planes of every beam (its plate, or the web of a section).
 
     P0 : (n, 3) vertex positions at the first layer (glass side).
@@ -166,9 +165,7 @@ def beam_solids(structure, P0: np.ndarray, width: float, node_radius: float, s_b
     else -1; half_width : the section's half width across the beam plane
     (flanges), default ``width / 2``: square ends are set back far enough that
     neighbours this wide cannot touch; square : square ends (default
-    ``node_radius > 0``), else bisector ends; setback : ``(e, 2)`` mm, the square ends' distance
-    from the node axis at end ``a`` and ``b`` as given (a faceted hub's flats,
-    :func:`fabricate.cad.nodes.flat_layout`) instead of the rule above.
+    ``node_radius > 0``), else bisector ends.
     Returns ``vertices (e, 12, 3)``, ``normals (e, 10, 3)`` (outward, in the
     order of :data:`FACES`), ``planarity_mm (e,)``, ``setback (e, 2)`` mm
     (the distance of the end planes from the node axes, 0 for bisectors),
@@ -207,9 +204,7 @@ def beam_solids(structure, P0: np.ndarray, width: float, node_radius: float, s_b
     alpha = np.minimum(nb["gap"] / 2, np.pi / 2)
     square = node_radius > 0 if square is None else square
     half_width = 0.5 * width if half_width is None else half_width
-    if square and setback is not None:
-        setback = np.asarray(setback, dtype=float)
-    elif square:
+    if square:
         tan_min = np.tan(np.minimum(alpha[..., 0], alpha[..., 1]))
         need = np.where(tan_min > 1e-12, half_width / np.maximum(tan_min, 1e-12), np.inf)
         setback = np.maximum(node_radius, need)

@@ -22,9 +22,9 @@ from .flat import flat_data
 from .glass import overhead_limit
 from .limits import check_limits
 from .geometry import dot, polygon_area_2d, unit, volumes
-from .hubs import faceted_tube_hubs
+from .hubs import tube_hubs
 from .hubsize import hub_limit, size_hubs
-from .nodes import faceted_nodes, flat_layout
+from .nodes import node_solids
 from .sections import BOX_FACES, BOX_NAMES, BOX_RING, MEMBERS as SECTION_MEMBERS, flange_plates
 from .parts import PartGroup, Parts, part_ids, unit_id
 from .spec import PartSpec
@@ -90,15 +90,8 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
     section = spec.beam.section
     web = spec.web if section != "plate" else spec.beam_width
     square = spec.connection != "mitre"
-    layout = ridge_normals = None
-    if with_nodes:  # faceted hubs: a flat square to every beam end, as deep as the beam (fabricate.cad.nodes)
-        pl = beam_solids(structure, P0, web, spec.end_setback, s_beam, square=square)["planes"]
-        ridge_normals = np.stack([pl["T0+"][0], pl["T1+"][0]], axis=1)
-        layout = flat_layout(structure, P0, P1, spec.hub_radius, 0.5 * max(web, spec.bearing_width),
-                             ridge_normals[:, 0])
     beams = beam_solids(structure, P0, web, spec.end_setback, s_beam,
-                        half_width=0.5 * max(web, spec.bearing_width), square=square,
-                        setback=None if layout is None else layout["setback"][np.asarray(topo.edges)])
+                        half_width=0.5 * max(web, spec.bearing_width), square=square)
     e = np.arange(len(topo.edges))
     Qb = bp["quad"]  # the beam's edge at the last layer as a fraction of it at the first (< 0: reversed)
     shrink = dot(Qb[:, 2] - Qb[:, 3], Qb[:, 1] - Qb[:, 0]) / np.maximum(dot(Qb[:, 1] - Qb[:, 0],
@@ -149,37 +142,29 @@ def build_parts(structure, spec: PartSpec | None = None) -> Parts:
                              member=member, centre_line=centre, hint=hint))
     node_facts = {}
     if with_nodes:
+        nodes = node_solids(structure, P0, P1, spec.hub_radius, spec.node_sides)
         v = np.arange(mesh.n_vertices)
         inc = [[] for _ in v]
         for i, (a, b) in enumerate(topo.edges.tolist()):  # incidence lists, built once
             inc[a].append(i)
             inc[b].append(i)
-        nb_all = [tuple(bid[row]) for row in inc]
-        tube = spec.hub_kind == "tube"
-        batches = faceted_nodes(structure, P0, P1, layout, spec.node.wall_mm if tube else None, ridge_normals)
-        heights = np.empty(len(v))
-        for nodes in batches:
-            idx = nodes["index"]
-            heights[idx] = nodes["height"]
-            nb = [nb_all[i] for i in idx.tolist()]
-            diameter = 2 * nodes["setback"]
-            if not tube:
-                groups.append(_group("node", nid[idx], idx, nodes["vertices"], nodes["faces"], nodes["normals"],
-                                     nodes["m"], 2 * nodes["m"], np.zeros(len(idx)), diameter, nodes["height"], nb, spec))
-                continue
-            pieces = faceted_tube_hubs(nodes, spec.node.wall_mm, spec.node.cap_mm, nid[idx], idx)
-            k_of = {"tube": 1, "top cap": 2, "bottom cap": 3}
-            for pc in pieces:
-                k, sel = k_of[pc["member"]], pc["select"]
-                sibs = tuple(f".{j}" for j in (1, 2, 3) if j != k)
-                near = [nb[j] + tuple(nid[idx[j]] + s for s in sibs) for j in sel.tolist()]
-                groups.append(_group("node", np.char.add(nid[idx[sel]], f".{k}"), idx[sel], pc["vertices"],
-                                     pc["faces"], pc["normals"], 0, pc.get("back", 1), np.zeros(len(sel)),
-                                     pc["thickness"], pc["length"], near, spec, member=pc["member"]))
-        node_facts = {"hub": spec.hub_kind, "shape": "faceted: a flat square to every beam end, as deep as the beam",
-                      "radius_mm": spec.hub_radius, "flats_mm_min": float(layout["setback"].min()),
-                      "flats_mm_max": float(layout["setback"].max()), "height_mm_min": float(heights.min()),
-                      "height_mm_max": float(heights.max())}
+        nb = [tuple(bid[row]) for row in inc]
+        diameter = np.full(len(v), 2 * spec.hub_radius)
+        if spec.hub_kind == "solid":
+            groups.append(_group("node", nid, v, nodes["vertices"], nodes["faces"], nodes["normals"], 0, 1,
+                                 np.zeros(len(v)), diameter, nodes["length"], nb, spec))
+        else:
+            pieces = tube_hubs(nodes, spec.node.wall_mm, spec.node.cap_mm, nid, v)
+            for k, pc in enumerate(pieces, 1):
+                sibs = tuple(f".{j}" for j in range(1, len(pieces) + 1) if j != k)
+                near = [row + tuple(nid[i] + s for s in sibs) for i, row in enumerate(nb)]
+                groups.append(_group("node", np.char.add(nid, f".{k}"), v, pc["vertices"], pc["faces"],
+                                     pc["normals"], 0, pc.get("back", 1), np.zeros(len(v)), pc["thickness"],
+                                     pc["length"], near, spec,
+                                     member=pc["member"]))
+        node_facts = {"theta_max_deg": float(np.degrees(nodes["theta_max"].max())), "hub": spec.hub_kind,
+                      "radius_mm": spec.hub_radius, "height_mm_min": float(nodes["length"].min()),
+                      "height_mm_max": float(nodes["length"].max())}
         if spec.hub_kind == "tube":
             node_facts.update(wall_mm=spec.node.wall_mm, cap_mm=spec.node.cap_mm)
         node_facts["sizing"] = sizing

@@ -29,7 +29,6 @@ import numpy as np
 
 from optimize.errors import ConfigError
 
-from .geometry import unit
 from .panels import prism_faces
 
 MEMBERS = ("tube", "top cap", "bottom cap")
@@ -47,54 +46,15 @@ def tube_faces(k: int) -> tuple[tuple[int, ...], ...]:
 
 
 def tube_step_faces(k: int) -> tuple[tuple, tuple[int, ...]]:
-    """The faces STEP writes for a ``k``-gon tube of :func:`tube_faces`: ``(faces, normal_of)``, its ``4 k``
-    quads as they are (a faceted hub's ends follow the glass planes: no plane annulus), ``normal_of``
-    the face of :func:`tube_faces` whose normal each has."""
-    return tube_faces(k), tuple(range(4 * k))
-
-
-def faceted_tube_hubs(node: dict, wall: float, cap: float, node_ids, element) -> list[dict]:
-    """A faceted hub as a shop builds it: the tube (:func:`fabricate.cad.nodes.faceted_nodes` with a
-    wall, its flats and its ends in the glass planes) and two cap plates inside it, each the inner
-    polygon ``cap`` thick, normal to the axis: the top one below the glass planes, the bottom one above
-    the planes of the last layer (they close the tube; the beams' ends are closed by the flats).
-    ``[{"member", "vertices", "normals", "faces", "length", "thickness", "select"}]``: ``select`` the
-    group's nodes each batch holds (the caps come in batches by their corner count)."""
-    from .nodes import face_normals
-
-    V = node["vertices"]
-    m = node["m"]
-    bot, top, ibot, itop = V[:, :m], V[:, m:2 * m], V[:, 2 * m:3 * m], V[:, 3 * m:]
-    a = unit(top.mean(axis=1) - bot.mean(axis=1))
-    o = itop.mean(axis=1)
-    zt = np.einsum("pki,pi->pk", itop - o[:, None], a)
-    zb = np.einsum("pki,pi->pk", ibot - o[:, None], a)
-    hi = np.minimum(zt.min(axis=1), np.einsum("pi,pi->p", node["apex"][:, 0] - o, a))
-    lo = np.maximum(zb.max(axis=1), np.einsum("pi,pi->p", node["apex"][:, 1] - o, a))
-    free = hi - lo
-    short = free <= 2 * cap + 1e-6
-    if short.any():
-        i = int(np.argmax(short))
-        raise ConfigError(f"node {node_ids[i]} (vertex {int(element[i])}): the hub's inside is {free[i]:.1f} mm "
-                          f"high between the glass planes and the last layer, no room for two {cap:g} mm caps; "
-                          "reduce parts.node.cap_mm or use parts.node.hub: solid")
-    plan = itop - zt[..., None] * a[:, None, :]                       # the inner polygon at height 0
-    corner = node["ridge"] < 0                                        # a cap's corners (not the ridge points)
-    count = corner.sum(axis=1)
-    caps = []
-    for member, z0, z1 in (("top cap", hi - cap, hi), ("bottom cap", lo, lo + cap)):
-        for c in np.unique(count):                                    # one batch per corner count
-            sel = np.flatnonzero(count == c)
-            pl = plan[sel][corner[sel]].reshape(len(sel), int(c), 3)
-            P = np.concatenate([pl + (z0[sel] - 0)[:, None, None] * a[sel, None, :],
-                                pl + z1[sel][:, None, None] * a[sel, None, :]], axis=1)
-            faces = prism_faces(int(c))
-            caps.append({"member": member, "vertices": P, "normals": face_normals(P, faces), "faces": faces,
-                         "length": np.full(len(sel), cap), "thickness": np.full(len(sel), cap), "select": sel})
-    tube = {"member": "tube", "vertices": V, "normals": node["normals"], "faces": tube_faces(m),
-            "length": node["height"], "back": m, "thickness": np.full(len(V), float(wall)),
-            "select": np.arange(len(V))}
-    return [tube] + caps
+    """The ``k``-gon tube of :func:`tube_faces` with annular ends: ``(faces, normal_of)``, ``2 k`` quads
+    (outside, inside) then the upper and the lower end, each ``(outer loop, hole loop)`` (outer
+    counter-clockwise about the outward normal, the hole clockwise); ``normal_of``: the face of
+    :func:`tube_faces` whose normal each has."""
+    ring = [tuple(o * k + j for j in range(k)) for o in range(4)]                 # ol, ou, il, iu
+    quads = tube_faces(k)[:2 * k]
+    upper = (ring[1], ring[3][::-1])                                               # normal +axis
+    lower = (ring[0][::-1], ring[2])                                               # normal -axis
+    return quads + (upper, lower), tuple(range(2 * k)) + (2 * k, 3 * k)
 
 
 def tube_hubs(node: dict, wall: float, cap: float, node_ids, element) -> list[dict]:
@@ -138,12 +98,16 @@ def tube_hubs(node: dict, wall: float, cap: float, node_ids, element) -> list[di
 
 
 def tube_breps(group) -> list:
-    """``TopoDS_Solid`` of every tube of a ``tube`` group, built with build123d from its planar faces
-    (the flats outside and inside, the ends in the glass planes)."""
-    from build123d import Face, Shell, Solid, Vector, Wire
+    """``TopoDS_Solid`` of every tube of a ``tube`` group, built with build123d: the outside polygon
+    with the inside one as a hole, extruded along the axis (one annular face per end)."""
+    from build123d import Face, Vector, Wire, extrude
 
+    k = group.vertices.shape[1] // 4
     out = []
     for V in group.vertices:  # one B-rep per tube
-        faces = [Face(Wire.make_polygon([Vector(*V[j]) for j in f], close=True)) for f in group.faces]
-        out.append(Solid(Shell(faces)).wrapped)
+        outer = Wire.make_polygon([Vector(*p) for p in V[:k]], close=True)
+        inner = Wire.make_polygon([Vector(*p) for p in V[2 * k:3 * k]], close=True)
+        face = Face(outer, [inner])
+        d = V[k] - V[0]
+        out.append(extrude(face, amount=float(np.linalg.norm(d)), dir=Vector(*(d / np.linalg.norm(d)))).wrapped)
     return out
