@@ -68,13 +68,16 @@ def test_ifc_has_one_element_per_bom_row_with_the_step_volume(ifc_file, parts, b
 def test_ifc_hierarchy_materials_quantities_and_fabrication_figures(ifc_file, parts):
     import ifcopenshell.util.element as eu
 
+    from fabricate.export.schedules import beam_lengths
+
     f = ifcopenshell.open(str(ifc_file[0]))
     project, = f.by_type("IfcProject")
     site, = f.by_type("IfcSite")
     building, = f.by_type("IfcBuilding")
+    storey, = f.by_type("IfcBuildingStorey")
     wall, = f.by_type("IfcCurtainWall")
     assert eu.get_aggregate(site) == project and eu.get_aggregate(building) == site
-    assert eu.get_container(wall) == building
+    assert eu.get_aggregate(storey) == building and eu.get_container(wall) == storey
     assert {e.Name for e in eu.get_decomposition(wall)} == {p.id for p in parts}
     unit, = [u for u in f.by_type("IfcSIUnit") if u.UnitType == "LENGTHUNIT"]
     assert (unit.Prefix, unit.Name) == ("MILLI", "METRE")
@@ -88,13 +91,16 @@ def test_ifc_hierarchy_materials_quantities_and_fabrication_figures(ifc_file, pa
     assert psets["Qto_PlateBaseQuantities"]["NetArea"] == pytest.approx(panel.area_mm2 * 1e-6)
     assert psets["Qto_PlateBaseQuantities"]["NetWeight"] == pytest.approx(
         panel.volume_mm3 * 1e-9 * parts.spec.density_glass)
-    assert psets["Pset_ConicalFabFabrication"]["Planarity_mm"] == pytest.approx(panel.planarity_mm)
+    assert psets["ConicalFab_Fabrication"]["planarity_mm"] == pytest.approx(panel.planarity_mm)
     beam = parts.beams[0]
     member = next(e for e in f.by_type("IfcMember") if e.Name == beam.id)
-    assert member.PredefinedType == "MULLION" and eu.get_material(member).Name == "S355J2"
+    assert member.PredefinedType == "MULLION"     # a plate beam: one member, its section's profile set
+    profile, = eu.get_material(member).MaterialProfiles
+    assert profile.Material.Name == "S355J2" and profile.Profile.is_a("IfcRectangleProfileDef")
     q = eu.get_psets(member)
-    assert q["Qto_MemberBaseQuantities"]["Length"] == pytest.approx(beam.length_mm)
-    assert q["Pset_ConicalFabFabrication"]["Twist_mm"] == pytest.approx(beam.planarity_mm)
+    assert q["ConicalFab_Fabrication"]["twist_mm"] == pytest.approx(beam.planarity_mm)
+    length = beam_lengths(parts)[1][beam.id]                   # one length: the cut list's, the NC1's
+    assert q["Qto_MemberBaseQuantities"]["Length"] == q["ConicalFab_Fabrication"]["length_mm"] == length
 
 
 def test_3dm_layers_names_user_strings_and_exact_vertices(parts, bom, tmp_path):

@@ -135,10 +135,14 @@ def test_a_run_with_rhs_beams_and_tube_hubs_passes_its_checks(tmp_path):
     assert res["checks"]["flat"]["pass"] and res["checks"]["step"]["pass"] and res["checks"]["ifc"]["pass"]
     import ifcopenshell
 
-    members = {e.Name: e for e in ifcopenshell.open(str(out / "model.ifc")).by_type("IfcMember")}
-    assert len(members["B0001"].Representation.Representations[0].Items) == 6     # one member, six plates
-    assert len(members["N0001"].Representation.Representations[0].Items) == 3     # tube and two caps
-    tube = members["N0001"].Representation.Representations[0].Items[0]             # annular ends: faces with a hole
+    import ifcopenshell.util.element as eu
+
+    f = ifcopenshell.open(str(out / "model.ifc"))
+    assemblies = {e.Name: e for e in f.by_type("IfcElementAssembly")}          # one shop assembly per piece
+    assert sorted(p.Name for p in eu.get_decomposition(assemblies["B0001"])) == [f"B0001.{k}" for k in range(1, 7)]
+    assert sorted(p.Name for p in eu.get_decomposition(assemblies["N0001"])) == ["N0001.1", "N0001.2", "N0001.3"]
+    tube = next(e for e in f.by_type("IfcMember") if e.Name == "N0001.1").Representation.Representations[0].Items[0]
+    # the tube's annular ends: faces with a hole
     assert [x.is_a() for x in tube.Faces].count("IfcIndexedPolygonalFaceWithVoids") == 2 and len(tube.Faces) == 2 * 24 + 2
     from fabricate.export.step_text import read_step_text
 

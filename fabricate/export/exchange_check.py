@@ -1,7 +1,10 @@
 """``fabricate check`` of the exchange files against the bill of materials.
 
 - ``ifc``: ifcopenshell opens ``model.ifc``; one element per BOM row with the
-  same id (Name and Tag), one per glass unit (``P0001`` for the rows ``P0001.1 ...``, volumes summed); full mode also validates the file against the IFC4
+  same id (Name and Tag), one per glass unit (``P0001`` for the rows ``P0001.1 ...``, volumes summed), one
+  ``IfcElementAssembly`` per steel unit of several solids aggregating exactly them (every solid in one
+  assembly), every steel cut list row's length (``Length`` quantity and ``length_mm``) within 0.05 mm of
+  the list's; full mode also validates the file against the IFC4
   schema and its express rules' attribute types (``ifcopenshell.validate`` for every instance but the
   face sets, their faces and point lists, whose rules :func:`read_face_sets` checks at once)
   and compares every element's volume, from ifcopenshell's own geometry
@@ -158,35 +161,126 @@ def face_set_volumes(f) -> dict[str, float]:
     return read_face_sets(f)[0]
 
 
-def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False, tol: Tolerances = DEFAULT) -> dict:
+CUT_LIST = "steel_cut_list.csv"
+LENGTH_TOL_MM = 0.05
+"""How far an IFC length may be from the steel cut list's (which writes 0.1 mm)."""
+
+
+def check_ifc(path: Path, bom, *, full: bool = True, kernel: bool = False, tol: Tolerances = DEFAULT,
+              cut_list: Path | None = None) -> dict:
     """``full``: schema validation and volumes (``kernel``: ifcopenshell's geometry kernel, else the
-    face sets' own coordinates as parsed, about 20x faster).  The whole check holds ifcopenshell
-    (:func:`fabricate.export.ifc.ifcopenshell_alone`): two runs' checks in threads of one process
-    take turns."""
+    face sets' own coordinates as parsed, about 20x faster).  Always: the shop assemblies
+    (:func:`_assembly_errors`) and, when the run wrote ``cut_list`` (default: ``steel_cut_list.csv``
+    beside the IFC file), every piece's length against it (:func:`_length_errors`).  The whole check
+    holds ifcopenshell (:func:`fabricate.export.ifc.ifcopenshell_alone`): two runs' checks in threads of
+    one process take turns."""
     from .ifc import ifcopenshell_alone
 
     with ifcopenshell_alone():
-        return _check_ifc(path, bom, full, kernel, tol)
+        return _check_ifc(path, bom, full, kernel, tol, cut_list)
 
 
-def _check_ifc(path: Path, bom, full: bool, kernel: bool, tol: Tolerances) -> dict:
-    import ifcopenshell
-
+def ifc_rows(bom) -> tuple[dict[str, dict], dict[str, set[str]]]:
+    """``(rows, assemblies)`` the IFC file must hold for the BOM: ``rows`` element name -> BOM row (a glass
+    unit of several solids (``P0001.1 ...``) one element, its volumes summed; every steel solid its own
+    element), ``assemblies`` every steel unit of several solids (a beam welded from plates, a tube hub)
+    -> the ids of its solids (one ``IfcElementAssembly`` each)."""
     from fabricate.cad.parts import unit_id
+
+    rows: dict[str, dict] = {}
+    units: dict[str, set[str]] = {}
+    for r in bom:
+        u = unit_id(r["id"])
+        if r["kind"] != "panel":
+            rows[r["id"]] = r
+            units.setdefault(u, set()).add(r["id"])
+        elif u in rows:
+            rows[u] = dict(rows[u], volume_mm3=repr(float(rows[u]["volume_mm3"]) + float(r["volume_mm3"])))
+        else:
+            rows[u] = r
+    return rows, {u: ids for u, ids in units.items() if ids != {u}}
+
+
+def _assembly_errors(f, elements: dict, assemblies: dict[str, set[str]]) -> list[str]:
+    """Every shop assembly an ``IfcElementAssembly`` aggregating exactly its solids, and every solid of an
+    assembly in exactly one (``"<id>: why"``)."""
+    bad = []
+    held: dict[str, int] = {}
+    for a in f.by_type("IfcElementAssembly"):
+        own = [p.Name for rel in a.IsDecomposedBy for p in rel.RelatedObjects]
+        for p in own:
+            held[p] = held.get(p, 0) + 1
+        want = assemblies.get(a.Name)
+        if want is None:
+            bad.append(f"{a.Name}: an IfcElementAssembly of no BOM unit of several solids")
+        elif set(own) != want or len(own) != len(want):
+            bad.append(f"{a.Name}: parts {' '.join(sorted(own)) or 'none'}, expected {' '.join(sorted(want))}")
+    for u, ids in sorted(assemblies.items()):
+        if u not in elements or not elements[u].is_a("IfcElementAssembly"):
+            bad.append(f"{u}: expected an IfcElementAssembly of {' '.join(sorted(ids))}")
+        bad += [f"{pid}: in {held.get(pid, 0)} assemblies, expected 1 ({u})" for pid in sorted(ids)
+                if held.get(pid, 0) != 1]
+    return bad
+
+
+def ifc_lengths(f) -> dict[str, dict[str, float]]:
+    """Element name -> its lengths as written: ``quantity`` (an ``IfcQuantityLength`` ``Length`` of its
+    quantity sets) and ``length_mm`` (the project's property set :data:`fabricate.export.ifc.PSET`), in one
+    pass over the property relations."""
+    from .ifc import PSET
+
+    out: dict[str, dict[str, float]] = {}
+    for rel in f.by_type("IfcRelDefinesByProperties"):
+        d = rel.RelatingPropertyDefinition
+        if d.is_a("IfcElementQuantity"):
+            found = [("quantity", q.LengthValue) for q in d.Quantities
+                     if q.is_a("IfcQuantityLength") and q.Name == "Length"]
+        elif d.is_a("IfcPropertySet") and d.Name == PSET:
+            found = [("length_mm", p.NominalValue.wrappedValue) for p in d.HasProperties
+                     if p.Name == "length_mm" and p.is_a("IfcPropertySingleValue") and p.NominalValue is not None]
+        else:
+            continue
+        for o in rel.RelatedObjects:
+            out.setdefault(o.Name, {}).update(found)
+    return out
+
+
+def _length_errors(f, cut_list: Path) -> list[str]:
+    """Every row of the steel cut list (a beam, a plate, a hub, its tube and caps): its element in the
+    file, whose ``length_mm`` and ``Length`` quantity (where it has one) are the row's ``length_mm``
+    within :data:`LENGTH_TOL_MM` (``"<id>: why"``)."""
+    import csv
+
+    lengths = ifc_lengths(f)
+    bad = []
+    with open(cut_list, newline="", encoding="utf-8") as fh:
+        for row in csv.DictReader(fh):
+            pid, want = row["id"], float(row["length_mm"])
+            have = lengths.get(pid)
+            if not have or "length_mm" not in have:
+                bad.append(f"{pid}: no length_mm in the IFC file, the cut list says {row['length_mm']} mm")
+                continue
+            for key, v in sorted(have.items()):
+                if not abs(float(v) - want) <= LENGTH_TOL_MM:
+                    bad.append(f"{pid}: IFC {key} {float(v):.2f} mm, cut list length_mm {row['length_mm']}")
+    return bad
+
+
+def _check_ifc(path: Path, bom, full: bool, kernel: bool, tol: Tolerances, cut_list: Path | None) -> dict:
+    import ifcopenshell
 
     from .ifc import open_ifc
 
     f = open_ifc(path)
     elements = {e.Name: e for e in f.by_type("IfcElement") if not e.is_a("IfcCurtainWall")}
-    rows: dict[str, dict] = {}
-    for r in bom:  # a glass unit of several solids (P0001.1 ...) is one element: its volumes summed
-        u = unit_id(r["id"])
-        if u in rows:
-            rows[u] = dict(rows[u], volume_mm3=repr(float(rows[u]["volume_mm3"]) + float(r["volume_mm3"])))
-        else:
-            rows[u] = r
+    rows, assemblies = ifc_rows(bom)
     bad_tag = sorted(n for n, e in elements.items() if e.Tag != n)[:20]
-    extra: dict = {"bad_tag": bad_tag}
+    extra: dict = {"bad_tag": bad_tag, "assemblies": len(assemblies),
+                   "bad_assembly": _assembly_errors(f, elements, assemblies)[:20]}
+    cut_list = Path(path).with_name(CUT_LIST) if cut_list is None else Path(cut_list)
+    if cut_list.is_file():
+        extra["lengths_from"] = cut_list.name
+        extra["bad_length"] = _length_errors(f, cut_list)[:20]
     if full:
         import ifcopenshell.validate
 
@@ -202,7 +296,7 @@ def _check_ifc(path: Path, bom, full: bool, kernel: bool, tol: Tolerances) -> di
         extra["volume_rel_error_max"] = max(errors.values(), default=0.0)
         # no shape (NaN) is as bad as a wrong volume
         extra["bad_volume"] = sorted(pid for pid, e in errors.items() if not e <= tol.file_volume)[:20]
-    return _ids_result(set(rows), set(elements), extra)
+    return _ids_result(set(rows) | set(assemblies), set(elements), extra)
 
 
 def check_3dm(path: Path, bom) -> dict:

@@ -10,10 +10,13 @@ text, continuing the skeleton's entity ids:
    mm, numbers formatted in bulk), one ``IfcIndexedPolygonalFace`` (or
    ``...WithVoids``) per face (the group's face list is one template) and
    its ``IfcPolygonalFaceSet``;
-2. per unit (:class:`Unit`): its body representation, placement and element,
-   its quantity set and property set with their ``IfcRelDefinesByProperties``;
-3. the curtain wall's ``IfcRelAggregates`` of every element and the two
-   ``IfcRelAssociatesMaterial``.
+2. per unit (:class:`Unit`): its body representation (none for an
+   ``IfcElementAssembly``), placement and element, its quantity set and property
+   set with their ``IfcRelDefinesByProperties``; an assembly's parts follow it
+   (placed relative to it) and its ``IfcRelAggregates``;
+3. the curtain wall's ``IfcRelAggregates`` of every top-level element (glass
+   units, assemblies, one-solid members) and one ``IfcRelAssociatesMaterial``
+   per material (the glass layer set, the steel, each profile set).
 
 Strings are escaped as ifcopenshell writes them (``'`` doubled, ``\\``
 doubled, anything but printable ASCII as ``\\X2\\....\\X0\\`` or
@@ -26,7 +29,7 @@ from __future__ import annotations
 import base64
 import os
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -127,8 +130,10 @@ class SolidText:
 @dataclass
 class Unit:
     """One element: ``kind`` (panel, beam, node), its IFC class, predefined and object type, its id,
-    description, solids ``[(group index, part index)]``, quantity set (name, ``{key: (kind, value)}``)
-    and fabrication property set (``{key: str | int | float}``)."""
+    description, solids ``[(group index, part index)]`` (none: an element without a body of its own, an
+    assembly), quantity set (name, ``{key: (kind, value)}``), fabrication property set (``{key: str | int |
+    float}``), ``material``: the key in ``refs`` of what it is made of (``layers``, ``steel``, a profile
+    set), and ``parts``: the units an ``IfcElementAssembly`` aggregates (placed relative to it)."""
     kind: str
     cls: str
     predefined: str
@@ -139,6 +144,12 @@ class Unit:
     qto_name: str
     quantities: dict
     props: dict
+    material: str = "steel"
+    parts: list = field(default_factory=list)
+
+    def count(self) -> int:
+        """Elements this unit writes: itself and its parts."""
+        return 1 + sum(p.count() for p in self.parts)
 
 
 def _value(v) -> str:
@@ -161,11 +172,49 @@ def _defined_by(out: list, nid: int, el: int, guids, cls: str, name: str, blanks
     return s + 2
 
 
+ASSEMBLY = "IFCELEMENTASSEMBLY"
+
+
+def _element(out: list, nid: int, u: Unit, parent_place: int, solids, refs: dict, guids, pset: str,
+             materials: dict) -> tuple[int, int]:
+    """Append unit ``u`` from id ``nid`` on (placed relative to ``parent_place``): its body (when it has
+    solids), placement and element, quantity and property sets, then its parts (placed relative to it) and
+    the ``IfcRelAggregates`` that holds them.  Records the element under ``materials[u.material]``.
+    Returns ``(element id, next free id)``."""
+    name = string(u.uid)
+    ot = "$" if u.object_type is None else string(u.object_type)
+    if u.solids:
+        items = ",".join(f"#{solids[gi].face_set(i)}" for gi, i in u.solids)
+        out.append(f"#{nid}=IFCSHAPEREPRESENTATION(#{refs['body']},'Body','Tessellation',({items}));\n"
+                   f"#{nid + 1}=IFCLOCALPLACEMENT(#{parent_place},#{refs['origin']});\n"
+                   f"#{nid + 2}=IFCPRODUCTDEFINITIONSHAPE($,$,(#{nid}));\n")
+        place, shape, el = nid + 1, f"#{nid + 2}", nid + 3
+    else:
+        out.append(f"#{nid}=IFCLOCALPLACEMENT(#{parent_place},#{refs['origin']});\n")
+        place, shape, el = nid, "$", nid + 1
+    where = ",.FACTORY." if u.cls == ASSEMBLY else ""   # IfcElementAssembly's AssemblyPlace: welded in the shop
+    out.append(f"#{el}={u.cls}('{next(guids)}',$,{name},{string(u.description)},{ot},#{place},"
+               f"{shape},{name}{where},.{u.predefined}.);\n")
+    materials.setdefault(u.material, []).append(el)
+    nid = _defined_by(out, el + 1, el, guids, "IFCELEMENTQUANTITY", u.qto_name, "$,$,",
+                      [f"{QUANTITY[kind]}({string(key)},$,$,{real(v)},$)" for key, (kind, v) in u.quantities.items()])
+    nid = _defined_by(out, nid, el, guids, "IFCPROPERTYSET", pset, "$,",
+                      [f"IFCPROPERTYSINGLEVALUE({string(key)},$,{_value(v)},$)" for key, v in u.props.items()])
+    kids = []
+    for p in u.parts:
+        k, nid = _element(out, nid, p, place, solids, refs, guids, pset, materials)
+        kids.append(k)
+    if kids:
+        out.append(f"#{nid}=IFCRELAGGREGATES('{next(guids)}',$,$,$,#{el},(" + ",".join(f"#{k}" for k in kids) + "));\n")
+        nid += 1
+    return el, nid
+
+
 def write_body(fh, groups, faces, units: list[Unit], refs: dict, first_id: int, pset: str) -> int:
-    """Write every solid of ``groups`` (faces of each: ``faces``), then every unit, then the wall's
-    relations, as Part 21 entities from id ``first_id`` on.  ``refs``: ids of the skeleton's
-    ``body`` subcontext, ``origin`` placement, ``wall`` and its placement ``wall_place``, the glass
-    ``layers`` and the ``steel``.  Returns the next free id."""
+    """Write every solid of ``groups`` (faces of each: ``faces``), then every unit (an assembly with its
+    parts), then the wall's relations, as Part 21 entities from id ``first_id`` on.  ``refs``: ids of the
+    skeleton's ``body`` subcontext, ``origin`` placement, ``wall`` and its placement ``wall_place``, and
+    of every material a unit names (``layers``, ``steel``, profile sets).  Returns the next free id."""
     nid = first_id
     solids = []
     for g, fc in zip(groups, faces):
@@ -173,25 +222,14 @@ def write_body(fh, groups, faces, units: list[Unit], refs: dict, first_id: int, 
         nid += len(g) * solids[-1].stride
     for g, t in zip(groups, solids):
         t.write(fh, g.vertices)
-    guids = iter(new_guids(5 * len(units) + 3))
-    body, origin, wall_place = refs["body"], refs["origin"], refs["wall_place"]
-    members: dict[str, list[int]] = {"panel": [], "beam": [], "node": []}
+    n = sum(u.count() for u in units)
+    guids = iter(new_guids(6 * n + 2 + len(refs)))
+    materials: dict[str, list[int]] = {}
+    top: list[int] = []
     out: list[str] = []
     for u in units:
-        el = nid + 3
-        members[u.kind].append(el)
-        items = ",".join(f"#{solids[gi].face_set(i)}" for gi, i in u.solids)
-        ot = "$" if u.object_type is None else string(u.object_type)
-        name = string(u.uid)
-        out.append(f"#{nid}=IFCSHAPEREPRESENTATION(#{body},'Body','Tessellation',({items}));\n"
-                   f"#{nid + 1}=IFCLOCALPLACEMENT(#{wall_place},#{origin});\n"
-                   f"#{nid + 2}=IFCPRODUCTDEFINITIONSHAPE($,$,(#{nid}));\n"
-                   f"#{el}={u.cls}('{next(guids)}',$,{name},{string(u.description)},{ot},#{nid + 1},"
-                   f"#{nid + 2},{name},.{u.predefined}.);\n")
-        nid = _defined_by(out, el + 1, el, guids, "IFCELEMENTQUANTITY", u.qto_name, "$,$,",
-                          [f"{QUANTITY[kind]}({string(key)},$,$,{real(v)},$)" for key, (kind, v) in u.quantities.items()])
-        nid = _defined_by(out, nid, el, guids, "IFCPROPERTYSET", pset, "$,",
-                          [f"IFCPROPERTYSINGLEVALUE({string(key)},$,{_value(v)},$)" for key, v in u.props.items()])
+        el, nid = _element(out, nid, u, refs["wall_place"], solids, refs, guids, pset, materials)
+        top.append(el)
         if len(out) > 20 * CHUNK:
             fh.write("".join(out))
             out.clear()
@@ -199,18 +237,12 @@ def write_body(fh, groups, faces, units: list[Unit], refs: dict, first_id: int, 
 
     def refs_of(ids):
         return "(" + ",".join(f"#{i}" for i in ids) + ")"
-    everything = members["panel"] + members["beam"] + members["node"]
     tail = []
-    if everything:  # IfcRelAggregates needs one part at least (ifcopenshell wrote an empty set)
-        tail.append(f"#{nid}=IFCRELAGGREGATES('{next(guids)}',$,$,$,#{refs['wall']},{refs_of(everything)});\n")
+    if top:  # IfcRelAggregates needs one part at least (ifcopenshell wrote an empty set)
+        tail.append(f"#{nid}=IFCRELAGGREGATES('{next(guids)}',$,$,$,#{refs['wall']},{refs_of(top)});\n")
         nid += 1
-    if members["panel"]:
-        tail.append(f"#{nid}=IFCRELASSOCIATESMATERIAL('{next(guids)}',$,$,$,{refs_of(members['panel'])},"
-                    f"#{refs['layers']});\n")
-        nid += 1
-    steel = members["beam"] + members["node"]
-    if steel:
-        tail.append(f"#{nid}=IFCRELASSOCIATESMATERIAL('{next(guids)}',$,$,$,{refs_of(steel)},#{refs['steel']});\n")
+    for key, ids in materials.items():
+        tail.append(f"#{nid}=IFCRELASSOCIATESMATERIAL('{next(guids)}',$,$,$,{refs_of(ids)},#{refs[key]});\n")
         nid += 1
     fh.write("".join(tail))
     return nid
