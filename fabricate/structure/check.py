@@ -12,12 +12,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .engine import MechanismError, solve
+from .engine import MechanismError, solve, solve_second_order
 from .frame import Frame, frame_from_offset
-from .loads import basic_cases
+from .loads import basic_cases, combine
 from .options import ALPHA, GRADES
 from .results import N_WORST, Results, evaluate, worst
 from .sections import SectionProperties, built_section
+from .stability import ALPHA_CR_LIMIT, Assembly, Buckling, imperfection
 
 UTILIZATION_NOTE = ("max of the elastic cross-section check |N|/Npl + |My|/Mel,y + |Mz|/Mel,z (EN 1993-1-1 "
                     "6.2.1(7)) and the same with the compression over chi Npl (flexural buckling 6.3.1, "
@@ -42,6 +43,7 @@ class StructureCheck:
     section: SectionProperties
     options: object
     seconds: dict = field(default_factory=dict)
+    stability: "Stability | None" = None
 
     @property
     def max_utilization(self) -> float:
@@ -58,8 +60,34 @@ class StructureCheck:
 
     def passes(self) -> bool:
         r = self.results
-        return bool(self.max_utilization <= 1.0 and (self.deflection_ratio() <= 1.0).all()
+        stable = self.stability is None or self.stability.alpha_cr > 1.0
+        return bool(self.max_utilization <= 1.0 and (self.deflection_ratio() <= 1.0).all() and stable
                     and r.displacement_mm.max(initial=0.0) <= r.displacement_limit_mm and not self.slender().size)
+
+
+@dataclass(frozen=True, eq=False)
+class Stability:
+    """The linear buckling analysis of every ULS combination and the second-order analyses it asked for.
+
+    alphas : {combination: alpha_cr}; buckling : the Buckling (modes) of the lowest one, ``combination``
+    its name; second_order : {combination: how it was analysed: "P-Delta" or "amplified 1/(1 - 1/alpha_cr)"};
+    imperfection_mm : the amplitude of the first-mode imperfection; first_order_utilization : max
+    utilization before the second-order results replaced the first-order ones; lower_bounds : the
+    combinations whose alpha_cr is the compression-only lower bound (:meth:`Assembly.buckling`).
+    """
+
+    alphas: dict
+    buckling: Buckling | None
+    combination: str
+    second_order: dict
+    imperfection_mm: float
+    first_order_utilization: float
+    seconds: float = 0.0
+    lower_bounds: tuple = ()
+
+    @property
+    def alpha_cr(self) -> float:
+        return min(self.alphas.values(), default=float("inf"))
 
 
 def configured_section(options, spec, structure) -> SectionProperties:
@@ -94,18 +122,94 @@ def build(structure, options, spec, section: SectionProperties | None = None):
 
 
 def solve_frame(frame, cases, options, structure) -> tuple:
-    """``(solution, results)`` of ``frame`` under ``cases`` with the config's combinations."""
+    """``(solution, results, stability)`` of ``frame`` under ``cases`` with the config's combinations;
+    where ``structure.stability`` asks for it, the ULS combinations with alpha_cr < 10 (or all) are
+    solved second order and their results replace the first-order ones."""
     try:
         solution = solve(frame, cases)
     except MechanismError as exc:
-        raise MechanismError(f"structure.supports = {options.supports!r} ({int(frame.fixed.any(axis=1).sum())} "
+        raise MechanismError(f"structure.supports = {options.supports!r} ({int(frame.supported().sum())} "
                              f"{options.support_kind} supports), structure.connections = {options.connections!r}: "
                              f"{exc}") from None
     span = options.span or default_span(np.asarray(structure.mesh.V), options.up)
-    results = evaluate(frame, cases, solution, options.combination_list(), fy=options.fy,
-                       deflection_limit=options.deflection_limit, span_mm=span, alpha=ALPHA[options.buckling_curve],
-                       buckling_length_factor=options.buckling_length_factor, fy_class=GRADES[options.grade])
-    return solution, results
+    combos = options.combination_list()
+
+    def run(sol, combinations):
+        return evaluate(frame, cases, sol, combinations, fy=options.fy, deflection_limit=options.deflection_limit,
+                        span_mm=span, alpha=ALPHA[options.buckling_curve],
+                        buckling_length_factor=options.buckling_length_factor, fy_class=GRADES[options.grade])
+
+    results = run(solution, combos)
+    stab = None
+    if options.stability != "off" and any(k == "uls" for _, k, _ in combos):
+        stab, solution2, combos2 = second_order(frame, cases, solution, combos, options, span,
+                                                float(results.utilization.max(initial=0.0)))
+        if stab.second_order:
+            results = run(solution2, combos2)
+            solution = solution2
+    return solution, results, stab
+
+
+def mix(store: dict, factors: dict) -> np.ndarray:
+    return sum(f * store[k] for k, f in factors.items())
+
+
+SECOND = " | second order"
+"""Suffix of the solution entries that hold a combination's second-order results."""
+
+
+def second_order(frame, cases, solution, combos, options, span: float, u_first: float):
+    """The buckling analysis of every ULS combination (:mod:`fabricate.structure.stability`) and the
+    second-order (P-Delta) solution of those with alpha_cr < :data:`ALPHA_CR_LIMIT` (``auto``) or all
+    (``always``) on the frame displaced along the combination's first mode by span / ``imperfection``
+    (EN 1993-1-1 5.3.2(11)); a P-Delta solution that does not converge is replaced by the first-order
+    forces amplified by ``1 / (1 - 1 / alpha_cr)`` (5.2.2(5)B), and nothing when alpha_cr <= 1 (unstable:
+    the check fails).  Returns ``(Stability, solution, combinations)``: the combinations solved second
+    order point at their own entries of the solution (factor 1)."""
+    t0 = time.perf_counter()
+    asm = Assembly(frame)
+    import scipy.sparse.linalg as spla
+
+    lu = spla.splu(asm.Ke) if len(asm.free) > 600 else None
+    alphas, worst, worst_name = {}, None, ""
+    modes, bounds = {}, []
+    for name, kind, factors in combos:
+        if kind != "uls":
+            continue
+        N = asm.axial(mix(solution.end_forces, factors), mix(solution.line_local, factors))
+        b = asm.buckling(N, options.buckling_modes, lu=lu)
+        alphas[name] = b.alpha_cr
+        modes[name] = b
+        if b.lower_bound:
+            bounds.append(name)
+        if worst is None or b.alpha_cr < worst.alpha_cr:
+            worst, worst_name = b, name
+    amp = span / options.imperfection
+    ends, disp, reac, line = (dict(d) for d in (solution.end_forces, solution.displacements, solution.reactions,
+                                                 solution.line_local))
+    out, done = [], {}
+    for name, kind, factors in combos:
+        a = alphas.get(name, float("inf"))
+        wanted = kind == "uls" and (options.stability == "always" or a < ALPHA_CR_LIMIT) and len(modes[name].alphas)
+        if not wanted or a <= 1.0:
+            out.append((name, kind, factors))
+            continue
+        direction = mix(solution.displacements, factors)[:, :3]
+        X = imperfection(frame, modes[name].modes[0], amp, direction)
+        got = solve_second_order(frame, combine(cases, factors, name), X)
+        key = name + SECOND
+        if got is None:
+            f = 1.0 / (1.0 - 1.0 / a)
+            ends[key], disp[key] = f * mix(solution.end_forces, factors), f * mix(solution.displacements, factors)
+            reac[key], line[key] = f * mix(solution.reactions, factors), mix(solution.line_local, factors)
+            done[name] = f"amplified 1/(1 - 1/alpha_cr) = {f:.3g} (P-Delta did not converge)"
+        else:
+            ends[key], disp[key], reac[key], line[key] = got
+            done[name] = "P-Delta"
+        out.append((name, kind, {key: 1.0}))
+    sol = dataclasses.replace(solution, end_forces=ends, displacements=disp, reactions=reac, line_local=line)
+    stab = Stability(alphas, worst, worst_name, done, amp, u_first, round(time.perf_counter() - t0, 4), tuple(bounds))
+    return stab, sol, out
 
 
 def check_structure(structure, options, spec, *, section_of=None, sections=None) -> StructureCheck:
@@ -121,14 +225,16 @@ def check_structure(structure, options, spec, *, section_of=None, sections=None)
         frame = frame.with_sections(sections, section_of)
         cases = basic_cases(structure, frame, options.loads, spec.glass_thickness, options.up)
     t1 = time.perf_counter()
-    solution, results = solve_frame(frame, cases, options, structure)
+    solution, results, stab = solve_frame(frame, cases, options, structure)
     t2 = time.perf_counter()
     seconds = {"model": round(t1 - t0, 4), "solve": round(t2 - t1 - solution.seconds.get("ours", 0.0), 4)}
     seconds.update({f"opensees_{k}": v for k, v in solution.seconds.items() if k not in ("opensees", "ours")})
     seconds["opensees"] = solution.seconds.get("opensees", 0.0)
     seconds["total"] = round(time.perf_counter() - t0, 4)
     seconds["ours"] = round(seconds["total"] - seconds["opensees"], 4)
-    return StructureCheck(frame, cases, solution, results, supports, section, options, seconds)
+    if stab is not None:
+        seconds["stability"] = stab.seconds
+    return StructureCheck(frame, cases, solution, results, supports, section, options, seconds, stab)
 
 
 def report(check: StructureCheck) -> dict:
@@ -173,10 +279,40 @@ def report(check: StructureCheck) -> dict:
                          "combination": r.governing_sls},
         "equilibrium": {"relative_residual": r.equilibrium, "max": max(r.equilibrium.values(), default=0.0)},
         "class_4": class_4(check),
+        "stability": stability_report(check),
         "pass": check.passes(),
         "seconds": check.seconds,
     }
     return out
+
+
+STABILITY_NOTE = ("elastic critical load factor alpha_cr of each ULS combination from a linear buckling analysis (K_e + "
+                  "alpha K_g, each beam in 4 elements, the combination's first-order axial forces); where alpha_cr < 10 "
+                  "(EN 1993-1-1 5.2.1(3)) the combination is solved second order (OpenSees P-Delta) on the frame "
+                  "displaced along its first mode by span / n (5.3.2(11)), and its forces replace the first-order "
+                  "ones; alpha_cr <= 1 fails")
+
+
+def stability_report(check: StructureCheck) -> dict | None:
+    """report.json's ``stability``: alpha_cr per ULS combination, the lowest with its modes, the
+    combinations solved second order and the utilization before and after."""
+    st = check.stability
+    if st is None:
+        return None
+    b = st.buckling
+    return {"alpha_cr": _finite(st.alpha_cr), "combination": st.combination, "limit": ALPHA_CR_LIMIT,
+            "pass": bool(st.alpha_cr > 1.0),
+            "alpha_cr_per_combination": {k: _finite(v) for k, v in st.alphas.items()},
+            "modes": [_finite(a) for a in (b.alphas.tolist() if b is not None else [])],
+            "lower_bound": list(st.lower_bounds), "second_order": dict(st.second_order), "imperfection_mm": round(st.imperfection_mm, 2),
+            "imperfection": f"first buckling mode x span/{check.options.imperfection:g}",
+            "utilization_first_order": st.first_order_utilization,
+            "utilization": check.max_utilization, "method": STABILITY_NOTE}
+
+
+def _finite(v: float):
+    """A JSON-ready alpha: None for infinity (nothing compressed)."""
+    return round(float(v), 4) if np.isfinite(v) else None
 
 
 def class_4(check: StructureCheck) -> dict:

@@ -15,6 +15,11 @@ ends are released, and no load is a torque).  A pin-jointed frame needs at least
 free node translation (Maxwell's count; a quad grid has about two per node): fewer is named a
 mechanism before solving.  Pinned frames use BandSPD with RCM numbering: on a pin-jointed quad grid
 Mumps returned finite displacements where BandSPD reports the mechanism.
+Support springs: a fixed ground node and a ``zeroLength`` element of ``Elastic`` materials per
+sprung node; semi-rigid joints: an end node per element end (``equalDOF`` translations, rotational
+springs in the element's axes); both built by :func:`build_model`, which also writes the model as a
+script (:mod:`fabricate.structure.export`).  :func:`solve_second_order`: one combination, ``PDelta``
+transformations on an imperfect geometry, Newton in load increments.
 Every load case is a pattern switched on at its own step only (a ``Path``
 series 0-1-0), and the ``Linear`` algorithm factors the stiffness once for all of them.
 OpenSees is imported here only.
@@ -122,6 +127,140 @@ def pinned_count(frame: Frame) -> None:
             "rigid connections")
 
 
+@dataclass(frozen=True, eq=False)
+class Model:
+    """What :func:`build_model` made: ``supported`` (k,) node indices with a reaction, ``ground``
+    {node index: OpenSees tag of the fixed node its springs hold}, ``axes`` (e, 3, 3) local frames."""
+
+    supported: np.ndarray
+    ground: dict
+    axes: np.ndarray
+
+
+SPRING_TORSION = 1e3
+"""Semi-rigid joints: the torsional spring between an element end and its node is this many times the
+element's own G J / L (rigid in practice; only the bending rotations are semi-rigid)."""
+
+
+def build_model(ops, frame: Frame, X: np.ndarray | None = None, transf: str = "Linear") -> Model:
+    """Build ``frame`` in ``ops`` (OpenSees, or a recorder that writes the same calls as a script):
+    nodes 1..n at ``X`` (default ``frame.X``), supports, springs (a fixed ground node per sprung node
+    and a ``zeroLength`` element of ``Elastic`` materials), semi-rigid joints (an end node per element
+    end, ``equalDOF`` translations, a ``zeroLength`` in the element's axes: bending springs
+    ``joint_stiffness``, torsion :data:`SPRING_TORSION` x GJ/L), ``elasticBeamColumn`` elements with a
+    ``transf`` (``Linear`` | ``PDelta``) geometric transformation each."""
+    X = frame.X if X is None else X
+    n, e = frame.n_nodes, frame.n_elements
+    axes = Frame(X, frame.elements, frame.vecxz, frame.sections, frame.section_of, frame.E, frame.G,
+                 frame.fixed).local_axes()
+    A, Iy, Iz, J = frame.prop("A"), frame.prop("Iy"), frame.prop("Iz"), frame.prop("J")
+    held = frame.fixed.copy()
+    if frame.pinned:  # released ends leave the node rotations without stiffness: hold them (no force changes)
+        held[:, 3:] = True
+    springs = np.zeros((n, 6)) if frame.springs is None else np.where(held, 0.0, frame.springs)
+    release = ["-releasez", 3, "-releasey", 3] if frame.pinned else []
+    E, G = frame.E, frame.G
+    ops.wipe()
+    ops.model("basic", "-ndm", 3, "-ndf", 6)
+    for i, (x, y, z) in enumerate(X.tolist()):
+        ops.node(i + 1, x, y, z)
+    fixed = held.astype(int).tolist()
+    for i in np.nonzero(held.any(axis=1))[0].tolist():
+        ops.fix(i + 1, *fixed[i])
+    tag = n + 1
+    ground, mat = {}, 0
+    sprung = np.nonzero((springs > 0).any(axis=1))[0].tolist()
+    for i in sprung:
+        ops.node(tag, *X[i].tolist())
+        ops.fix(tag, 1, 1, 1, 1, 1, 1)
+        ground[i] = tag
+        tag += 1
+    ele = e + 1
+    for i in sprung:
+        dirs = np.nonzero(springs[i] > 0)[0].tolist()
+        mats = []
+        for d in dirs:
+            mat += 1
+            ops.uniaxialMaterial("Elastic", mat, float(springs[i, d]))
+            mats.append(mat)
+        ops.element("zeroLength", ele, ground[i], i + 1, "-mat", *mats, "-dir", *[d + 1 for d in dirs])
+        ele += 1
+    ends = (frame.elements + 1).tolist()
+    if frame.semi_rigid:  # an end node per element end, joined to its node by rotational springs
+        L = np.linalg.norm(X[frame.elements[:, 1]] - X[frame.elements[:, 0]], axis=1)
+        mat += 1
+        ops.uniaxialMaterial("Elastic", mat, float(frame.joint_stiffness))
+        bend = mat
+        for k, (a, b) in enumerate(frame.elements.tolist()):
+            mat += 1
+            ops.uniaxialMaterial("Elastic", mat, float(SPRING_TORSION * G * J[k] / L[k]))
+            pair = []
+            for node in (a, b):
+                ops.node(tag, *X[node].tolist())
+                ops.equalDOF(node + 1, tag, 1, 2, 3)
+                ops.element("zeroLength", ele, node + 1, tag, "-mat", mat, bend, bend, "-dir", 4, 5, 6,
+                            "-orient", *axes[k, 0].tolist(), *axes[k, 1].tolist())
+                pair.append(tag)
+                tag += 1
+                ele += 1
+            ends[k] = pair
+    for k, ((a, b), v, (a_, iy, iz, j)) in enumerate(zip(ends, frame.vecxz.tolist(),
+                                                          np.stack([A, Iy, Iz, J], axis=1).tolist())):
+        ops.geomTransf(transf, k + 1, *v)
+        # OpenSees: A E G J Iy(local y, weak) Iz(local z, strong)
+        ops.element("elasticBeamColumn", k + 1, a, b, a_, E, G, j, iz, iy, k + 1, *release)
+    supported = np.nonzero(held.any(axis=1) | (springs > 0).any(axis=1))[0]
+    return Model(supported, ground, axes)
+
+
+def analysis(ops, frame: Frame, *, linear: bool = True, steps: int = 1, tol: float = 1e-8) -> None:
+    """The analysis objects: the linear system (see the module docstring), ``Transformation``
+    constraints where joints are semi-rigid, ``LoadControl`` of ``1 / steps``, and the ``Linear``
+    algorithm factoring once (``linear``) or ``Newton`` with a displacement-increment test."""
+    if frame.pinned:  # released joints leave rotations free: BandSPD reports the singular matrix, Mumps may not
+        ops.system("BandSPD")
+        ops.numberer("RCM")
+    elif frame.semi_rigid:  # equalDOF constraints: transformed, so the system is not banded-symmetric
+        ops.system("UmfPack")
+        ops.numberer("RCM")
+    else:
+        ops.system(SYSTEM)
+        ops.numberer("Plain")
+    ops.constraints("Transformation" if frame.semi_rigid else "Plain")
+    ops.integrator("LoadControl", 1.0 / steps)
+    if linear:
+        ops.algorithm("Linear", "-factorOnce")
+    else:
+        ops.test("NormDispIncr", tol, 50)
+        ops.algorithm("Newton")
+    ops.analysis("Static")
+
+
+def add_loads(ops, pattern: int, series: int, case: LoadCase, axes: np.ndarray) -> np.ndarray:
+    """A ``Plain`` pattern of ``case`` (element line loads in local axes, nodal loads); returns the
+    local line loads (e, 3)."""
+    wl = np.einsum("eij,ej->ei", axes, case.line)  # local wx, wy, wz
+    ops.pattern("Plain", pattern, series)
+    loaded = np.nonzero(np.abs(wl).max(axis=1) > 0)[0]
+    for el, (wx, wy, wz) in zip(loaded.tolist(), wl[loaded].tolist()):
+        ops.eleLoad("-ele", el + 1, "-type", "-beamUniform", wy, wz, wx)
+    nodal = np.nonzero(np.abs(case.nodal).max(axis=1) > 0)[0]
+    for i, f in zip(nodal.tolist(), case.nodal[nodal].tolist()):
+        ops.load(i + 1, *f)
+    return wl
+
+
+def read_reactions(ops, model: Model, n: int) -> np.ndarray:
+    """(n, 6) float reactions of the supports (a sprung node: its springs' ground node's too)."""
+    ops.reactions()
+    R = np.zeros((n, 6))
+    for i in model.supported.tolist():
+        R[i] = ops.nodeReaction(i + 1)
+        if i in model.ground:
+            R[i] += np.asarray(ops.nodeReaction(model.ground[i]))
+    return R
+
+
 def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
     """Solve ``frame`` for each case in ``cases`` (linear elastic; superposition holds).
 
@@ -134,61 +273,25 @@ def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
     ops = _opensees()
     t0 = time.perf_counter()
     spent = {"build": 0.0, "solve": 0.0, "read": 0.0}
-    axes = frame.local_axes()
-    A, Iy, Iz, J = frame.prop("A"), frame.prop("Iy"), frame.prop("Iz"), frame.prop("J")
-    X = frame.X.tolist()
-    El = (frame.elements + 1).tolist()
-    vecxz = frame.vecxz.tolist()
-    supported = np.nonzero(frame.fixed.any(axis=1))[0]
-    held = frame.fixed.copy()
-    if frame.pinned:  # released ends leave the node rotations without stiffness: hold them (no force changes)
-        held[:, 3:] = True
-    fixed = held.astype(int).tolist()
-    props = np.stack([A, Iy, Iz, J], axis=1).tolist()
-    release = ["-releasez", 3, "-releasey", 3] if frame.pinned else []
-    E, G = frame.E, frame.G
     t = time.perf_counter()
     ops.wipe()
     ops.logFile(os.devnull, "-noEcho")
-    ops.model("basic", "-ndm", 3, "-ndf", 6)
-    for i, (x, y, z) in enumerate(X):
-        ops.node(i + 1, x, y, z)
-    for i in np.nonzero(held.any(axis=1))[0].tolist():
-        ops.fix(i + 1, *fixed[i])
-    for k, ((a, b), v, (a_, iy, iz, j)) in enumerate(zip(El, vecxz, props)):
-        ops.geomTransf("Linear", k + 1, *v)
-        # OpenSees: A E G J Iy(local y, weak) Iz(local z, strong)
-        ops.element("elasticBeamColumn", k + 1, a, b, a_, E, G, j, iz, iy, k + 1, *release)
-    if frame.pinned:  # released joints leave rotations free: BandSPD reports the singular matrix, Mumps may not
-        ops.system("BandSPD")
-        ops.numberer("RCM")
-    else:
-        ops.system(SYSTEM)
-        ops.numberer("Plain")
-    ops.constraints("Plain")
-    ops.integrator("LoadControl", 1.0)
-    ops.algorithm("Linear", "-factorOnce")
-    ops.analysis("Static")
+    model = build_model(ops, frame)
+    analysis(ops, frame)
     size = float(np.linalg.norm(frame.X.max(axis=0) - frame.X.min(axis=0)))
     end_forces, disp, reac, line_local = {}, {}, {}, {}
     n, e = frame.n_nodes, frame.n_elements
     steps = []
     for name, case in cases.items():  # every case is a pattern that is on (factor 1) at its own step only
-        wl = np.einsum("eij,ej->ei", axes, case.line)  # local wx, wy, wz
+        wl = np.einsum("eij,ej->ei", model.axes, case.line)
         line_local[name] = wl
-        loaded = np.nonzero(np.abs(wl).max(axis=1) > 0)[0]
-        nodal = np.nonzero(np.abs(case.nodal).max(axis=1) > 0)[0]
-        if loaded.size == 0 and nodal.size == 0:  # an empty case (a zero load): nothing to solve
+        if not (np.abs(wl).max(initial=0.0) > 0 or np.abs(case.nodal).max(initial=0.0) > 0):
             end_forces[name], disp[name], reac[name] = np.zeros((e, 12)), np.zeros((n, 6)), np.zeros((n, 6))
-            continue
+            continue  # an empty case (a zero load): nothing to solve
         steps.append(name)
         k = len(steps)
         ops.timeSeries("Path", k, "-time", k - 1.0, k, k + 1.0, "-values", 0.0, 1.0, 0.0)
-        ops.pattern("Plain", k, k)
-        for el, (wx, wy, wz) in zip(loaded.tolist(), wl[loaded].tolist()):
-            ops.eleLoad("-ele", el + 1, "-type", "-beamUniform", wy, wz, wx)
-        for i, f in zip(nodal.tolist(), case.nodal[nodal].tolist()):
-            ops.load(i + 1, *f)
+        add_loads(ops, k, k, case, model.axes)
     spent["build"] += time.perf_counter() - t
     for name in steps:  # linear: step k solves K du = P_k - K u_(k-1), so u_k = K^-1 P_k (one factorization)
         t = time.perf_counter()
@@ -197,10 +300,7 @@ def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
         t = time.perf_counter()
         U = np.array([ops.nodeDisp(i + 1) for i in range(n)], dtype=float).reshape(n, 6)
         Fe = np.array([ops.eleResponse(k + 1, "localForce") for k in range(e)], dtype=float).reshape(e, 12)
-        ops.reactions()
-        R = np.zeros((n, 6))
-        for i in supported.tolist():
-            R[i] = ops.nodeReaction(i + 1)
+        R = read_reactions(ops, model, n)
         spent["read"] += time.perf_counter() - t
         if ok != 0 or not (np.isfinite(U).all() and np.isfinite(Fe).all()) or \
                 np.abs(U[:, :3]).max(initial=0.0) > max(size, 1.0):
@@ -208,8 +308,10 @@ def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
             why = (f"OpenSees found the stiffness singular (analyze returned {ok})" if ok != 0
                    else "the displacements are not finite or larger than the frame itself")
             raise MechanismError(f"the frame is a mechanism (or far too soft) under load case {name!r}: {why}; "
-                                 f"expected supports that hold it ({len(supported)} supported nodes) and "
-                                 f"connections that make it stiff ({'pinned' if frame.pinned else 'rigid'} joints)")
+                                 f"expected supports that hold it ({len(model.supported)} supported nodes) and "
+                                 f"connections that make it stiff ({joints(frame)} joints)")
+        if cases[name].fixed_end is not None:
+            Fe = Fe + cases[name].fixed_end
         end_forces[name], disp[name], reac[name] = Fe, U, R
     try:
         from importlib.metadata import version as _version
@@ -222,3 +324,37 @@ def solve(frame: Frame, cases: dict[str, LoadCase]) -> Solution:
     spent["opensees"] = round(sum(spent.values()), 4)
     spent["ours"] = round(total - spent["opensees"], 4)
     return Solution(end_forces, disp, reac, line_local, spent, version)
+
+
+def joints(frame: Frame) -> str:
+    return "pinned" if frame.pinned else "semi-rigid" if frame.semi_rigid else "rigid"
+
+
+def solve_second_order(frame: Frame, case: LoadCase, X: np.ndarray, steps: int = 10):
+    """Geometrically nonlinear (P-Delta) solution of one combined ``case`` on the frame with its nodes
+    at ``X`` (an imperfect geometry): OpenSees ``PDelta`` transformations, the load in ``steps``
+    increments, Newton iterations.  Returns ``(end_forces (e, 12), displacements (n, 6), reactions
+    (n, 6), line_local (e, 3))``, or None when an increment does not converge (the frame is unstable
+    under the combination)."""
+    ops = _opensees()
+    ops.wipe()
+    ops.logFile(os.devnull, "-noEcho")
+    model = build_model(ops, frame, X, transf="PDelta")
+    ops.timeSeries("Linear", 1)
+    wl = add_loads(ops, 1, 1, case, model.axes)
+    analysis(ops, frame, linear=False, steps=steps,
+             tol=1e-10 * max(float(np.linalg.norm(X.max(axis=0) - X.min(axis=0))), 1.0))
+    n, e = frame.n_nodes, frame.n_elements
+    for _ in range(steps):
+        if ops.analyze(1) != 0:
+            ops.wipe()
+            return None
+    U = np.array([ops.nodeDisp(i + 1) for i in range(n)], dtype=float).reshape(n, 6)
+    Fe = np.array([ops.eleResponse(k + 1, "localForce") for k in range(e)], dtype=float).reshape(e, 12)
+    R = read_reactions(ops, model, n)
+    ops.wipe()
+    if not (np.isfinite(U).all() and np.isfinite(Fe).all()):
+        return None
+    if case.fixed_end is not None:
+        Fe = Fe + case.fixed_end
+    return Fe, U, R, wl

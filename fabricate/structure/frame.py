@@ -31,6 +31,10 @@ class Frame:
     ids : (e,) str element names (beam part ids); node_ids : (n,) str.
     top : (e,) float, +1 where the element's local ``y`` points to the section's top fibre (the glass
         side), -1 where it points away; None when unknown (the section class then takes both signs).
+    springs : (n, 6) float or None: support springs, N/mm (translations) and N mm/rad (rotations), on
+        dofs that are not ``fixed`` (0: free); the reaction of a spring is its force.
+    joint_stiffness : N mm/rad, semi-rigid joints: every element end is joined to its node by a
+        rotational spring of this stiffness about both bending axes (0: rigid; ``pinned`` overrides).
     """
 
     X: np.ndarray
@@ -45,6 +49,17 @@ class Frame:
     ids: tuple = ()
     node_ids: tuple = ()
     top: np.ndarray | None = None
+    springs: np.ndarray | None = None
+    joint_stiffness: float = 0.0
+
+    @property
+    def semi_rigid(self) -> bool:
+        return (not self.pinned) and self.joint_stiffness > 0
+
+    def supported(self) -> np.ndarray:
+        """(n,) bool nodes held by a fixed dof or a spring."""
+        held = self.fixed.any(axis=1)
+        return held | (self.springs > 0).any(axis=1) if self.springs is not None else held
 
     @property
     def n_nodes(self) -> int:
@@ -97,7 +112,7 @@ def check_frame(frame: Frame) -> None:
     if bad.size:
         raise MeshError(f"structure: beam {frame.ids[bad[0]] if frame.ids else bad[0]}: its beam-plane normal is "
                         "parallel to the beam, expected a normal across it")
-    if not frame.fixed.any():
+    if not frame.supported().any():
         raise ConfigError("structure.supports: no node is supported, expected at least one support")
 
 

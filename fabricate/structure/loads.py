@@ -25,28 +25,35 @@ KN_M2 = 1e-3   # kN/m2 -> N/mm2
 @dataclass(frozen=True, eq=False)
 class LoadCase:
     """One load case: ``nodal (n, 6)`` forces N and moments N mm, ``line (e, 3)`` global uniform
-    line loads N/mm on the elements."""
+    line loads N/mm on the elements; ``fixed_end (e, 12)`` or None: local end forces of the members
+    held at both ends (an imposed strain: temperature), added to the solved end forces (their
+    equivalent nodal loads are in ``nodal``)."""
 
     name: str
     nodal: np.ndarray
     line: np.ndarray
+    fixed_end: np.ndarray | None = None
 
     def total_force(self, lengths: np.ndarray) -> np.ndarray:
         """(3,) float resultant force, N, for element ``lengths (e,)``."""
         return self.nodal[:, :3].sum(axis=0) + (self.line * lengths[:, None]).sum(axis=0)
 
     def scaled(self, factor: float, name: str | None = None) -> "LoadCase":
-        return LoadCase(name or self.name, self.nodal * factor, self.line * factor)
+        return LoadCase(name or self.name, self.nodal * factor, self.line * factor,
+                        None if self.fixed_end is None else self.fixed_end * factor)
 
 
 def combine(cases: dict[str, LoadCase], factors: dict[str, float], name: str) -> LoadCase:
     """``sum factor * case`` over the cases named in ``factors``."""
     first = next(iter(cases.values()))
     nodal, line = np.zeros_like(first.nodal), np.zeros_like(first.line)
+    fixed = np.zeros((len(first.line), 12))
     for key, f in factors.items():
         nodal += f * cases[key].nodal
         line += f * cases[key].line
-    return LoadCase(name, nodal, line)
+        if cases[key].fixed_end is not None:
+            fixed += f * cases[key].fixed_end
+    return LoadCase(name, nodal, line, fixed)
 
 
 def panel_area_vectors(mesh) -> np.ndarray:

@@ -114,6 +114,12 @@ class StructureOptions:
     up: tuple[float, float, float] = option((0.0, 0.0, 1.0), help="the up direction of the loads")
     deflection_limit: float = option(200.0, gt=0, le=10000.0, help="span / n, beams and whole structure")
     span: float | None = option(None, gt=0, le=1e7, unit="mm", help="null: the shorter side of the plan")
+    stability: Literal["off", "auto", "always"] = option(
+        "auto", help="alpha_cr of every ULS combination (linear buckling analysis); second-order analysis with "
+                     "the first-mode imperfection where alpha_cr < 10 (auto) or always")
+    imperfection: float = option(300.0, ge=10.0, le=10000.0,
+                                 help="n of the imperfection amplitude span / n along the first buckling mode")
+    buckling_modes: int = option(3, ge=1, le=20, help="buckling modes computed and reported per combination")
     loads: LoadsOptions = LoadsOptions()
     combinations: tuple[CombinationOptions, ...] | None = None
     sizing: SizingOptions = SizingOptions()

@@ -26,7 +26,13 @@ def structure_measures(check) -> dict[str, dict]:
     r, opt = check.results, check.options
     enforced = opt.check == "enforce"
     ids = np.arange(check.frame.n_elements)
-    return {
+    extra = {}
+    if check.stability is not None and check.stability.alphas:
+        alphas = np.array(list(check.stability.alphas.values()), dtype=float)
+        extra["structure_stability"] = entry(1.0 / alphas, 1.0, "ratio", "combination", enforced=enforced,
+                                             what="1 / alpha_cr of each ULS combination (linear buckling analysis; "
+                                                  "above 1 the frame buckles under it)")
+    return extra | {
         "structure_utilization": entry(r.utilization, 1.0, "ratio", "beam", ids=ids, enforced=enforced,
                                        what=f"steel utilization ({opt.grade}, governing ULS combination; "
                                             "cross-section and flexural buckling)"),

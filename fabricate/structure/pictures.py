@@ -54,7 +54,7 @@ def deflection_scale(X: np.ndarray, U: np.ndarray, fraction: float = 0.05) -> fl
 
 
 def picture_deflection(X: np.ndarray, elements: np.ndarray, U: np.ndarray, path: str | Path, *, title: str,
-                       combination: str) -> tuple[Path, float]:
+                       combination: str, label: str = "node displacement (mm)", unit: str = " mm") -> tuple[Path, float]:
     """The undeformed frame (grey) and the deflected one (node displacements ``U (n, 3)`` mm,
     exaggerated by the stated scale), coloured by displacement.  Returns ``(path, scale)``."""
     from matplotlib import colormaps
@@ -76,7 +76,7 @@ def picture_deflection(X: np.ndarray, elements: np.ndarray, U: np.ndarray, path:
     seg = np.stack([Y[elements[:, 0]], Y[elements[:, 1]]], axis=1)
     ax.add_collection3d(Line3DCollection(seg, colors=cmap(norm(un[elements].mean(axis=1))), linewidths=1.0))
     bar = fig.colorbar(ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.6, pad=0.08)
-    bar.set_label("node displacement (mm)")
-    ax.set_title(f"{title}\n{combination}, displacements x {scale:g} (max {un.max(initial=0.0):.1f} mm)",
+    bar.set_label(label)
+    ax.set_title(f"{title}\n{combination}, displacements x {scale:g} (max {un.max(initial=0.0):.3g}{unit})",
                  fontsize=10)
     return _save(fig, path), scale

@@ -62,4 +62,12 @@ def write_pictures(chk, out, name: str) -> dict[str, str]:
                                   title=f"{name}: deflected shape", combination=r.governing_sls)
     pics["structure_deflection.png"] = (f"the deflected frame ({r.governing_sls}), displacements exaggerated "
                                         f"x {scale:g}")
+    st = chk.stability
+    if st is not None and st.buckling is not None and len(st.buckling.alphas):
+        b = st.buckling
+        picture_deflection(b.X, b.elements, b.modes[0], out / "structure_mode.png",
+                           title=f"{name}: first buckling mode, alpha_cr = {b.alpha_cr:.3g}",
+                           combination=st.combination, label="mode shape (largest translation 1)", unit="")
+        pics["structure_mode.png"] = (f"the first buckling mode of {st.combination} (alpha_cr {b.alpha_cr:.3g}; "
+                                      f"{'second-order analysis below 10' if b.alpha_cr < 10 else 'first order: 10 or more'})")
     return pics
