@@ -182,3 +182,22 @@ def test_the_file_check_holds_the_assemblies_and_the_lengths(rhs, tmp_path):
     assert any(e.startswith("B0001:") for e in bad["bad_assembly"]) and \
         any(e.startswith("B0001.1: in 0 assemblies") for e in bad["bad_assembly"]), bad["bad_assembly"]
     assert [e.split(":")[0] for e in bad["bad_length"]] == ["B0002", "B0002"], bad["bad_length"]
+
+
+def test_one_beam_one_length_in_the_ifc_the_cut_list_and_the_nc1(rhs, tmp_path):
+    """Every plate's NC1 length is its IFC length_mm (and the cut list's, above): one length per piece."""
+    from fabricate.export.nc1 import write_nc1
+    from fabricate.export.nc1_read import read_nc1
+
+    parts, folder = rhs
+    write_nc1(parts, tmp_path / "nc1")
+    f = ifcopenshell.open(str(folder / "model.ifc"))
+    plates = {e.Name: eu.get_psets(e)[PSET]["length_mm"] for e in f.by_type("IfcPlate") if e.Name[0] == "B"}
+    nc1 = {p.stem: read_nc1(p)["header"]["length"] for p in (tmp_path / "nc1").glob("B*.nc1")}
+    assert set(nc1) == set(plates) and len(nc1) == 6 * len({k.split(".")[0] for k in nc1})
+    for pid, length in plates.items():
+        assert nc1[pid] == pytest.approx(length, abs=0.05), pid
+    beam = next(a for a in f.by_type("IfcElementAssembly") if a.Name == "B0001")
+    length = eu.get_psets(beam)[PSET]["length_mm"]              # end cut to end cut of the whole as welded
+    assert f"{length:.1f}" == _cut_list(folder)["B0001"]["length_mm"]
+    assert all(length >= v - 1e-9 for k, v in plates.items() if k.startswith("B0001."))
