@@ -96,3 +96,109 @@ def test_large_system_with_a_small_factor_refactors_and_solves(mkl):
         x = f.update(A * scale).solve(b)
         np.testing.assert_allclose((A * scale) @ x, b, atol=1e-10)
     assert f.analyses == 2
+
+
+def test_upper_triangle_is_read_from_the_csr_arrays_with_every_diagonal_stored():
+    A = spd(400, 6)
+    data, indptr, indices = pardiso.upper_triangle(A)
+    U = sp.csr_matrix((data, indices, indptr), shape=A.shape)
+    np.testing.assert_array_equal(U.toarray(), sp.triu(A).toarray())
+    assert indptr.dtype == indices.dtype == np.int32
+    np.testing.assert_array_equal(indices[indptr[:-1]], np.arange(400))  # the diagonal first in each row
+    # a product's unsorted indices and duplicates, a row without its diagonal entry
+    B = sp.csr_matrix((np.array([1.0, 2.0, 3.0, 4.0]), np.array([1, 0, 0, 1]), np.array([0, 2, 4])),
+                      shape=(2, 2))
+    assert not B.has_canonical_format
+    data, indptr, indices = pardiso.upper_triangle(B)
+    np.testing.assert_array_equal(sp.csr_matrix((data, indices, indptr), shape=(2, 2)).toarray(),
+                                  [[2.0, 1.0], [0.0, 4.0]])
+    C = sp.csr_matrix(np.array([[0.0, 1.0], [1.0, 2.0]]))
+    C.eliminate_zeros()
+    data, indptr, indices = pardiso.upper_triangle(C)
+    np.testing.assert_array_equal(indices, [0, 1, 1])
+    np.testing.assert_array_equal(data, [0.0, 1.0, 2.0])
+
+
+def test_upper_triangle_needs_no_copy_of_the_whole_matrix_in_64_bit_indices():
+    # SciPy's triu went through COO with 64-bit row and column arrays: about 2x the bytes of the
+    # matrix on top of it (at a million faces several GiB); the mask keeps it under 0.9x
+    import tracemalloc
+
+    A = spd(20000, 7)
+    A.indices, A.indptr = A.indices.astype(np.int32), A.indptr.astype(np.int32)
+    size = A.data.nbytes + A.indices.nbytes + A.indptr.nbytes
+    tracemalloc.start()
+    base = tracemalloc.get_traced_memory()[0]
+    out = pardiso.upper_triangle(A)
+    peak = tracemalloc.get_traced_memory()[1] - base
+    tracemalloc.stop()
+    assert peak < 1.0 * size, (peak, size)  # scipy.sparse.triu and the conversions: 1.6
+    assert sum(a.nbytes for a in out) < 0.7 * size
+
+
+def test_a_shifted_matrix_is_factored_without_preparing_it_again(mkl):
+    A = spd(600, 8)
+    b = np.cos(np.arange(600, dtype=float))
+    f = mkl.PardisoCholesky()
+    for shift in (1e-3, 1e-2, 10.0, 0.0):
+        x = f.update(A, shift=shift).solve(b)
+        np.testing.assert_allclose(A @ x + shift * x, b, atol=1e-9)
+    assert f.analyses == 1
+    held = f._arrays[0]
+    f.update(A, shift=5.0)
+    assert f._arrays[0] is held  # the same upper triangle, its diagonal shifted in place
+    A2 = A * 3.0  # a new matrix of the same pattern: prepared anew, analysis kept
+    x = f.update(A2, shift=5.0).solve(b)
+    np.testing.assert_allclose(A2 @ x + 5.0 * x, b, atol=1e-9)
+    assert f._arrays[0] is not held and f.analyses == 1
+
+
+@pytest.mark.parametrize("backend", ["superlu", "auto"])
+def test_normal_solver_solves_a_shifted_matrix(backend):
+    A = spd(300, 9)
+    b = np.linspace(-1.0, 1.0, 300)
+    s = linalg.NormalSolver(backend)
+    for mu in (1e-2, 1.0):
+        x = s.solve(linalg.Shifted(A, mu), b)
+        np.testing.assert_allclose(A @ x + mu * x, b, atol=1e-8)
+
+
+def test_normal_equations_are_the_sum_of_the_exact_and_majorized_products():
+    from optimize.solvers.guided import normal_equations
+
+    rng = np.random.default_rng(10)
+    size = 60
+    J = sp.random(40, size, density=0.1, random_state=11, format="csr")
+    parts = [[sp.random(15, size, density=0.1, random_state=12 + k, format="csr") for k in range(2)],
+             [sp.random(7, size, density=0.2, random_state=20 + k, format="csr") for k in range(3)]]
+    r = rng.normal(size=40 + 15 + 7)
+    free = np.setdiff1d(np.arange(size), [3, 17, 41])
+    S = sp.csr_matrix((np.ones(len(free)), (free, np.arange(len(free)))), shape=(size, len(free)))
+    want = J.T @ J
+    for p in parts:
+        want = want + len(p) * sum(Jk.T @ Jk for Jk in p)
+    Jw = sp.vstack([sum(p[1:], p[0]) for p in parts])
+    g_want = sp.vstack([J, Jw]).T @ r
+    for sel in (None, S):
+        M, g = normal_equations(J, parts, r, sel)
+        T = sp.eye(size) if sel is None else S
+        np.testing.assert_allclose(M.toarray(), (T.T @ want @ T).toarray(), atol=1e-12)
+        np.testing.assert_allclose(g, T.T @ g_want, atol=1e-12)
+
+
+def test_a_matrix_inside_the_analysed_pattern_is_factored_without_a_new_analysis(mkl):
+    # rows that come and go (the guided solver's convexity hinges) or exact zeros a sparse
+    # product dropped: the analysis of the wider pattern is kept, the missing entries are zeros
+    A = spd(500, 13)
+    wide = (A + 0.01 * (sp.eye(500, k=9) + sp.eye(500, k=-9))).tocsr()
+    b = np.sin(np.arange(500.0))
+    f = mkl.PardisoCholesky()
+    f.update(wide)
+    for M in (A, A * 2.0, wide):
+        x = f.update(M, shift=0.5).solve(b)
+        np.testing.assert_allclose(M @ x + 0.5 * x, b, atol=1e-9)
+    assert f.analyses == 1 and f.embedded == 2
+    grown = (A + 0.01 * (sp.eye(500, k=31) + sp.eye(500, k=-31))).tocsr()  # outside: analysed anew
+    x = f.update(grown).solve(b)
+    np.testing.assert_allclose(grown @ x, b, atol=1e-9)
+    assert f.analyses == 2

@@ -18,7 +18,7 @@ from .._lazy import lazy_exports
 
 _EXPORTS = {
     "BACKENDS": ".normal", "NormalSolver": ".normal", "SolveError": ".normal",
-    "normal_matrix": ".normal", "resolve_backend": ".normal",
+    "normal_matrix": ".normal", "resolve_backend": ".normal", "Shifted": ".normal",
     "SPDSolver": ".spd", "Factor": ".spd", "lstsq": ".spd", "COND_LIMIT": ".spd", "RESIDUAL_TOL": ".spd",
     "superlu": ".superlu:superlu",
 }

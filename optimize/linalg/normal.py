@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import logging
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -64,6 +65,26 @@ class SolveError(RuntimeError):
 def _superlu_factor(A: sp.spmatrix):
     """A function ``b -> A^{-1} b`` from SuperLU in symmetric mode (:func:`optimize.linalg.superlu.superlu`)."""
     return superlu(A, symmetric=True).solve
+
+
+@dataclass(frozen=True)
+class Shifted:
+    """``matrix + shift I`` without forming it: the damped Gauss-Newton matrix of one iteration,
+    solved for several ``shift`` values (the damping) on one ``matrix`` (symmetric, CSR).
+
+    :class:`NormalSolver` prepares ``matrix`` once (PARDISO: its upper triangle) and then
+    only adds the shift to the diagonal; the same ``matrix`` object passed again is taken as
+    unchanged, so it must not be modified in place between the solves."""
+
+    matrix: sp.csr_matrix
+    shift: float = 0.0
+
+    def formed(self) -> sp.csr_matrix:
+        """``matrix + shift I`` as a new CSR matrix (the backends without a shifted path)."""
+        return (self.matrix + sp.diags(np.full(self.matrix.shape[0], float(self.shift)))).tocsr()
+
+    def __matmul__(self, v: np.ndarray) -> np.ndarray:
+        return self.matrix @ v + self.shift * v
 
 
 class NormalSolver:
@@ -99,8 +120,13 @@ class NormalSolver:
         self.factorizations = 0
         self.cg_iterations = 0
 
-    def solve(self, A: sp.spmatrix, b: np.ndarray) -> np.ndarray:
-        """``x (k,)`` with ``A (k, k) x = b (k,)``.  Raises :class:`SolveError` on failure."""
+    def solve(self, A: sp.spmatrix | Shifted, b: np.ndarray) -> np.ndarray:
+        """``x (k,)`` with ``A (k, k) x = b (k,)``.  Raises :class:`SolveError` on failure.
+
+        ``A`` may be a :class:`Shifted` matrix: PARDISO then factors ``matrix + shift I`` from
+        the upper triangle it prepared for that ``matrix`` (no copy of the matrix per shift)."""
+        if not isinstance(A, Shifted):
+            A = Shifted(A)
         if self.reuse and self._factor is not None:
             x = self._preconditioned_cg(A, b)
             if x is not None:
@@ -113,11 +139,13 @@ class NormalSolver:
                     from .pardiso import PardisoCholesky
 
                     self._pardiso = PardisoCholesky()
-                self._factor = self._pardiso.update(A)
+                self._factor = self._pardiso.update(A.matrix, shift=A.shift)
             elif self.backend == "superlu":
-                self._factor = _superlu_factor(A)
+                self._factor = None  # the previous factor freed before the new one is made
+                self._factor = _superlu_factor(A.formed())
             else:
-                self._factor = self._eliminate_factor(A)
+                self._factor = None
+                self._factor = self._eliminate_factor(A.formed())
             t1 = time.perf_counter()
             x = self._factor(b)
             t2 = time.perf_counter()
@@ -131,8 +159,8 @@ class NormalSolver:
         return x
 
     def _preconditioned_cg(self, A, b):
-        """CG on ``A x = b`` preconditioned by the last factor; None if it does not converge."""
-        A = A.tocsr()
+        """CG on ``A x = b`` (a :class:`Shifted`) preconditioned by the last factor; None if it
+        does not converge."""
         M = self._factor
         x = M(b)
         r = b - A @ x

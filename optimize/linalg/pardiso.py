@@ -89,7 +89,9 @@ def _ptr(a: np.ndarray, ctype):
 
 class PardisoCholesky:
     """Factor of SPD ``A`` (upper triangle used); ``update(A)`` refactors a new matrix,
-    redoing the analysis only when the sparsity pattern changed.
+    redoing the analysis only when its sparsity pattern has entries outside the analysed
+    one (a matrix with fewer entries is factored in the analysed pattern, its missing
+    entries stored as zeros: the convexity hinge rows of the guided solver come and go).
 
     Raises ``RuntimeError`` (with PARDISO's error text) when a phase fails.
     """
@@ -111,9 +113,13 @@ class PardisoCholesky:
         self.n = 0
         self.threads = 0  # 0: MKL's default (every core); 1 for small factors, see update
         self.analyses = 0
+        self.embedded = 0  # matrices factored in the analysed pattern, a superset of theirs
         self.seconds = {"analysis": 0.0, "numeric": 0.0, "solve": 0.0}
         self._pattern = None
         self._arrays = None
+        self._source = None  # the matrix self._arrays holds the upper triangle of (see update)
+        self._shift = 0.0
+        self._diagonal = None
         self._factored = False
 
     @property
@@ -131,7 +137,8 @@ class PardisoCholesky:
                 setter(before)
 
     def _call_pardiso(self, phase: int, b: np.ndarray | None) -> np.ndarray | None:
-        a, ia, ja = self._arrays
+        a, ia, ja = self._arrays if self._arrays is not None else (  # phase -1 needs no matrix
+            np.zeros(1), np.zeros(2, dtype=np.int32), np.zeros(1, dtype=np.int32))
         one = np.ones(1, dtype=np.int32)
         args = [np.array([v], dtype=np.int32) for v in (1, 1, 2, phase, self.n)]
         perm = np.zeros(max(self.n, 1), dtype=np.int32)
@@ -149,23 +156,35 @@ class PardisoCholesky:
                                f"{ERRORS.get(int(err[0]), 'unknown error')}")
         return x if b is not None else None
 
-    def update(self, A: sp.spmatrix) -> "PardisoCholesky":
-        """Factor ``A (n, n)`` (symmetric; its upper triangle is read)."""
-        U = sp.triu(A, format="csr")
-        U.sum_duplicates()
-        U.sort_indices()
-        n = U.shape[0]
-        if U.shape != (n, n) or n == 0:
-            raise ValueError(f"PARDISO needs a non-empty square matrix, got shape {A.shape}")
-        indptr, indices = U.indptr.astype(np.int32), U.indices.astype(np.int32)
-        # every diagonal entry must be stored, even a zero one
-        diag_first = indices[indptr[:-1][np.diff(indptr) > 0]]
-        if len(diag_first) != n or np.any(diag_first != np.arange(n)):
-            U = _with_diagonal(U)
-            indptr, indices = U.indptr.astype(np.int32), U.indices.astype(np.int32)
-        self._arrays = (np.ascontiguousarray(U.data, dtype=np.float64), indptr, indices)
-        same = (self._pattern is not None and self.n == n and np.array_equal(self._pattern[0], indptr)
-                and np.array_equal(self._pattern[1], indices))
+    def update(self, A: sp.spmatrix, shift: float = 0.0) -> "PardisoCholesky":
+        """Factor ``A + shift I`` (``A (n, n)`` symmetric; its upper triangle is read).
+
+        The upper triangle of ``A`` is extracted once and kept: the same ``A`` object passed
+        again (a new damping ``shift`` in one Gauss-Newton iteration) only changes the kept
+        diagonal in place, so ``A`` must not be modified in place between such calls."""
+        if A is not self._source:
+            self._source = None
+            self._arrays = None  # the previous matrix's copy freed before the next is made
+            data, indptr, indices = upper_triangle(A)
+            if self._pattern is not None and len(indptr) == len(self._pattern[0]) and not (
+                    np.array_equal(self._pattern[0], indptr) and np.array_equal(self._pattern[1], indices)):
+                pos = _positions_in(self._pattern, indptr, indices)
+                if pos is not None:  # fewer entries than the analysed pattern (rows that come and
+                    # go, exact zeros a sparse product dropped): its values in that pattern
+                    full = np.zeros(len(self._pattern[1]))
+                    full[pos] = data
+                    data, (indptr, indices) = full, self._pattern
+                    self.embedded += 1
+            self._arrays, self._source, self._shift = (data, indptr, indices), A, 0.0
+            self._diagonal = indptr[:-1]  # upper_triangle stores every diagonal entry first in its row
+        data, indptr, indices = self._arrays
+        n = len(indptr) - 1
+        if shift != self._shift:
+            data[self._diagonal] += shift - self._shift
+            self._shift = shift
+        same = self._pattern is not None and self.n == n and (
+            (self._pattern[0] is indptr and self._pattern[1] is indices)
+            or (np.array_equal(self._pattern[0], indptr) and np.array_equal(self._pattern[1], indices)))
         self.n = n
         t0 = time.perf_counter()
         if not same:
@@ -216,7 +235,7 @@ class PardisoCholesky:
 
     def _release_handle(self):
         """Free PARDISO's memory for this handle (on the threads it was analysed with)."""
-        if self._arrays is not None and np.any(self.pt):
+        if np.any(self.pt):
             try:
                 self._call(-1)
             except RuntimeError:
@@ -232,6 +251,50 @@ class PardisoCholesky:
             self._release()
         except Exception:  # interpreter shutdown: nothing left to free safely
             pass
+
+
+def upper_triangle(A: sp.spmatrix) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The upper triangle of a square ``A (n, n)`` as PARDISO reads it: ``(data float64,
+    indptr int32, indices int32)`` in CSR, column indices sorted, duplicates summed and the
+    diagonal entry stored (zero if absent) first in every row.
+
+    Made from ``A``'s CSR arrays with one boolean mask (SciPy's ``triu`` goes through COO
+    with 64-bit indices: 3x the memory of the matrix at a million faces).  A CSR ``A`` not in
+    canonical form (a sparse product's unsorted indices) is put in it in place: same matrix."""
+    A = A if sp.issparse(A) and A.format == "csr" else sp.csr_matrix(A)
+    n = A.shape[0]
+    if A.shape != (n, n) or n == 0:
+        raise ValueError(f"PARDISO needs a non-empty square matrix, got shape {A.shape}")
+    if not A.has_canonical_format:
+        A.sum_duplicates()  # sorts the indices too
+    counts = np.diff(A.indptr)
+    keep = A.indices >= np.repeat(np.arange(n, dtype=A.indices.dtype), counts)
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    if A.nnz:  # kept entries per row (a row without entries: reduceat would give its next entry)
+        per_row = np.add.reduceat(keep, np.minimum(A.indptr[:-1], A.nnz - 1), dtype=np.int64)
+        np.cumsum(np.where(counts > 0, per_row, 0), out=indptr[1:])
+    data = A.data[keep].astype(np.float64, copy=False)
+    indices = A.indices[keep].astype(np.int32, copy=False)
+    del keep
+    nonempty = indptr[1:] > indptr[:-1]
+    if np.all(nonempty) and np.array_equal(indices[indptr[:-1]], np.arange(n, dtype=np.int32)):
+        return data, indptr.astype(np.int32), indices
+    U = _with_diagonal(sp.csr_matrix((data, indices, indptr), shape=(n, n)))
+    return U.data.astype(np.float64), U.indptr.astype(np.int32), U.indices.astype(np.int32)
+
+
+def _positions_in(pattern: tuple[np.ndarray, np.ndarray], indptr: np.ndarray,
+                  indices: np.ndarray) -> np.ndarray | None:
+    """Where the entries of the CSR pattern ``(indptr, indices)`` sit in ``pattern`` (both
+    sorted in each row, same number of rows), or None when one of them is not in it."""
+    P_indptr, P_indices = pattern
+    if len(indices) > len(P_indices):
+        return None
+    n = len(indptr) - 1
+    keys_p = np.repeat(np.arange(n, dtype=np.int64) * n, np.diff(P_indptr)) + P_indices
+    keys = np.repeat(np.arange(n, dtype=np.int64) * n, np.diff(indptr)) + indices
+    pos = np.minimum(np.searchsorted(keys_p, keys), len(keys_p) - 1)
+    return pos if np.array_equal(keys_p[pos], keys) else None
 
 
 def _with_diagonal(U: sp.csr_matrix) -> sp.csr_matrix:
