@@ -25,10 +25,13 @@ MAX_AREA_LOAD = 100.0
 """Largest area load (kN/m2): ten times a heavy design snow load."""
 MAX_UNIT_WEIGHT = 1000.0
 """Largest unit weight (kN/m3): steel is 78.5, the densest metal about 220."""
+MAX_TEMPERATURE = 200.0
+"""Largest uniform temperature change (K)."""
 MAX_FACTOR = 10.0
 """Largest factor of a load case in a combination (EN 1990's are at most 1.5)."""
 _LOADS = {"steel_unit_weight": {"le": MAX_UNIT_WEIGHT}, "glass_unit_weight": {"le": MAX_UNIT_WEIGHT},
-          **{k: {"le": MAX_AREA_LOAD} for k in ("finishes", "snow", "wind_pressure", "wind_suction")}}
+          "temperature": {"le": MAX_TEMPERATURE},
+          **{k: {"le": MAX_AREA_LOAD} for k in ("finishes", "snow", "wind_pressure", "wind_suction", "maintenance")}}
 
 
 class SectionOption(section_base(SectionOptions, meta=_SIZES)):

@@ -264,7 +264,7 @@ def stage_structure(cfg, off: OffsetRecord, parts: PartsRecord) -> StructureReco
     from fabricate.structure.outputs import structure_measures
     from fabricate.structure.run import check_run
 
-    chk, rep, notes, line = check_run(cfg.structure.to_options(), off.structure, parts.spec)
+    chk, rep, notes, line = check_run(cfg.structure.to_options(), off.structure, parts.spec, parts=parts.parts)
     return StructureRecord(check=chk, report=frozen(rep), measures=frozen(structure_measures(chk)),
                            notes=tuple(notes), line=line)
 

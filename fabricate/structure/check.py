@@ -110,14 +110,15 @@ def default_span(V: np.ndarray, up) -> float:
     return float(max(ext.min(), 1e-9))
 
 
-def build(structure, options, spec, section: SectionProperties | None = None):
-    """``(frame, supports, cases)`` for a structure with one section everywhere."""
+def build(structure, options, spec, section: SectionProperties | None = None, parts=None):
+    """``(frame, supports, cases)`` for a structure with one section everywhere (``parts``: the CAD
+    stage's, for the hubs' weight)."""
     section = section or configured_section(options, spec, structure)
     frame, supports = frame_from_offset(
         structure, section, E=options.elastic_modulus, G=options.shear_modulus, supports=options.supports,
         support_tolerance=options.support_tolerance, support_kind=options.support_kind,
         pinned=options.connections == "pinned", up=options.up)
-    cases = basic_cases(structure, frame, options.loads, spec.glass_thickness, options.up)
+    cases = basic_cases(structure, frame, options.loads, spec.glass_thickness, options.up, parts)
     return frame, supports, cases
 
 
@@ -212,18 +213,19 @@ def second_order(frame, cases, solution, combos, options, span: float, u_first: 
     return stab, sol, out
 
 
-def check_structure(structure, options, spec, *, section_of=None, sections=None) -> StructureCheck:
+def check_structure(structure, options, spec, *, section_of=None, sections=None, parts=None) -> StructureCheck:
     """Build, load, solve and evaluate the beam frame of ``structure`` (an OffsetStructure).
 
     options : the :class:`~fabricate.structure.options.StructureOptions` (``cfg.structure.to_options()``); spec : the PartSpec (glass thickness, beam width).
     section_of, sections : optional per beam sections (sizing); default the configured one.
+    parts : the CAD stage's Parts (the node parts' weight, load case ``hubs``), or None (no hubs).
     """
     t0 = time.perf_counter()
     section = configured_section(options, spec, structure)
-    frame, supports, cases = build(structure, options, spec, section)
+    frame, supports, cases = build(structure, options, spec, section, parts)
     if sections is not None:
         frame = frame.with_sections(sections, section_of)
-        cases = basic_cases(structure, frame, options.loads, spec.glass_thickness, options.up)
+        cases = basic_cases(structure, frame, options.loads, spec.glass_thickness, options.up, parts)
     t1 = time.perf_counter()
     solution, results, stab = solve_frame(frame, cases, options, structure)
     t2 = time.perf_counter()

@@ -16,8 +16,11 @@ from typing import Literal
 from ..fields import check_fields, option
 from .sections import SectionProperties, section
 
-CASES = ("self_weight", "glass", "finishes", "snow", "wind_pressure", "wind_suction")
-"""The basic load cases (EN 1991-style names); permanent: self_weight, glass, finishes."""
+CASES = ("self_weight", "hubs", "glass", "finishes", "snow", "wind_pressure", "wind_suction", "maintenance",
+         "temperature_rise", "temperature_fall")
+"""The basic load cases (EN 1991-style names); permanent: self_weight, hubs, glass, finishes."""
+KFI = {"CC1": 0.9, "CC2": 1.0, "CC3": 1.1}
+"""EN 1990 Annex B Table B3: the factor K_FI on the partial factors of the unfavourable actions."""
 ALPHA = {"a0": 0.13, "a": 0.21, "b": 0.34, "c": 0.49, "d": 0.76}
 """Imperfection factor of each flexural buckling curve (EN 1993-1-1 Table 6.1)."""
 GRADES = {"S235": 235.0, "S275": 275.0, "S355": 355.0, "S460": 460.0}
@@ -49,6 +52,11 @@ class LoadsOptions:
     snow: float = option(0.8, ge=0, unit="kN/m2", help="s = mu_i C_e C_t s_k, per m2 of plan")
     wind_pressure: float = option(0.5, ge=0, unit="kN/m2", help="w_e toward the structure, normal to the panels")
     wind_suction: float = option(0.5, ge=0, unit="kN/m2", help="w_e away from the structure (uplift)")
+    maintenance: float = option(0.4, ge=0, unit="kN/m2",
+                                help="EN 1991-1-1 Table 6.10, roofs of category H: q_k per m2 of plan (0.4 recommended)")
+    temperature: float = option(30.0, ge=0, unit="K",
+                                help="uniform temperature change +/- dT of the steel from its erection temperature "
+                                     "(EN 1991-1-5 6.1.3)")
 
     def __post_init__(self) -> None:
         check_fields(self, "structure.loads")
@@ -61,22 +69,47 @@ class CombinationOptions:
 
     name: str = option(min_length=1, max_length=60)
     kind: Literal["uls", "sls"]
-    factors: dict[Literal["self_weight", "glass", "finishes", "snow", "wind_pressure", "wind_suction"], float]
+    factors: dict[Literal["self_weight", "hubs", "glass", "finishes", "snow", "wind_pressure", "wind_suction",
+                          "maintenance", "temperature_rise", "temperature_fall"], float]
 
 
 def _perm(g: float) -> dict[str, float]:
-    return {"self_weight": g, "glass": g, "finishes": g}
+    return {"self_weight": g, "hubs": g, "glass": g, "finishes": g}
 
 
-DEFAULT_COMBINATIONS = (
-    ("ULS 1.35G", "uls", _perm(1.35)),
-    ("ULS 1.35G + 1.5S + 0.9W", "uls", dict(_perm(1.35), snow=1.5, wind_pressure=0.9)),
-    ("ULS 1.35G + 1.5W + 0.75S", "uls", dict(_perm(1.35), wind_pressure=1.5, snow=0.75)),
-    ("ULS 1.0G + 1.5W uplift", "uls", dict(_perm(1.0), wind_suction=1.5)),
-    ("SLS G + S + 0.6W", "sls", dict(_perm(1.0), snow=1.0, wind_pressure=0.6)),
-    ("SLS G + W + 0.5S", "sls", dict(_perm(1.0), wind_pressure=1.0, snow=0.5)),
-    ("SLS G + W uplift", "sls", dict(_perm(1.0), wind_suction=1.0)),
-)
+PSI0 = {"snow": 0.5, "wind": 0.6, "temperature": 0.6, "maintenance": 0.0}
+"""EN 1990 Table A1.1: psi_0 of snow (sites below 1000 m), wind, temperature, roofs of category H."""
+
+
+def default_combinations(kfi: float = 1.0, maintenance: bool = True, temperature: bool = True) -> tuple:
+    """EN 1990 eq. 6.10 with the recommended factors (gamma_G 1.35 K_FI unfavourable, 1.0 favourable,
+    gamma_Q 1.5 K_FI, :data:`PSI0`), each variable action leading in turn: snow, wind (pressure; suction
+    with the permanent actions favourable), temperature (rise and fall, snow and wind accompanying),
+    maintenance alone (EN 1991-1-1 3.3.2(1): not with snow or wind); temperature does not accompany the
+    snow- and wind-led ones.  SLS: the characteristic combinations of the same."""
+    g, q = 1.35 * kfi, 1.5 * kfi
+    f = lambda x: round(x, 4)  # noqa: E731
+    s0, w0, t0 = PSI0["snow"], PSI0["wind"], PSI0["temperature"]
+    out = [(f"ULS {f(g):g}G", "uls", _perm(f(g))),
+           (f"ULS {f(g):g}G + {f(q):g}S + {f(q * w0):g}W", "uls", dict(_perm(f(g)), snow=f(q), wind_pressure=f(q * w0))),
+           (f"ULS {f(g):g}G + {f(q):g}W + {f(q * s0):g}S", "uls", dict(_perm(f(g)), wind_pressure=f(q), snow=f(q * s0))),
+           (f"ULS 1.0G + {f(q):g}W uplift", "uls", dict(_perm(1.0), wind_suction=f(q)))]
+    if temperature:
+        for sign in ("rise", "fall"):
+            out.append((f"ULS {f(g):g}G + {f(q):g}T {sign} + {f(q * s0):g}S + {f(q * w0):g}W", "uls",
+                        dict(_perm(f(g)), **{f"temperature_{sign}": f(q)}, snow=f(q * s0), wind_pressure=f(q * w0))))
+    if maintenance:
+        out.append((f"ULS {f(g):g}G + {f(q):g}H maintenance", "uls", dict(_perm(f(g)), maintenance=f(q))))
+    out += [("SLS G + S + 0.6W", "sls", dict(_perm(1.0), snow=1.0, wind_pressure=w0)),
+            ("SLS G + W + 0.5S", "sls", dict(_perm(1.0), wind_pressure=1.0, snow=s0)),
+            ("SLS G + W uplift", "sls", dict(_perm(1.0), wind_suction=1.0))]
+    if maintenance:
+        out.append(("SLS G + H maintenance", "sls", dict(_perm(1.0), maintenance=1.0)))
+    return tuple(out)
+
+
+DEFAULT_COMBINATIONS = default_combinations()
+"""The default combinations in consequence class CC2 with every action present."""
 
 
 @dataclass(frozen=True)
@@ -120,6 +153,8 @@ class StructureOptions:
     imperfection: float = option(300.0, ge=10.0, le=10000.0,
                                  help="n of the imperfection amplitude span / n along the first buckling mode")
     buckling_modes: int = option(3, ge=1, le=20, help="buckling modes computed and reported per combination")
+    consequence_class: Literal["CC1", "CC2", "CC3"] = option(
+        "CC2", help="EN 1990 Annex B: K_FI 0.9 / 1.0 / 1.1 on the unfavourable actions of the default combinations")
     loads: LoadsOptions = LoadsOptions()
     combinations: tuple[CombinationOptions, ...] | None = None
     sizing: SizingOptions = SizingOptions()
@@ -135,7 +170,8 @@ class StructureOptions:
     def combination_list(self) -> list[tuple[str, str, dict[str, float]]]:
         """``[(name, kind, {case: factor})]``: the configured combinations or the EN 1990 defaults."""
         if self.combinations is None:
-            return [(n, k, dict(f)) for n, k, f in DEFAULT_COMBINATIONS]
+            return [(n, k, dict(f)) for n, k, f in default_combinations(
+                KFI[self.consequence_class], self.loads.maintenance > 0, self.loads.temperature > 0)]
         return [(c.name, c.kind, dict(c.factors)) for c in self.combinations]
 
 

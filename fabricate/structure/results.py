@@ -128,13 +128,17 @@ class Results:
 
 
 def equilibrium(frame, cases, solution) -> dict[str, float]:
-    """``{case: |sum of reactions + sum of loads| / |sum of loads|}`` (forces; 0 for an empty case)."""
+    """``{case: |sum of reactions + sum of loads| / |sum of loads|}`` (forces; 0 for an empty case; a
+    case whose loads sum to zero: over the sum of their magnitudes)."""
     L = frame.lengths()
     out = {}
     for name, case in cases.items():
         load = case.total_force(L)
         reac = solution.reactions[name][:, :3].sum(axis=0)
-        scale = np.linalg.norm(load)
+        # a self-equilibrated case (temperature: nodal loads that sum to zero) against its loads' size
+        size = float(np.abs(case.nodal[:, :3]).sum() + (np.abs(case.line) * L[:, None]).sum())
+        scale = float(np.linalg.norm(load))
+        scale = scale if scale > 1e-6 * size else size
         out[name] = float(np.linalg.norm(load + reac) / scale) if scale > 0 else float(np.linalg.norm(reac))
     return out
 

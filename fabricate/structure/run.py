@@ -15,14 +15,14 @@ from .check import beam_table, check_structure, report
 from .sections import built_section
 
 
-def check_run(opt, structure, spec) -> tuple:
+def check_run(opt, structure, spec, parts=None) -> tuple:
     """The structural check of a run: ``opt`` the config's ``structure`` section, ``structure`` the
-    OffsetStructure, ``spec`` the PartSpec the beams were cut with.
+    OffsetStructure, ``spec`` the PartSpec the beams were cut with, ``parts`` the Parts (the hubs' weight).
 
     Returns ``(check, report, notes, line)``: the StructureCheck, report.json's ``structure`` (with
     the beam table and the notes), notes for the run (what the check and the cut list disagree on)
     and a one-line result for the progress bar."""
-    chk = check_structure(structure, opt, spec)
+    chk = check_structure(structure, opt, spec, parts=parts)
     rep = report(chk)
     d0, d1 = structure.beam_span
     built_name = built_section(spec, abs(d1 - d0)).name
