@@ -209,6 +209,9 @@ class Assembly:
     def _modes(self, N: np.ndarray, k: int, lu, bound: bool) -> Buckling:
         nf = len(self.free)
         B = -self.Kg(N)
+        B.eliminate_zeros()
+        if B.nnz == 0 or not (N < 0).any():   # nothing compressed: no buckling
+            return Buckling(np.zeros(0), self.X, self.sub, np.zeros((0, len(self.X), 3)), bound)
         if nf <= DENSE:
             mu, vec = scipy.linalg.eigh(B.toarray(), self.Ke.toarray())
             order = np.argsort(-mu)[:k]
@@ -218,7 +221,7 @@ class Assembly:
             Minv = spla.LinearOperator((nf, nf), matvec=lu.solve, dtype=float)
             kk = min(k, nf - 2)
             mu, vec = spla.eigsh(B, k=kk, M=self.Ke, Minv=Minv, which="LA", tol=TOL, ncv=min(nf - 1, max(20, 4 * kk)),
-                                 maxiter=MAX_RESTARTS)
+                                 maxiter=MAX_RESTARTS, v0=np.ones(nf) / np.sqrt(nf))   # a fixed start: reproducible
             order = np.argsort(-mu)
             mu, vec = mu[order], vec[:, order]
         pos = mu > 1e-12  # alpha below 1e12: a compression; mu <= 0 where nothing is compressed
