@@ -67,7 +67,7 @@ def captured(tmp_path_factory):
         cfg = tiny_config(tmp, outputs={"bom": True, "step": False, "stl": False, "3mf": False, "dxf": False,
                                         "svg": False, "ifc": False, "3dm": False, "nc1": False, "gltf": False,
                                         "pictures": False, "html": False},
-                          structure={"check": "report"})
+                          structure={"check": "report", "supports": "boundary"})
         summary = run_pipeline(cfg, tmp / "out")
     finally:
         stages.stage_report = original

@@ -147,7 +147,7 @@ def test_a_run_writes_the_structure_table_columns_and_pictures(tmp_path):
     from fabricate.app.pipeline import run_pipeline
 
     outs = dict(NO_FILES, bom=True, pictures=True)
-    cfg = tiny_config(tmp_path, "st", outputs=outs, structure={"check": "report"})
+    cfg = tiny_config(tmp_path, "st", outputs=outs, structure={"check": "report", "supports": "boundary"})
     summary = run_pipeline(cfg, tmp_path / "out")
     assert summary.exit_code == 0, summary.message
     out = tmp_path / "out" / "st"
@@ -169,7 +169,7 @@ def test_a_run_writes_the_structure_table_columns_and_pictures(tmp_path):
 def test_enforce_with_a_section_far_too_small_is_exit_3(tmp_path):
     from fabricate.app.pipeline import run_pipeline
 
-    cfg = tiny_config(tmp_path, "weak", structure={"check": "enforce",
+    cfg = tiny_config(tmp_path, "weak", structure={"check": "enforce", "supports": "boundary",
                                                    "section": {"shape": "plate", "depth": 200, "width": 0.5}})
     summary = run_pipeline(cfg, tmp_path / "out")
     assert summary.exit_code == 3 and "structure_utilization" in summary.failed
@@ -180,7 +180,9 @@ def test_enforce_fails_a_class_4_section_with_exit_3(tmp_path):
 
     # strong enough (utilization about 0.4), but the stem (c/t 36) is class 4 wherever it is compressed
     thin = {"shape": "tee", "depth": 200, "width": 200, "web": 5, "flange": 20}
-    cfg = tiny_config(tmp_path, "thin", structure={"check": "enforce", "section": thin})
+    # no temperature: the held ring beams would fail on it too (this test is about the class)
+    cfg = tiny_config(tmp_path, "thin", structure={"check": "enforce", "supports": "boundary", "section": thin,
+                                                   "loads": {"temperature": 0.0}})
     summary = run_pipeline(cfg, tmp_path / "out")
     assert summary.exit_code == 3 and summary.failed == ["structure_section_class"]
     assert "every requirement met" not in summary.message and "structure_section_class" in summary.message
@@ -191,7 +193,7 @@ def test_the_bom_rows_of_welded_beams_carry_their_beams_figures(tmp_path):
 
     tee = {"section": "tee", "web_mm": 10, "flange_mm": 12, "flange_width_mm": 100}
     cfg = tiny_config(tmp_path, "tee", outputs=dict(NO_FILES, bom=True), parts={"beam": tee},
-                      structure={"check": "report"})
+                      structure={"check": "report", "supports": "boundary"})
     summary = run_pipeline(cfg, tmp_path / "out")
     assert summary.exit_code == 0, summary.message
     rows = [r for r in csv.DictReader((tmp_path / "out" / "tee" / "bom.csv").open()) if r["kind"] == "beam"]
