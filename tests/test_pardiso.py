@@ -202,3 +202,30 @@ def test_a_matrix_inside_the_analysed_pattern_is_factored_without_a_new_analysis
     x = f.update(grown).solve(b)
     np.testing.assert_allclose(grown @ x, b, atol=1e-9)
     assert f.analyses == 2
+
+
+def test_large_systems_are_factored_in_single_precision_and_refined_in_double(mkl, monkeypatch):
+    from optimize.linalg import normal
+
+    monkeypatch.setattr(normal, "SINGLE_FROM", 500)  # this 800-unknown system counts as large
+    A = spd(800, 14)
+    b = np.cos(np.arange(800.0))
+    s = linalg.NormalSolver("pardiso")
+    for mu in (1e-3, 1e-1):
+        x = s.solve(linalg.Shifted(A, mu), b)
+        assert np.linalg.norm(A @ x + mu * x - b) <= 1e-10 * np.linalg.norm(b)
+    assert s._pardiso.single and s._pardiso.analyses == 1 and s.cg_iterations >= 1
+    double = mkl.PardisoCholesky().update(A)
+    assert s._pardiso.iparm[16] < 0.75 * double.iparm[16]  # the numeric phase's memory (KB)
+
+
+def test_a_single_precision_factor_that_fails_is_replaced_by_a_double_one(mkl, monkeypatch):
+    from optimize.linalg import normal
+
+    monkeypatch.setattr(normal, "SINGLE_FROM", 2)
+    # positive definite, but its Schur complement 1e-9 is lost in float32: not PD there
+    A = sp.csr_matrix(np.array([[1.0, 1.0], [1.0, 1.0 + 1e-9]]))
+    s = linalg.NormalSolver("pardiso")
+    x = s.solve(A, np.array([1.0, 2.0]))
+    np.testing.assert_allclose(A @ x, [1.0, 2.0], atol=1e-6)
+    assert not s._pardiso.single

@@ -96,7 +96,7 @@ class PardisoCholesky:
     Raises ``RuntimeError`` (with PARDISO's error text) when a phase fails.
     """
 
-    def __init__(self):
+    def __init__(self, single: bool = False):
         lib = _load()
         if lib is None:
             raise RuntimeError(_LIB_ERROR)
@@ -110,6 +110,7 @@ class PardisoCholesky:
         p[9] = 13   # pivot perturbation 1e-13 (unused for SPD)
         p[17] = -1  # report nonzeros of the factor
         p[34] = 1   # zero-based indices
+        p[27] = int(single)  # the factor in single precision (half the memory; solves in float32)
         self.n = 0
         self.threads = 0  # 0: MKL's default (every core); 1 for small factors, see update
         self.analyses = 0
@@ -119,8 +120,15 @@ class PardisoCholesky:
         self._arrays = None
         self._source = None  # the matrix self._arrays holds the upper triangle of (see update)
         self._shift = 0.0
-        self._diagonal = None
+        self._diagonal = self._diagonal0 = None
         self._factored = False
+
+    @property
+    def single(self) -> bool:
+        """The factor is computed and stored in single precision (``iparm[27]``): a solve is
+        then accurate to about ``1e-7`` times the condition number, and callers refine it
+        (:class:`optimize.linalg.normal.NormalSolver` runs CG in double with it)."""
+        return bool(self.iparm[27])
 
     @property
     def factor_nnz(self) -> int:
@@ -144,7 +152,8 @@ class PardisoCholesky:
         perm = np.zeros(max(self.n, 1), dtype=np.int32)
         msglvl = np.zeros(1, dtype=np.int32)
         err = np.zeros(1, dtype=np.int32)
-        rhs = np.zeros(max(self.n, 1)) if b is None else np.ascontiguousarray(b, dtype=np.float64)
+        dtype = np.float32 if self.single else np.float64  # the factor's precision (iparm[27])
+        rhs = np.zeros(max(self.n, 1), dtype) if b is None else np.ascontiguousarray(b, dtype=dtype)
         x = np.zeros_like(rhs)
         i32 = ctypes.c_int32
         self._fn(_ptr(self.pt, ctypes.c_int64), _ptr(args[0], i32), _ptr(args[1], i32),
@@ -154,7 +163,7 @@ class PardisoCholesky:
         if err[0] != 0:
             raise RuntimeError(f"PARDISO phase {phase} failed with error {int(err[0])}: "
                                f"{ERRORS.get(int(err[0]), 'unknown error')}")
-        return x if b is not None else None
+        return x.astype(np.float64, copy=False) if b is not None else None
 
     def update(self, A: sp.spmatrix, shift: float = 0.0) -> "PardisoCholesky":
         """Factor ``A + shift I`` (``A (n, n)`` symmetric; its upper triangle is read).
@@ -175,12 +184,15 @@ class PardisoCholesky:
                     full[pos] = data
                     data, (indptr, indices) = full, self._pattern
                     self.embedded += 1
-            self._arrays, self._source, self._shift = (data, indptr, indices), A, 0.0
             self._diagonal = indptr[:-1]  # upper_triangle stores every diagonal entry first in its row
+            self._diagonal0 = data[self._diagonal]  # the diagonal before any shift
+            if self.single:
+                data = data.astype(np.float32)
+            self._arrays, self._source, self._shift = (data, indptr, indices), A, 0.0
         data, indptr, indices = self._arrays
         n = len(indptr) - 1
         if shift != self._shift:
-            data[self._diagonal] += shift - self._shift
+            data[self._diagonal] = self._diagonal0 + shift
             self._shift = shift
         same = self._pattern is not None and self.n == n and (
             (self._pattern[0] is indptr and self._pattern[1] is indices)
