@@ -7,6 +7,7 @@ returns a lighter section that passes (by a full solve), and bad input is exit 2
 from __future__ import annotations
 
 import csv
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -277,3 +278,26 @@ def test_fabricate_size_reports_the_lightest_passing_section_and_the_steel_saved
     assert "rhs 200x60x4" in d["class_4_under_the_final_forces"]
     assert d["configured_section"] == "plate 60x200" and d["saved_kg"] > 0
     assert "rhs 200x60x6" in proc.stdout and "saved" in proc.stdout
+
+
+def test_a_run_with_the_structure_check_checks_every_panel_as_glass(tmp_path):
+    """#35 item 7 wired: structure.glass (check: report by default) writes glass_check.csv, the report's
+    structure.glass and the measures glass_stress / glass_deflection; off leaves them out."""
+    from fabricate.app.pipeline import run_pipeline
+
+    cfg = tiny_config(tmp_path, "gl", outputs=dict(NO_FILES, bom=True),
+                      structure={"check": "report", "supports": "boundary", "loads": {"temperature": 0.0}})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    out = tmp_path / "out" / "gl"
+    rep = json.loads((out / "report.json").read_text())
+    rows = list(csv.DictReader((out / "glass_check.csv").open()))
+    assert summary.exit_code == 0, summary.message
+    assert len(rows) == rep["parts"]["panels"]["count"] == 12 and all(0 < float(r["utilization"]) for r in rows)
+    assert rep["measures"]["glass_stress"]["max"] == pytest.approx(max(float(r["utilization_stress"]) for r in rows),
+                                                                   rel=1e-3)
+    assert "glass" in rep["structure"] and rep["measures"]["glass_deflection"]["role"] == "information"
+    off = tiny_config(tmp_path, "gl_off", outputs=dict(NO_FILES, bom=True),
+                      structure={"check": "report", "supports": "boundary", "loads": {"temperature": 0.0},
+                                 "glass": {"check": "off"}})
+    run_pipeline(off, tmp_path / "out")
+    assert not (tmp_path / "out" / "gl_off" / "glass_check.csv").exists()

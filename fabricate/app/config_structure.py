@@ -16,6 +16,7 @@ from ..structure.options import (
     SizingOptions,
     StructureOptions,
 )
+from ..structure.glass import GlassOptions
 from .config_section import MAX_MM, section_base
 
 
@@ -75,11 +76,17 @@ class SizingOption(section_base(SizingOptions, extra={
     """``fabricate size``: candidate sections (lightest passing one per group) and the grouping."""
 
 
+class GlassOption(section_base(GlassOptions)):
+    """``structure.glass``: the glass check of every panel (EN 16612; defaults:
+    :class:`fabricate.structure.glass.GlassOptions`)."""
+
+
 _NESTED = {
     "section": (SectionOption | None, Field(default=None)),  # null: the section the parts are welded from (parts.beam)
     "loads": (LoadsOption, Field(default_factory=LoadsOption)),
     "combinations": (list[CombinationOption] | None, Field(default=None)),  # null: DEFAULT_COMBINATIONS
     "sizing": (SizingOption, Field(default_factory=SizingOption)),
+    "glass": (GlassOption, Field(default_factory=GlassOption)),
 }
 
 

@@ -111,7 +111,7 @@ class StructureRecord:
     """The structural check (``structure.check`` report | enforce), or nothing when off.
 
     check : the StructureCheck (None when off or skipped); report : report.json's ``structure``
-    (None when off); measures : the check's entries for the run's measures.
+    (None when off); measures : the check's entries for the run's measures (the glass check's too).
     """
 
     check: StructureCheck | None = None
@@ -119,6 +119,7 @@ class StructureRecord:
     measures: Mapping[str, Mapping[str, Any]] = field(default_factory=lambda: EMPTY)
     notes: tuple[str, ...] = ()
     line: str = ""
+    glass: Any = None  # the glass check (fabricate.structure.glass.GlassCheck), None when off or skipped
 
 
 @dataclass(frozen=True)

@@ -264,9 +264,17 @@ def stage_structure(cfg, off: OffsetRecord, parts: PartsRecord) -> StructureReco
     from fabricate.structure.outputs import structure_measures
     from fabricate.structure.run import check_run
 
-    chk, rep, notes, line = check_run(cfg.structure.to_options(), off.structure, parts.spec, parts=parts.parts)
-    return StructureRecord(check=chk, report=frozen(rep), measures=frozen(structure_measures(chk)),
-                           notes=tuple(notes), line=line)
+    opts = cfg.structure.to_options()
+    chk, rep, notes, line = check_run(opts, off.structure, parts.spec, parts=parts.parts)
+    measures, glass = structure_measures(chk), None
+    if opts.glass.check != "off":  # every panel as glass (EN 16612) under the same loads
+        from fabricate.structure.glass import check_parts
+
+        glass = check_parts(parts.parts, opts, opts.glass)
+        rep = dict(rep, glass=glass.report())
+        measures.update(glass.measures())
+    return StructureRecord(check=chk, report=frozen(rep), measures=frozen(measures), notes=tuple(notes),
+                           line=line, glass=glass)
 
 
 # -- exports -------------------------------------------------------------------------
@@ -342,6 +350,10 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
             from fabricate.structure.outputs import add_bom_columns
 
             files[fname].update(add_bom_columns(out / fname, statics.check))
+    if statics.glass is not None:  # the glass check, per unit
+        from fabricate.structure.glass import write_glass_check
+
+        files["glass_check.csv"] = write_glass_check(statics.glass, out / "glass_check.csv")
     if cfg.outputs.wanted("cut_files"):  # one nested DXF and SVG per material and thickness
         progress.advance("exports", 1, "nested cut files")
         nesting = cfg.outputs.nesting.model_dump()

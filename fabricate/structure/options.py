@@ -15,6 +15,7 @@ from typing import Literal
 
 from ..fields import check_fields, option
 from .sections import SectionProperties, section
+from .glass import GlassOptions
 
 CASES = ("self_weight", "hubs", "glass", "finishes", "snow", "wind_pressure", "wind_suction", "maintenance",
          "temperature_rise", "temperature_fall")
@@ -158,6 +159,7 @@ class StructureOptions:
     loads: LoadsOptions = LoadsOptions()
     combinations: tuple[CombinationOptions, ...] | None = None
     sizing: SizingOptions = SizingOptions()
+    glass: GlassOptions = GlassOptions()
 
     def __post_init__(self) -> None:
         check_fields(self, "structure")
