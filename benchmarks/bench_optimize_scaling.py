@@ -130,8 +130,8 @@ def run_case(cmd, max_gib, timeout):
 
 def scale_table(args):
     sizes = args.sizes
-    todo = [("pq", n) for n in sizes] + [("conical", n) for n in sizes]
-    if args.huge:
+    todo = [(t, n) for t in args.targets for n in sizes]
+    if args.huge and "pq" in args.targets:
         todo.append(("pq", 1_000_000))
     codes = ([("before", args.baseline)] if args.baseline else []) + [("after" if args.baseline else "now", None)]
     print(f"scale table (perturbed dome of revolution, linear_solver={args.backend}, one fresh process per "
@@ -164,6 +164,7 @@ def main():
     ap.add_argument("--scale", action="store_true", help="issue 31's scale table (10k, 100k, 300k faces)")
     ap.add_argument("--sizes", type=int, nargs="+", default=[10_000, 100_000, 300_000],
                     help="face counts of the scale table")
+    ap.add_argument("--targets", nargs="+", default=["pq", "conical"], help="targets of the scale table")
     ap.add_argument("--huge", action="store_true", help="scale table: also pq at 1M faces (over 10 minutes)")
     ap.add_argument("--baseline", metavar="DIR", help="scale table: also run every case with the code in DIR")
     ap.add_argument("--backend", default="auto", help="scale table: linear_solver (auto, pardiso, superlu, ...)")
