@@ -92,7 +92,9 @@ def test_two_sided_trefoil_band_lies_on_the_rectifying_developable():
     d = DESIGNS["trefoil_band"](twist=False, rulings=r)
     assert measures.planarity(d.mesh).max() < 0.01
     t = 2 * np.pi * (np.arange(r) + 0.5) / r  # quad i lies between rulings i and i + 1
-    knot = lambda t: np.stack([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)], 1)
+    def knot(t):
+        return np.stack([np.sin(t) + 2 * np.sin(2 * t), np.cos(t) - 2 * np.cos(2 * t), -np.sin(3 * t)], 1)
+
     h = 1e-4  # principal normal by central differences, independent of the design's formulas
     d1, d2 = (knot(t + h) - knot(t - h)) / (2 * h), (knot(t + h) - 2 * knot(t) + knot(t - h)) / h ** 2
     T = d1 / np.linalg.norm(d1, axis=1, keepdims=True)

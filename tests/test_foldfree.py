@@ -51,7 +51,8 @@ def test_no_fold_free_pq_mesh_nearby_is_a_diagnosis_not_converged():
     assert res.defects["folded"]["count"] == 0 and not measures.folded_faces(mesh, res.mesh.V).any()
     held = res.defects["convexity"]
     assert held["held"] > 0 and held["faces"]
-    assert "found no fold-free PQ mesh near" in res.message and "--remesh auto" in res.message and str(held["faces"][0]) in res.message
+    assert "found no fold-free PQ mesh near" in res.message and "--remesh auto" in res.message
+    assert str(held["faces"][0]) in res.message
 
 
 @pytest.mark.parametrize("target,formulation", [("pq", "auxiliary"), ("pq", "vertices"),

@@ -245,7 +245,8 @@ def test_arbitrary_text(folder, memory_cap, data):
 # -- --set -----------------------------------------------------------------------------
 GOOD = ["8", "12", "2", "0,-200", "[0, -200]", "0,-150,-300", "off", "fast", "true", "false", "conical", "pq",
         "1e-7", "0.01", "m", "boundary", "1,2,3", "keep"]
-SET_TEXT = st.one_of(st.sampled_from(GOOD), st.sampled_from(HOSTILE), st.lists(st.sampled_from(HOSTILE[:30]), min_size=2, max_size=4)
+SET_TEXT = st.one_of(st.sampled_from(GOOD), st.sampled_from(HOSTILE),
+                     st.lists(st.sampled_from(HOSTILE[:30]), min_size=2, max_size=4)
                      .map(",".join), st.text(min_size=1, max_size=20))
 
 

@@ -16,7 +16,7 @@ import fabricate.app.stages as stages
 from fabricate.app.config import load_config
 from fabricate.app.pipeline import STAGES, run_pipeline
 from fabricate.app.progress import RecordingProgress
-from optimize.errors import ConfigError, ExportError, MeshError
+from optimize.errors import ConfigError, MeshError
 from optimize.mesh.io import read_mesh
 
 from _pipeline_fixtures import REPO, finished_run, tiny_config  # noqa: F401 - fixtures

@@ -3,7 +3,6 @@ near the end of float64, scaled beyond any building, slivers and straight corner
 import json
 import warnings
 
-import numpy as np
 
 from fabricate.app.cli import main
 from optimize.mesh import Mesh, measures

@@ -103,7 +103,8 @@ def test_the_check_solves_second_order_where_alpha_cr_is_below_10():
     spec = PartSpec(glass_thickness=10.0, beam_width=60.0, beam_depth=200.0)
 
     def opts(**kw):
-        data = {"input": {"shape": {"name": "dome"}}, "structure": dict(check="report", loads={"snow": 6.0, "temperature": 0.0}, **kw)}
+        data = {"input": {"shape": {"name": "dome"}},
+                "structure": dict(check="report", loads={"snow": 6.0, "temperature": 0.0}, **kw)}
         return parse_config(data, source=Path("t.yaml")).structure.to_options()
 
     chk = check_structure(dome, opts(), spec)

@@ -401,8 +401,10 @@ def print_table(summaries: list[RunSummary], console=None) -> None:
                       ("conical", "right"), ("parts", "right"), ("time s", "right")):
         table.add_column(col, justify=just, overflow="fold", no_wrap=col not in ("name", "status"))
     style = {"ok": "green", "tolerance_not_reached": "yellow"}
+    def num(v, f):
+        return "" if v is None else format(v, f)
+
     for s in summaries:
-        num = (lambda v, f: "" if v is None else format(v, f))
         label = s.status.replace("_", " ").replace("tolerance not reached", "tolerance not met")
         table.add_row(s.name, f"[{style.get(s.status, 'red')}]{label} ({s.exit_code})", num(s.faces, "d"),
                       num(s.planarity, ".2e"), num(s.conical, ".2e"), num(s.parts, "d"), f"{s.seconds:.1f}")

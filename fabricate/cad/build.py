@@ -242,7 +242,8 @@ def _group(kind, ids, element, V, faces, normals, outline, bevel, planarity, thi
                      flat_bevel=fd["bottom_flat"] if dashed == "bottom" else fd["top_flat"], rect=fd["rect"],
                      bevel_ref=fd["ref"], bevel_ref_z=fd["ref_z"], bevel_deg=fd["bevel_deg"],
                      transform=fd["transform"],
-                     flat_faces=(fd["top_flat"], fd["bottom_flat"]), cuts=fd["cuts"], ring=ring, area_mm2=area, length_mm=np.asarray(length, dtype=float),
+                     flat_faces=(fd["top_flat"], fd["bottom_flat"]), cuts=fd["cuts"], ring=ring, area_mm2=area,
+                     length_mm=np.asarray(length, dtype=float),
                      thickness_mm=np.asarray(thickness, dtype=float),
                      planarity_mm=np.asarray(planarity, dtype=float), residual_mm=residual,
                      neighbours=tuple(tuple(str(x) for x in nb) for nb in neighbours), member=member,
@@ -267,8 +268,10 @@ def _validate(kind, ids, element, V, faces, normals, hint=None) -> None:
     if (turn < CONVEX_MIN).any():
         i = int(np.argmin(turn))
         fi = int(where[i])
-        name = (FACE_NAMES[fi] if len(faces) == len(FACE_NAMES) else BOX_NAMES[fi]) if kind == "beam" else ("lower" if fi == 0 else "upper" if fi == 1
-                                                      else f"side {fi - 2}")
+        if kind == "beam":
+            name = FACE_NAMES[fi] if len(faces) == len(FACE_NAMES) else BOX_NAMES[fi]
+        else:
+            name = "lower" if fi == 0 else "upper" if fi == 1 else f"side {fi - 2}"
         raise PartError(f"{kind} {ids[i]} (element {int(element[i])}): face {name} is folded or "
                         f"collapsed (corner turn {turn[i]:.3g}, expected > 0); {hint(i) if hint else HINTS[kind]}",
                         str(ids[i]), int(element[i]))

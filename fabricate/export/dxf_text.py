@@ -141,7 +141,7 @@ def read_outlines_text(path, *, sheets: bool = False) -> tuple[dict[str, np.ndar
 
     def pick(idx) -> np.ndarray:
         """The values at ``idx`` (indices or mask), stripped, as an object array of str."""
-        idx = np.flatnonzero(idx) if getattr(idx, "dtype", None) == bool else np.asarray(idx, np.int64)
+        idx = np.flatnonzero(idx) if getattr(idx, "dtype", None) is np.dtype(bool) else np.asarray(idx, np.int64)
         if kernel is not None and len(idx):             # each distinct value decoded once
             ids, first, last, exact, _ = kernel.intern(buf, vs, ve, idx)
             if exact:

@@ -7,8 +7,8 @@ triangles over its own vertices, so manifold3d builds one part of each group
 genus of the group's solids (0, a hub tube 1), which depend on the triangles
 alone; every vertex of every part must be finite (the one thing about a vertex
 that manifold3d's status tells), and the volume of every part's triangles
-(:func:`fabricate.cad.geometry.volumes`, of the same fan triangles) is summed against the analytic volume.  Coordinates are taken relative to
-``Parts.local_origin()`` (zero unless the model is far from the origin),
+(:func:`fabricate.cad.geometry.volumes`, of the same fan triangles) is summed against the analytic
+volume.  Coordinates are taken relative to ``Parts.local_origin()`` (zero unless the model is far from the origin),
 because STL stores float32.  The check is made once per parts object and origin
 (:data:`_CHECKED`): the STL and the 3MF writer check the same triangles.
 """
@@ -21,6 +21,7 @@ import numpy as np
 from optimize.errors import ExportError
 
 from ..cad.geometry import fan_triangles, volumes
+from ..cad.parts import GENUS
 
 
 def group_triangles(group, origin: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -38,8 +39,6 @@ def manifold_of(X: np.ndarray, T: np.ndarray):
                              tri_verts=np.ascontiguousarray(tri, dtype=np.uint64))
     return manifold3d.Manifold(mesh)
 
-
-from fabricate.cad.parts import GENUS
 
 _CHECKED: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 """``{parts: {origin bytes: facts}}``: the manifold3d checks passed by each (immutable) parts object, while it lives."""

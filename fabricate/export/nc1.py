@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 from optimize.atomic import atomic_dir, umask
-from optimize.errors import ExportError, write_error
+from optimize.errors import write_error
 
 NUM = "{:10.3f}"
 TEXT_MAX = 60

@@ -346,7 +346,8 @@ def write_steel_cut_list(parts, path) -> dict:
                    f"{uf['weight_kg'][e]:.2f}", " ".join(panels), nodes, "; ".join(unit_flags))
             for g, i, pid, a, w, L in plates:
                 yield (pid, e, types.get(unit, ""), unit, f"PL{g.thickness_mm[i]:g}", g.member, "", spec.steel_grade,
-                       f"{plate_length[pid]:.1f}", f"{L:.1f}", f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}", *angles(a, i), "", f"{w:.2f}",
+                       f"{plate_length[pid]:.1f}", f"{L:.1f}", f"{g.rect[i, 0]:.1f}", f"{g.rect[i, 1]:.1f}",
+                       *angles(a, i), "", f"{w:.2f}",
                        " ".join(unit_id(n) for n in g.neighbours[i] if n[0] == "P"), nodes, "; ".join(flags.get(pid, [])))
     hubs, hub_weight = hub_rows(parts, flags, dict(zip(*node_types(parts)[:2])))
 
@@ -493,8 +494,9 @@ def write_node_schedule(parts, path) -> dict:
             i = int(v[s])
             x = mesh.V[i]
             a = axis[s]
-            yield (nid[i], i, types.get(nid[i], ""), nid[i], f"{x[0]:.1f}", f"{x[1]:.1f}", f"{x[2]:.1f}", f"{a[0]:.6f}", f"{a[1]:.6f}",
-                   f"{a[2]:.6f}", e - s, " ".join(beam[s:e]), _num(az[s:e]), _num(elev[s:e]), hub[i],
+            yield (nid[i], i, types.get(nid[i], ""), nid[i], f"{x[0]:.1f}", f"{x[1]:.1f}", f"{x[2]:.1f}",
+                   f"{a[0]:.6f}", f"{a[1]:.6f}", f"{a[2]:.6f}", e - s, " ".join(beam[s:e]), _num(az[s:e]),
+                   _num(elev[s:e]), hub[i],
                    f"{diameter:g}" if diameter else "", f"{wall[i]:g}" if wall[i] else "",
                    f"{height[i]:.1f}" if np.isfinite(height[i]) else "")
     n = _write(path, NODE_COLUMNS, rows())

@@ -67,7 +67,8 @@ SMALL = {  # few entities (a few per part): their groups are read in Python
 BIG = {  # the planar B-rep: kind -> entity name (read with numpy, :mod:`step_tokens`)
     "point": b"CARTESIAN_POINT", "direction": b"DIRECTION", "vertex": b"VERTEX_POINT", "vector": b"VECTOR",
     "line": b"LINE", "edge": b"EDGE_CURVE", "oriented": b"ORIENTED_EDGE", "loop": b"EDGE_LOOP",
-    "bound": b"FACE_OUTER_BOUND", "inner": b"FACE_BOUND", "axis": b"AXIS2_PLACEMENT_3D", "plane": b"PLANE", "face": b"ADVANCED_FACE",
+    "bound": b"FACE_OUTER_BOUND", "inner": b"FACE_BOUND", "axis": b"AXIS2_PLACEMENT_3D", "plane": b"PLANE",
+    "face": b"ADVANCED_FACE",
     "shell": b"CLOSED_SHELL", "solid": b"MANIFOLD_SOLID_BREP"}
 UNSUPPORTED = (b"B_SPLINE", b"CYLINDRICAL_SURFACE", b"CONICAL_SURFACE", b"SPHERICAL_SURFACE",
                b"TOROIDAL_SURFACE", b"SURFACE_OF_", b"OFFSET_SURFACE")

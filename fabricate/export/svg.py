@@ -15,7 +15,7 @@ import numpy as np
 
 from fabricate.cad.parts import cut_from_sheet
 from optimize.atomic import atomic_open
-from optimize.errors import ExportError, write_error
+from optimize.errors import write_error
 
 from .flat import flat_group
 from .nesting import Layout, sheet_gap

@@ -16,7 +16,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 
 from optimize.atomic import atomic_path
-from optimize.errors import ExportError, write_error
+from optimize.errors import write_error
 
 from ..cad.parts import COLOURS, KINDS
 from .meshes import group_triangles, validate_manifold

@@ -216,7 +216,8 @@ def second_order(frame, cases, solution, combos, options, span: float, u_first: 
 def check_structure(structure, options, spec, *, section_of=None, sections=None, parts=None) -> StructureCheck:
     """Build, load, solve and evaluate the beam frame of ``structure`` (an OffsetStructure).
 
-    options : the :class:`~fabricate.structure.options.StructureOptions` (``cfg.structure.to_options()``); spec : the PartSpec (glass thickness, beam width).
+    options : the :class:`~fabricate.structure.options.StructureOptions` (``cfg.structure.to_options()``);
+    spec : the PartSpec (glass thickness, beam width).
     section_of, sections : optional per beam sections (sizing); default the configured one.
     parts : the CAD stage's Parts (the node parts' weight, load case ``hubs``), or None (no hubs).
     """
@@ -306,7 +307,8 @@ def stability_report(check: StructureCheck) -> dict | None:
             "pass": bool(st.alpha_cr > 1.0),
             "alpha_cr_per_combination": {k: _finite(v) for k, v in st.alphas.items()},
             "modes": [_finite(a) for a in (b.alphas.tolist() if b is not None else [])],
-            "lower_bound": list(st.lower_bounds), "second_order": dict(st.second_order), "imperfection_mm": round(st.imperfection_mm, 2),
+            "lower_bound": list(st.lower_bounds), "second_order": dict(st.second_order),
+            "imperfection_mm": round(st.imperfection_mm, 2),
             "imperfection": f"first buckling mode x span/{check.options.imperfection:g}",
             "utilization_first_order": st.first_order_utilization,
             "utilization": check.max_utilization, "method": STABILITY_NOTE}

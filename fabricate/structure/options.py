@@ -90,7 +90,7 @@ def default_combinations(kfi: float = 1.0, maintenance: bool = True, temperature
     snow- and wind-led ones.  SLS: the characteristic combinations of the same."""
     g, q = 1.35 * kfi, 1.5 * kfi
     f = lambda x: round(x, 4)  # noqa: E731
-    s0, w0, t0 = PSI0["snow"], PSI0["wind"], PSI0["temperature"]
+    s0, w0 = PSI0["snow"], PSI0["wind"]
     out = [(f"ULS {f(g):g}G", "uls", _perm(f(g))),
            (f"ULS {f(g):g}G + {f(q):g}S + {f(q * w0):g}W", "uls", dict(_perm(f(g)), snow=f(q), wind_pressure=f(q * w0))),
            (f"ULS {f(g):g}G + {f(q):g}W + {f(q * s0):g}S", "uls", dict(_perm(f(g)), wind_pressure=f(q), snow=f(q * s0))),

@@ -62,8 +62,10 @@ def control_mesh(*, width: float, height: float, lengths, bend_deg: float, taper
         nxt = normal[order[(i + 1) % 3]]
         corner = 2 * apothem * (normal[k] + nxt) / np.linalg.norm(normal[k] + nxt)
         for p in (apothem * normal[k], corner):
-            top.append(len(V)); V.append(p + [0.0, 0.0, h])
-            bottom.append(len(V)); V.append(p - [0.0, 0.0, h])
+            top.append(len(V))
+            V.append(p + [0.0, 0.0, h])
+            bottom.append(len(V))
+            V.append(p - [0.0, 0.0, h])
     F = _hexagon_quads(0, top) + [f[::-1] for f in _hexagon_quads(1, bottom)]
     for s in (1, 3, 5):  # the side quads that stay, each on the half side after a corner
         F.append([top[(s + 1) % 6], top[s], bottom[s], bottom[(s + 1) % 6]])

@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import inspect
 import re
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -33,7 +32,7 @@ from ..mesh import Mesh
 from .design_params import (MAX_COUNT, MAX_NOISE, MAX_SIZE_MM, UNITS, Design,  # noqa: F401 (re-exported)
                             int_param as _int, noise_param as _noise, noisy as _noisy, pos_param as _pos)
 from .design_tunnel import tunnel
-from .shapes import dome_profile, grid, perturbed, revolution, translational
+from .shapes import dome_profile, grid, revolution, translational
 from .strips import join_meshes, strip_mesh
 
 __all__ = ["Design", "DESIGNS", "describe", "parse_params", "UNITS"]

@@ -52,6 +52,7 @@ def terms(x: np.ndarray, layout: Layout, mesh: Mesh,
 
 
 def at_positions(mesh: Mesh, V: np.ndarray, faces: np.ndarray | None = None) -> tuple[np.ndarray, sp.csr_matrix]:
-    """The rows at positions ``V (n, 3)``, the angle sum defect per face of ``faces`` (default :func:`angle_sum_faces`): residual ``(p,)`` and
-    Jacobian ``(p, 3 n)`` with columns ``x = V.ravel()`` (the unknowns are the vertices alone)."""
+    """The rows at positions ``V (n, 3)``, the angle sum defect per face of ``faces`` (default
+    :func:`angle_sum_faces`): residual ``(p,)`` and Jacobian ``(p, 3 n)`` with columns ``x = V.ravel()``
+    (the unknowns are the vertices alone)."""
     return rows_at(mesh, V, *rows(mesh, faces))

@@ -7,7 +7,8 @@ import json
 def register(sub) -> None:
     p = sub.add_parser("check", help="re-validate a finished run's STEP, STL, 3MF, DXF, SVG and BOM",
                        description="Read every file of a run folder back and check it against the bill of "
-                                   "materials: STEP solids valid (closed planar polyhedra; BRepCheck with --occ) with the analytic volumes and "
+                                   "materials: STEP solids valid (closed planar polyhedra; BRepCheck with --occ) "
+                                   "with the analytic volumes and "
                                    "names, STL/3MF manifold with the same volumes, no two parts overlapping, "
                                    "panels touching their beams, DXF audit clean with outlines equal to the "
                                    "3D faces. Exit 0 when every check passes, 4 otherwise; 2 when "
