@@ -160,7 +160,10 @@ def test_normal_solver_solves_a_shifted_matrix(backend):
     s = linalg.NormalSolver(backend)
     for mu in (1e-2, 1.0):
         x = s.solve(linalg.Shifted(A, mu), b)
-        np.testing.assert_allclose(A @ x + mu * x, b, atol=1e-8)
+        # the solver's contract: a direct solve, or CG from the last factor to the relative residual
+        # cg_rtol; which one depends on how long the factorization took (the reuse budget), so the
+        # bound is the contract's, not a direct solve's (this failed on a loaded machine at 1.2e-6)
+        assert np.linalg.norm(A @ x + mu * x - b) <= s.cg_rtol * np.linalg.norm(b)
 
 
 def test_normal_equations_are_the_sum_of_the_exact_and_majorized_products():
