@@ -26,7 +26,7 @@ from optimize.modelling import shapes
 def foldfree_table(args):
     """Old (no convexity rows, fairness weight in full) and new default, the paper's methods,
     the remeshed route and libigl / mpfp where installed, with folds and distances."""
-    from optimize.remesh.conjugacy import net_defect
+    from optimize.mesh.conjugacy import net_defect
     from optimize.remesh.routes import optimize_routes
     from optimize.solvers import guided
 

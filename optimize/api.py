@@ -21,7 +21,7 @@ from .mesh.axes import fit_axes
 from .options import DEFAULTS, FORMULATIONS, METHODS, OptimizeOptions  # noqa: F401 (re-exported)
 from .proximity.curve import BoundaryCurve
 from .proximity.surface import Reference
-from .remesh.conjugacy import record_net
+from .mesh.conjugacy import record_net
 from .result import OptimizeResult, check_folds, record_shape
 from .solvers import fairing, guided
 from .solvers.rationalize import rationalize as rationalize_run
@@ -201,7 +201,8 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
     if len(form.axis_vertices):
         beam_axes = np.full((mesh.n_vertices, 3), np.nan)
         beam_axes[form.axis_vertices] = axes[form.axis_vertices]
-    max_distance = float(ref.distance(Xn).max() / ref.bbox_diagonal)
+    dist = ref.distance(Xn)  # the footpoint search once: the headline and the per-vertex record share it
+    max_distance = float(dist.max() / ref.bbox_diagonal)
     defects = measures.summary(out, tol)
     timings = dict(run.timings, setup=t_setup, report=time.perf_counter() - t1,
                    total=time.perf_counter() - t0)
@@ -209,7 +210,7 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
                          message=run.message, nit=run.nit, history=run.history, defects=defects,
                          max_distance=max_distance, normals=normals, axes=axes, cone_angles=cone_angles,
                          beam_axes=beam_axes, timings=timings, method=method, target=target)
-    record_shape(res, mesh, ref.distance(Xn) * h, ref.bbox_diagonal * h)
+    record_shape(res, mesh, dist * h, ref.bbox_diagonal * h)
     if sym is not None:
         res.defects["symmetry"] = sym
     if rat is not None:

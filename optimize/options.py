@@ -165,18 +165,6 @@ class OptimizeOptions:
 _FIELDS = {f.name: f for f in fields(OptimizeOptions)}
 
 
-def resolve_optimizer(optimizer=None):
-    """The optimizer a modelling or remeshing step calls: ``optimizer`` (a callable with the
-    signature of :func:`optimize.api.optimize_mesh`), or that function when None, imported
-    here on first use: ``optimize.modelling`` and ``optimize.remesh`` receive the optimizer
-    and never import the api themselves."""
-    if optimizer is not None:
-        return optimizer
-    from .api import optimize_mesh
-
-    return optimize_mesh
-
-
 DEFAULTS = OptimizeOptions()
 """The defaults (``optimize.options.DEFAULTS.fairness`` is the fairness weight a run uses when
 none is given)."""

@@ -140,7 +140,7 @@ def test_near_pq_input_keeps_its_fairness_and_barely_moves(monkeypatch):
 
 
 def test_net_defect_tells_conjugate_asymptotic_and_principal_nets_apart():
-    from optimize.remesh.conjugacy import net_defect
+    from optimize.mesh.conjugacy import net_defect
 
     translational = shapes.grid(9, 9, size=(8, 8), height=lambda x, y: 0.5 * np.sin(0.6 * x) + 0.04 * y ** 2)
     d = net_defect(translational)  # z = f(x) + g(y): its grid lines are a conjugate net

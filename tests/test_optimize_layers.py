@@ -11,12 +11,11 @@ RANK = {
     "linalg": 2, "proximity": 2,
     "terms": 3,
     "result": 4,
-    "modelling": 5, "remesh": 5,  # they receive the optimizer; the solvers use remesh.conjugacy for results
-    "solvers": 6,
-    "api": 7,
+    "solvers": 5,
+    "api": 6,
+    "modelling": 7, "remesh": 7,  # they call the optimizer (the api's, unless the caller passes its own)
 }
-KNOWN = {("options", "api"): "resolve_optimizer: the default optimizer, imported when called, so that "
-                             "modelling and remesh need not import the api"}
+KNOWN = {}
 
 
 def _unit(name: str) -> str | None:

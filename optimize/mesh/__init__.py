@@ -6,6 +6,7 @@
 - ``corners``: corner angles and their gradients (the one kernel);
 - ``axes``: node axes fitted to the face normals (the one fit: optimizer results, offset stage);
 - ``components``: connected components;
+- ``conjugacy``: how far a quad mesh's lines are from a conjugate net (a measure of the net);
 - ``io``: OBJ, OFF, PLY, STL and 3dm readers and writers (:func:`read_mesh`, :func:`write_mesh`).
 Names load on first use (PEP 562).
 """

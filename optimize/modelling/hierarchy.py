@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from ..api import optimize_mesh as _optimize_mesh  # the default optimizer (this package sits above the api)
 from ..errors import ConfigError
 from ..mesh import Mesh, measures
-from ..options import resolve_optimizer
 from ..tolerances import DEFAULT, Tolerances
 from .subdivision import SCHEMES, subdivide
 
@@ -186,7 +186,7 @@ def _perturb(level: int, ref: Mesh, S, scheme: str, target: str, tol: Tolerances
         result = _optimize_strips(ref, target, kwargs, optimizer)
         mesh = result.mesh
     else:
-        result = resolve_optimizer(optimizer)(ref, target, reference=ref if surface is None else surface, **kwargs)
+        result = (optimizer or _optimize_mesh)(ref, target, reference=ref if surface is None else surface, **kwargs)
         mesh = result.mesh
     seconds = {"subdivide": t_sub, "optimize": time.perf_counter() - t0}
     return LevelResult(level, mesh, ref, S, result, _measures(mesh, tol, scheme, target), seconds)
@@ -205,7 +205,7 @@ def _optimize_strips(mesh: Mesh, target: str, kwargs: dict, optimizer=None):
     """Optimize every strip of ``mesh`` on its own; one merged OptimizeResult."""
     from .strips import strip_layouts
 
-    optimize_mesh = resolve_optimizer(optimizer)
+    optimize_mesh = optimizer or _optimize_mesh
     kw = dict(kwargs)
     if target == "strip" and kw.get("method", "default") == "default":
         kw["method"] = STRIP_METHOD
@@ -243,3 +243,4 @@ def _merge(mesh: Mesh, results: list, blocks: list, target: str, tol: Tolerances
                           defects=measures.summary(out, tol),
                           max_distance=max(r.max_distance for r in results),
                           timings=timings, method=results[0].method, target=target)
+

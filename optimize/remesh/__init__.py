@@ -5,7 +5,6 @@
   ``boundary_cells``: parametrization and extraction of the cells;
 - ``quads``: the chain (:func:`remesh`, :func:`surface_to_mesh`);
 - ``routes``: a quad input's own lines against the remeshed route (:func:`optimize_routes`);
-- ``conjugacy``: how far a mesh's lines are from a conjugate net;
 - ``surfaces``: test surfaces with known principal directions.
 Names load on first use (PEP 562).
 """

@@ -60,10 +60,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from ..api import optimize_mesh as _optimize_mesh  # the default optimizer (this package sits above the api)
 from ..errors import ConfigError, MeshError
 from ..mesh import Mesh, measures
 from ..mesh.measures import edge_lengths
-from ..options import resolve_optimizer
 from .crossfield import comb, face_crosses, face_frames, smooth_cross_field
 from .isolines import extract
 from .principal import oriented_surface, principal_frames, tangent_frames
@@ -461,7 +461,7 @@ def surface_to_mesh(surface: Mesh, edge_length: float, *, target: str = "conical
     quads, rep = remesh(surface, edge_length, radius=radius, side=side, irregular=irregular, with_report=True)
     if target in (None, "none"):
         return quads, None, rep
-    optimize_mesh = resolve_optimizer(optimizer)
+    optimize_mesh = optimizer or _optimize_mesh
     t0 = time.perf_counter()
     if glide_boundary and optimize_kwargs.get("fixed") is None:
         optimize_kwargs["fixed"] = np.asarray(rep.corners, dtype=np.int64)
@@ -483,3 +483,4 @@ def _finish(out: Mesh, rep: RemeshReport, t0: float, with_report: bool):
     rep.timings["total"] = time.perf_counter() - t0
     log.info("remesh %s: %s", out.name, rep.as_dict())
     return (out, rep) if with_report else out
+

@@ -1,6 +1,6 @@
 """Two routes to a fold-free mesh: optimize the input's own mesh lines, or remesh first.
 
-A quad mesh whose lines are far from a conjugate net (``optimize.remesh.conjugacy``)
+A quad mesh whose lines are far from a conjugate net (``optimize.mesh.conjugacy``)
 has no fold-free PQ mesh near it: the convexity rows of the default optimizer
 then hold some faces and the run ends with that diagnosis.  The paper's way
 forward is to treat the input quads as a surface, remesh it along principal
@@ -20,9 +20,9 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 
+from ..api import optimize_mesh as _optimize_mesh  # the default optimizer (this package sits above the api)
 from ..errors import ConfigError, MeshError
 from ..mesh import Mesh, measures
-from ..options import resolve_optimizer
 from ..result import OptimizeResult
 
 REMESH = ("auto", "always", "never")
@@ -80,7 +80,7 @@ def optimize_routes(mesh: Mesh, target: str = "pq", *, remesh: str = "auto", edg
     """
     from .quads import surface_to_mesh
 
-    optimize_mesh = resolve_optimizer(optimizer)
+    optimize_mesh = optimizer or _optimize_mesh
     if remesh not in REMESH:
         raise ConfigError(f"remesh: {remesh!r} is not known, expected one of {REMESH}")
     routes = []
@@ -118,4 +118,5 @@ def _dist(res: OptimizeResult) -> float:
 def summary(routes: list[Route]) -> list[dict]:
     """``Route.as_dict`` of each route."""
     return [r.as_dict() for r in routes]
+
 

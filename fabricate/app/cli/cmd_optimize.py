@@ -88,7 +88,7 @@ def run(args) -> int:
     if reference is not None:
         check_range(reference, str(args.reference))
     if args.target != "strip":  # said before optimizing: is a fold-free mesh likely near?
-        from optimize.remesh.conjugacy import net_defect
+        from optimize.mesh.conjugacy import net_defect
 
         print(f"{mesh.name}: {net_defect(mesh).line(args.target)}")
     from ..stages import method_for

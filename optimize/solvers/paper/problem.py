@@ -38,7 +38,7 @@ from ...mesh.corners import angle_values, corner_vertices
 from ...options import DEFAULTS
 from ...proximity.footpoints import Footpoints
 from ...proximity.surface import Reference
-from ...remesh.conjugacy import record_net
+from ...mesh.conjugacy import record_net
 from ...result import OptimizeResult, check_folds, record_shape
 from ...terms.closeness import closeness_residual
 from ...terms.determinants import det_values
