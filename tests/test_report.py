@@ -317,3 +317,33 @@ def test_report_has_the_clients_totals(finished_run):
     assert "distinct sizes" in html and "m2 in" in html
     assert not re.search(r"\d\.\d+e\+\d\d", html.split("<h2>Timings")[0]), "a mass printed as an exponent"
     assert "distinct sizes" in finished_run.stdout
+
+
+def test_failed_parts_are_drawn_apart_in_the_3d_view():
+    """#30 item 7: the parts a failed check or requirement names are one red primitive of the view (a
+    toggle named by their ids), and the kinds' own primitives no longer hold them."""
+    from cad_fixtures import dome_parts
+
+    from fabricate.report.html import highlighted_parts
+    from fabricate.report.scene import FAILED_STYLE, part_solids
+
+    parts = dome_parts()
+    beams = parts.of_kind("beam")[0]
+    bad = [beams.ids[1], parts.of_kind("panel")[0].ids[0]]
+    check = {"checks": {"intersections": {"pass": False, "failures": [{"pair": [bad[0], bad[1]]}]},
+                        "files": {"pass": True, "failures": [{"id": beams.ids[2]}]}}}
+    measures = {"beam_twist": {"pass": False, "enforced": True, "worst": [{"beam": 3, "id": beams.ids[3]}]},
+                "closeness": {"pass": False, "enforced": False, "worst": [{"vertex": 0, "id": "N0001"}]}}
+    ids = highlighted_parts(check, measures)
+    assert ids == [bad[0], bad[1], beams.ids[3]]  # not a passing check's part, not a warning's
+    plain, marked = part_solids(parts), part_solids(parts, frozenset(ids))
+    red = [m for m in marked if m.name.startswith("failed parts")]
+    assert len(red) == 1 and red[0].color == FAILED_STYLE and all(i in red[0].name for i in ids)
+    n_plain = {m.name: len(m.positions) for m in plain}
+    n_marked = {m.name: len(m.positions) for m in marked}
+    per_beam, per_panel = beams.vertices.shape[1], parts.of_kind("panel")[0].vertices.shape[1]
+    assert n_marked["steel beams"] == n_plain["steel beams"] - 2 * per_beam
+    assert n_marked["glass panels"] == n_plain["glass panels"] - per_panel
+    assert len(red[0].positions) == 2 * per_beam + per_panel
+    # the red solids are those parts' own corners
+    np.testing.assert_allclose(red[0].positions[:per_panel], parts.of_kind("panel")[0].vertices[0])

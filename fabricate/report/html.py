@@ -155,6 +155,16 @@ def failed_parts(check: dict[str, Any] | None) -> list[str]:
     return list(out)
 
 
+def highlighted_parts(check: dict[str, Any] | None, measures: dict[str, dict] | None) -> list[str]:
+    """The part ids the 3D view draws in red: those the failed file checks name
+    (:func:`failed_parts`) and the worst elements, by id, of every measure that fails as a requirement."""
+    out = dict.fromkeys(failed_parts(check))
+    for m in (measures or {}).values():
+        if isinstance(m, dict) and m.get("pass") is False and m.get("enforced"):
+            out.update(dict.fromkeys(str(w["id"]) for w in m.get("worst") or () if w.get("id")))
+    return list(out)
+
+
 def render_html(report: dict[str, Any], pictures: dict[str, str], *, viewer: bool) -> str:
     """The page as a string (``pictures``: file name -> caption)."""
     name = escape(report["name"])

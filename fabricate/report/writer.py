@@ -12,7 +12,7 @@ from optimize.errors import writing
 
 from .document import build_report, write_report_json
 from .glb import glb_bytes
-from .html import copy_viewer, write_html
+from .html import copy_viewer, highlighted_parts, write_html
 from .pictures import picture_defect, picture_history, picture_layers
 from .scene import build_scene
 
@@ -93,7 +93,8 @@ def write_report(run) -> list[str]:
     written += list(pictures)
     if cfg.outputs.html:
         scene = build_scene(mesh, M.planarity(mesh), tolerance=cfg.tolerances.planarity,
-                            structure=run.offset.structure, parts=run.parts.parts)
+                            structure=run.offset.structure, parts=run.parts.parts,
+                            highlight=highlighted_parts(run.exports.check, run.measures))
         glb = glb_bytes(scene, generator=f"conical-fab report of {cfg.name}")
         with writing(out / "model.glb", "3D view's model", needed=len(glb)):
             (out / "model.glb").write_bytes(glb)  # the folder itself is renamed into place atomically
