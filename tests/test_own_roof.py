@@ -133,9 +133,28 @@ def test_the_shipped_tube_shell_that_cannot_be_built_says_why_and_keeps_the_mesh
     # 200 mm deep beams on a shell this tightly curved: the offset faces turn over (or the beams fold), named
     assert "no panels or beams built" in summary.message and "design moved up to" in summary.message
     assert "mm" in summary.message.split("no panels or beams built", 1)[1]
-    if "FACES TURN OVER" in summary.message:  # the depth that fits, since the layers come from it
-        assert "The layers come from parts.beam_depth = 200 mm: at most" in summary.message
     assert (out / "mesh.obj").is_file() and (out / "TOLERANCE_NOT_REACHED.txt").is_file()
+    # the default 200 mm beams do not fit this shell: a depth that does is taken, said, and is the config as run
+    import re
+
+    said = re.search(r"Beams (\d+) mm deep \(parts.beam_depth\): the default 200 mm does not fit", summary.decision)
+    assert said, summary.decision
+    report = json.loads((out / "report.json").read_text())
+    assert report["config"]["parts"]["beam_depth"] == float(said.group(1)) < 200
+    assert report["offset"]["distances_mm"] == [0.0, -float(said.group(1))]
+    assert said.group(0) in " ".join(report["notes"])
+
+
+def test_a_beam_depth_the_user_gives_is_honoured_and_the_run_says_what_fits(tmp_path):
+    from fabricate.app.config import load_config
+
+    cfg = load_config(REPO / "configs" / "own_roof_tube.yaml", overrides={**NO_CAD_FILES, "parts.beam_depth": 200})
+    summary = run_pipeline(cfg, tmp_path / "out")
+    assert (summary.status, summary.exit_code) == ("tolerance_not_reached", 3)
+    assert "mm deep (parts.beam_depth)" not in summary.decision
+    report = json.loads((tmp_path / "out" / "own_roof_tube" / "report.json").read_text())
+    assert report["config"]["parts"]["beam_depth"] == 200
+    assert "FACES TURN OVER" in summary.message and "The layers come from parts.beam_depth = 200 mm: at most" in summary.message
 
 
 def test_a_roof_in_a_unit_float64_cannot_hold_to_the_cad_tolerance_is_refused_up_front(tmp_path):

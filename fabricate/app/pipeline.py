@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -146,6 +146,11 @@ def run_stages(config: RunConfig, workdir: Path, progress=None, t_start: float |
     inp = stage("input", config)
     opt = stage("optimize", config, inp, progress=progress)
     off = stage("offset", config, opt)
+    fitted = stages.fitted_depth(config, off)
+    if fitted is not None:  # the default beam depth turns faces over here: the largest depth that fits
+        config, why = fitted
+        off = replace(stage("offset", config, opt), notes=(why,))
+        opt = replace(opt, decision=f"{opt.decision} {why}".strip() if opt.decision else "")
     built = stage("cad", config, opt, off)
     statics = stage("structure", config, off, built)
     files = stage("exports", config, workdir, opt, off, built, statics, progress=progress)

@@ -93,6 +93,7 @@ class OffsetRecord:
 
     structure: OffsetStructure
     line: str = ""
+    notes: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -169,4 +170,4 @@ class RunRecord:
     @property
     def notes(self) -> tuple[str, ...]:
         """The stages' notes in run order."""
-        return self.input.notes + self.optimize.notes + self.parts.notes + self.structure.notes
+        return self.input.notes + self.optimize.notes + self.offset.notes + self.parts.notes + self.structure.notes

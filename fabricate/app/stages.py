@@ -190,6 +190,59 @@ def stage_offset(cfg, opt: OptimizeRecord) -> OffsetRecord:
                         line=f"{len(structure.layers)} layers, {len(structure.edges)} beams, {kind}")
 
 
+DEPTH_FIT_MARGIN = 0.9
+"""A beam depth fitted to a design takes at most this share of the distance at which its faces turn over."""
+AXES_MEET_MARGIN = 0.75
+"""... and at most this share of the distance at which the node axes of a beam's two ends meet (deeper,
+the beam's far edge shrinks below a quarter of its length at the glass and its end cuts fold)."""
+DEPTH_STEP_MM = 10.0
+MIN_FITTED_DEPTH_MM = 80.0
+"""Below this a fitted beam depth is not offered: the layers are then too close for a beam (the run says why)."""
+
+
+def _axes_meet_mm(structure) -> float:
+    """The smallest distance behind the first layer (mm, along the layers' direction) at which a beam's
+    edge shrinks to nothing: the node axes of its two ends meet there (inf when none does)."""
+    d0, d1 = structure.distances[0], structure.distances[-1]
+    if d1 == d0:
+        return np.inf
+    E = np.asarray(structure.edges)
+    L0, L1 = np.asarray(structure.layers[0]), np.asarray(structure.layers[-1])
+    r = L0[E[:, 1]] - L0[E[:, 0]]
+    q = (L1[E[:, 1]] - L1[E[:, 0]]) - r  # the edge at layer fraction t is r + t q
+    rq, rr = np.einsum("ij,ij->i", r, q), np.einsum("ij,ij->i", r, r)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(rq < 0, -rr / rq, np.inf)  # where its projection on r reaches zero
+    return float(np.min(t, initial=np.inf) * abs(d1 - d0))
+
+
+def fitted_depth(cfg, off: OffsetRecord):
+    """``(config, sentence)`` with ``parts.beam_depth`` lowered to fit the design, or None.
+
+    Only when the depth is the default (not in the config) and the layers are the default ones
+    (``[0, -beam_depth]``), and the default depth does not fit: a layer past the focal distance
+    (faces turn over) or node axes that meet within the depth (beams fold).  The new depth is the
+    largest multiple of 10 mm within 90 % of the first and 75 % of the second, at least 80 mm.  A
+    depth the user gave is honoured (the run then says what fits, exit 3)."""
+    if cfg.offset.distances is not None or "beam_depth" in cfg.parts.model_fields_set:
+        return None
+    old = cfg.parts.beam_depth
+    turned = off.structure.report.get("turned_over") or {"ok": True}
+    lo = turned["safe_range_mm"][0] if not turned["ok"] else None
+    limits = {"faces turn over": DEPTH_FIT_MARGIN * -lo if lo is not None and lo < 0 else np.inf,
+              "node axes of a beam meet": AXES_MEET_MARGIN * _axes_meet_mm(off.structure)}
+    why = min(limits, key=limits.get)
+    if limits[why] >= old:
+        return None
+    depth = float(np.floor(limits[why] / DEPTH_STEP_MM) * DEPTH_STEP_MM)
+    if depth < MIN_FITTED_DEPTH_MM:
+        return None
+    fitted = cfg.model_copy(update={"parts": cfg.parts.model_copy(update={"beam_depth": depth})})
+    return fitted, (f"Beams {depth:g} mm deep (parts.beam_depth): the default {old:g} mm does not fit this design "
+                    f"({why} within {limits[why] / (DEPTH_FIT_MARGIN if why.startswith('faces') else AXES_MEET_MARGIN):.0f} mm "
+                    "of the glass); set parts.beam_depth to choose another depth.")
+
+
 # -- CAD -----------------------------------------------------------------------------
 def part_spec(cfg):
     """The :class:`fabricate.cad.PartSpec` of the config's ``parts`` section (the frozen object it
