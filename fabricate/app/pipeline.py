@@ -151,6 +151,8 @@ def run_stages(config: RunConfig, workdir: Path, progress=None, t_start: float |
         config, why = fitted
         off = replace(stage("offset", config, opt), notes=(why,))
         opt = replace(opt, decision=f"{opt.decision} {why}".strip() if opt.decision else "")
+    if inp.advice:  # the unit a mesh file was read in looks wrong: said first
+        opt = replace(opt, decision=f"{inp.advice} {opt.decision}".strip())
     built = stage("cad", config, opt, off)
     statics = stage("structure", config, off, built)
     files = stage("exports", config, workdir, opt, off, built, statics, progress=progress)

@@ -63,6 +63,7 @@ class InputRecord:
     facts: Mapping[str, Any]
     notes: tuple[str, ...] = ()
     line: str = ""
+    advice: str = ""  # a mesh file's size that suggests another unit (:func:`fabricate.app.stages.unit_advice`)
 
 
 @dataclass(frozen=True)

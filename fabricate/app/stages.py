@@ -80,9 +80,34 @@ def stage_input(cfg) -> InputRecord:
     # the origin): bad input up front, not a failure of some later stage
     check_range(surface if surface is not None else mesh, f"input.{kind} {plan['source']}",
                 resolution=cfg.tolerances.cad_linear_mm, needs="the CAD tolerance")
+    advice = unit_advice(cfg, (surface if surface is not None else mesh).bbox_diagonal()) if kind != "shape" else ""
     return InputRecord(mesh=mesh, surface=surface, kind=kind, levels=int(plan["levels"]), scheme=plan["scheme"],
-                       target=plan["target"], facts=frozen(plan), notes=tuple(mesh.notes),
-                       line=f"{plan['source']}: {mesh.n_faces} faces")
+                       target=plan["target"], facts=frozen(plan), notes=tuple(mesh.notes) + ((advice,) if advice else ()),
+                       line=f"{plan['source']}: {mesh.n_faces} faces", advice=advice)
+
+
+PLAUSIBLE_MM = (1_000.0, 2_000_000.0)
+"""Bounding-box diagonals (mm) of a roof or facade: outside them a mesh read in a unit nobody gave is
+likely in another (a 7.3 m roof drawn in metres, read as mm, is 7.3 mm across)."""
+
+
+def unit_advice(cfg, diagonal_mm: float) -> str:
+    """One sentence when ``units`` was neither given nor stated by the file and the mesh, read in mm,
+    is smaller or larger than any roof (:data:`PLAUSIBLE_MM`); '' otherwise.  The run goes on (a model
+    may be meant at that size); the sentence leads the run's first paragraph."""
+    if "units" in cfg.model_fields_set or cfg.units_note is not None:
+        return ""
+    lo, hi = PLAUSIBLE_MM
+    if lo <= diagonal_mm <= hi:
+        return ""
+    size = diagonal_mm / cfg.scale
+    names = {"cm": "centimetres", "m": "metres", "in": "inches", "ft": "feet"}
+    guess = [u for u, f in UNIT_TO_MM.items() if u != "mm" and lo <= size * f <= hi]
+    best = "m" if "m" in guess else (guess[0] if guess else None)
+    hint = (f"if it is drawn in {names[best]}, set units: {best} ({size * UNIT_TO_MM[best] / 1000:.4g} m across)"
+            if best else "if it is drawn in another unit, set units (mm, cm, m, in, ft) or scale")
+    return (f"Units not given: the mesh was read in mm, {diagonal_mm:.4g} mm across its bounding box; "
+            f"{hint}.")
 
 
 # -- optimize ------------------------------------------------------------------

@@ -77,13 +77,48 @@ def mesh_units(path: str | os.PathLike, *, fmt: str | None = None) -> tuple[str,
     """The length unit a mesh file states: ``(name, mm per unit)`` for a Rhino .3dm file (its
     ``ModelUnitSystem``; mm per unit None when it has none or a custom one), None for a format that
     states none (OBJ, OFF, PLY, STL: the caller's ``units`` says).  Reading the unit of a .3dm
-    reads the file (rhino3dm has no lighter way)."""
-    if detect_format(path, fmt) != "3dm":
+    reads the file (rhino3dm has no lighter way).  An OBJ states one in the header comment some
+    exporters write (Maya: ``# This file uses centimeters as units for non-parametric coordinates.``),
+    read from the file's first :data:`OBJ_HEADER_BYTES` only."""
+    kind = detect_format(path, fmt)
+    if kind == "obj":
+        return _obj_units(path)
+    if kind != "3dm":
         return None
     from .rhino import model_units
 
     check_file(path, "3dm")
     return model_units(str(path))
+
+
+OBJ_HEADER_BYTES = 4096
+"""How much of an OBJ file's start is searched for a unit comment."""
+OBJ_UNITS = {"millimeters": 1.0, "millimetres": 1.0, "centimeters": 10.0, "centimetres": 10.0, "meters": 1000.0,
+             "metres": 1000.0, "inches": 25.4, "feet": 304.8, "kilometers": 1e6, "yards": 914.4}
+
+
+def _obj_units(path) -> tuple[str, float | None] | None:
+    """``(name, mm per unit)`` from an OBJ header comment ``# ... uses <unit> as units ...`` (None: none)."""
+    import re
+    import stat
+
+    try:  # a file that is missing or not regular (a pipe would block): none stated; the reader says why
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return None
+        with open(path, "rb") as fh:
+            head = fh.read(OBJ_HEADER_BYTES).decode("latin-1")
+    except OSError:
+        return None
+    for line in head.splitlines()[:-1] or head.splitlines():  # the last line may be cut off
+        if not line.startswith("#"):
+            if line.strip():
+                break  # the header ends at the first record
+            continue
+        m = re.search(r"\buses\s+([A-Za-z]+)\s+as\s+units\b", line)
+        if m:
+            name = m.group(1).lower()
+            return name, OBJ_UNITS.get(name)
+    return None
 
 
 def build_mesh(parsed: Parsed, name: str) -> Mesh:
