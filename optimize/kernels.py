@@ -33,7 +33,9 @@ environment variable ``CONICAL_FAB_NUMBA=0``, or with ``ENABLED = False``
 (tests switch it off to check the fallback), :func:`get` returns None and
 the callers keep their NumPy code.  numba is imported on
 first use, not with the package; kernels are compiled on first call and
-cached on disk (``cache=True``); :func:`warm_up` compiles them all and
+cached on disk (``cache=True``) outside the package folder: in ``NUMBA_CACHE_DIR`` when set, else
+in the user's cache folder (``$XDG_CACHE_HOME`` or ``~/.cache``, then ``conical-fab/numba``;
+:func:`cache_dir`), so an installed package's folder is never written to; :func:`warm_up` compiles them all and
 returns the seconds it took, for benchmarks to report apart from the runs.
 """
 from __future__ import annotations
@@ -60,14 +62,42 @@ def get():
     if not _on():
         return None
     if _KERNELS is None:
-        try:
-            import numba  # noqa: F401
-        except ImportError:
+        if not _import_numba():
             _KERNELS = False
         else:
             from . import _numba_kernels
             _KERNELS = _numba_kernels
     return _KERNELS or None
+
+
+def cache_dir() -> str | None:
+    """Where the compiled kernels are cached: ``NUMBA_CACHE_DIR`` when the user set it, else
+    ``conical-fab/numba`` in the user's cache folder, made here; None when it cannot be made (numba
+    then chooses, as it does without this)."""
+    given = os.environ.get("NUMBA_CACHE_DIR")
+    if given:
+        return given
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    path = os.path.join(base, "conical-fab", "numba")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError:
+        return None
+    return path
+
+
+def _import_numba() -> bool:
+    """Import numba with its cache outside the package folder (:func:`cache_dir`); False without it."""
+    path = cache_dir()
+    if path and not os.environ.get("NUMBA_CACHE_DIR"):
+        os.environ["NUMBA_CACHE_DIR"] = path  # read by numba's config when it is imported
+    try:
+        import numba
+    except ImportError:
+        return False
+    if path and not numba.config.CACHE_DIR:  # numba was imported before this (by the caller): set it there
+        numba.config.CACHE_DIR = path
+    return True
 
 
 _LOADED: dict = {}  # module name -> the module, or False when it did not import (no numba)
@@ -83,7 +113,7 @@ def load(module: str):
         import importlib
 
         try:
-            _LOADED[module] = importlib.import_module(module)
+            _LOADED[module] = _import_numba() and importlib.import_module(module)
         except ImportError:
             _LOADED[module] = False
     return _LOADED[module] or None
