@@ -82,12 +82,12 @@ def optimize_mesh(mesh: Mesh, target: str = DEFAULTS.target, *, method: str = DE
         (``"vertices"`` for conical, else ``"auxiliary"``); default method only.
     torsion_free_beams : conical with the vertex formulation: node axes become unknowns
         at every vertex, with the cone condition at every valence and every beam
-        planar (``constraints.nodeaxes``); the result then carries them in
+        planar (``terms.nodeaxes``); the result then carries them in
         ``beam_axes`` for the offset stage.  ``"auto"``: when the
         mesh has interior vertices of valence other than 4 (where the paper's angle
         balance says nothing and beams would twist).
     convex : keep every corner that is convex in the input convex (default method:
-        one-sided rows, ``constraints.convexity``, and no accepted step folds a face);
+        one-sided rows, ``terms.convexity``, and no accepted step folds a face);
         ``False`` is the earlier behaviour (planar, perhaps dented; then ``folded``).
         Where no fold-free mesh is near, the run ends ``stalled`` / ``max_iter`` and
         ``defects["convexity"]`` names the faces held at their convexity floor.

@@ -2,10 +2,10 @@
 
 At every interior valence-4 vertex (``topology.interior_valence4``) with
 corner angles ``w1..w4`` in cyclic order.  The normal-axis formulation
-(``constraints.conical``) alone also admits degenerate solutions where two
+(``terms.conical``) alone also admits degenerate solutions where two
 neighbouring faces become coplanar (any three planes touch a cone); the angle
 balance rules them out, so the conical target uses both.  Not quadratic
-(gradients in ``constraints.angles``).
+(gradients in ``terms.angles``).
 
 Block: ``vertices (n, 3)``.  One row per vertex.
 """

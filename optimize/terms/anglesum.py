@@ -1,6 +1,6 @@
 """Opposite angles of circular quads: ``phi1 + phi3 - pi = 0`` and ``phi2 + phi4 - pi = 0``.
 
-The centre formulation (``constraints.circular``) also holds for four points
+The centre formulation (``terms.circular``) also holds for four points
 on a circle taken in a crossing order (a bow-tie); these rows rule that branch
 out, so the circular target uses both.  Block: ``vertices (n, 3)``.  Rows
 ``2 i``, ``2 i + 1`` for quad ``i`` (faces with ``face_sizes == 4``, in order).

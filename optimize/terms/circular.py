@@ -2,7 +2,7 @@
 
 For quad ``f`` (faces with ``face_sizes == 4``, in face order) with centre
 ``c_f`` and squared radius ``R_f``: ``|v_i - c_f|^2 - R_f = 0`` for its four
-vertices and ``n_f . (c_f - v_0) = 0``.  With planarity (``constraints.planarity``)
+vertices and ``n_f . (c_f - v_0) = 0``.  With planarity (``terms.planarity``)
 and unit normals, a zero residual means the quad has a circumcircle, i.e.
 ``phi1 + phi3 = phi2 + phi4 = pi``.
 

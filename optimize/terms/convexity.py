@@ -14,7 +14,7 @@ its face; positive at a convex corner, negative at a reflex one: the measure
 of ``measures.corner_turns``) above a floor: the hinge ``min(0, s_c - floor)``,
 zero while the corner is convex enough, so it acts only on corners about to
 turn reflex and its square is continuously differentiable (like
-``constraints.edgefloor``).  A polygon whose corners all have a positive sine
+``terms.edgefloor``).  A polygon whose corners all have a positive sine
 about its normal is convex, so the rows of a face's corners together say
 "convex".  The floor (:func:`floors`) is ``min(SINE_FLOOR, s0 / 2)`` of the
 start sine ``s0``: a corner of 90 degrees may open to about 174 or close to

@@ -9,9 +9,9 @@ triangles give none.  ``quadruples`` also lists runs of four consecutive
 vertices of n-gons, but their rows miss a face that hinges about three
 nearly collinear vertices (the straight corner of a T-junction pentagon):
 the vertex formulation keeps a unit normal per n-gon instead
-(``formulation``; ``constraints.planarity`` with ``faces``).
+(``formulation``; ``terms.planarity`` with ``faces``).
 
-Unlike ``constraints.planarity`` this needs no auxiliary normals: the
+Unlike ``terms.planarity`` this needs no auxiliary normals: the
 conical target then has only the vertices as unknowns and the sparse factor
 of each step is about 3x smaller (see ``formulation``).  Not quadratic:
 ``dr = dt / s - t ds / s^2`` with ``dt/de = d1 x d2``, ``dt/dd1 = d2 x e``,

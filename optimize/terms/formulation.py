@@ -4,16 +4,16 @@ Targets (all with auxiliary variables so every constraint is at most quadratic):
 
 - ``pq``: vertices, unit face normals; planarity on every face.
 - ``conical``: ``pq`` plus a unit axis and ``c = cos(theta)`` per interior
-  valence-4 vertex (``constraints.conical``) and the angle balance there
-  (``constraints.anglebalance``, which excludes degenerate cones).
+  valence-4 vertex (``terms.conical``) and the angle balance there
+  (``terms.anglebalance``, which excludes degenerate cones).
 - ``circular``: ``pq`` plus a centre and squared radius per quad
-  (``constraints.circular``) and the opposite-angle sums (``constraints.anglesum``,
+  (``terms.circular``) and the opposite-angle sums (``terms.anglesum``,
   which exclude crossed quads).
 
 With ``unknowns="vertices"`` the same targets are written on the vertex
 positions (auxiliary unknowns only for the few n-gons): planarity as the
-signed distance between the diagonals of each quad (``constraints.diagonals``;
-an n-gon keeps a unit normal, ``constraints.planarity`` on its corners), the
+signed distance between the diagonals of each quad (``terms.diagonals``;
+an n-gon keeps a unit normal, ``terms.planarity`` on its corners), the
 conical angle balance, the circular opposite-angle sums.  These rows are not quadratic, but the system is 3x smaller: for the
 conical target the sparse factor of a 10,000-face mesh has 8.2 million
 nonzeros instead of 23 million (the per-vertex cone axes and the angle rows

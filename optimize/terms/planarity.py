@@ -2,7 +2,7 @@
 
 Blocks: ``vertices (n, 3)``, ``normals (m, 3)``.  One row per corner ``c``
 (half-edge ``i -> j`` of face ``f``), in topology corner order.  With the unit
-constraint on ``n_f`` (``constraints.unit``) a zero residual means that every
+constraint on ``n_f`` (``terms.unit``) a zero residual means that every
 face lies in a plane with normal ``n_f``; for an n-gon the ``k`` rows have
 rank ``k - 1``.  Triangles are included (always satisfiable).
 """
