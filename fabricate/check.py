@@ -49,6 +49,10 @@ with it:
   every element's face set, as ifcopenshell reads it, equal to the BOM's (with ``--occ``: from
   ifcopenshell's geometry kernel; not in the fast check: ``skip`` ``ifc_geometry``).
 
+- ``glass_order``: ``glass_order.csv`` and its drawings held to the units of ``flat.json``
+  (:func:`fabricate.export.check_glass_order.check_glass_order_files`): every unit in exactly one
+  position, each within its position's tolerance of the position's DXF, blanks that hold every ply.
+
 - ``files``: every file the run lists as written (its marker :data:`fabricate.app.runfolder.MARKER`,
   written last, else ``report.json``'s ``files``) is there, a regular file, of the size the run wrote;
   a marker or ``report.json`` that does not read fails.  Without either (the check inside a run, files
@@ -84,7 +88,7 @@ from .export.verify import not_regular
 log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
          "dxf": "outlines.dxf", "svg": "outlines.svg", "flat": "flat.json", "ifc": "model.ifc", "3dm": "model.3dm",
-         "nc1": "nc1", "welds": "weld_schedule.csv"}
+         "nc1": "nc1", "welds": "weld_schedule.csv", "glass_order": "glass_order.csv"}
 REPORT = "report.json"
 
 
@@ -116,6 +120,7 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     from . import check_lanes
     from .export import exchange_check
     from .export.bom import read_bom
+    from .export.check_glass_order import check_glass_order_files
     from .export.welds import check_weld_schedule
 
     t0 = time.perf_counter()
@@ -152,7 +157,8 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
                                                                  kernel=step_reader == "occ", tol=tol), None)),
         ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
         ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None)),
-        ("welds", "welds", None, lambda: (check_weld_schedule(paths["welds"], bom), None)))
+        ("welds", "welds", None, lambda: (check_weld_schedule(paths["welds"], bom), None)),
+        ("glass_order", "glass_order", None, lambda: (check_glass_order_files(out, _readable(paths["flat"])), None)))
 
     def run_checks(names) -> None:
         for name, key, needs, run in table:

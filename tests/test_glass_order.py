@@ -1,11 +1,14 @@
 """The glass order (issue 36): positions of identical units, R12 drawings, labels, and its check."""
 import csv
+import json
 import functools
 
 import numpy as np
 import pytest
 
 from cad_fixtures import dome_structure
+
+from fabricate.export.glass_delivery import RACK_KG, RACK_UNITS
 
 INSULATED = {"type": "insulated", "outer": {"type": "monolithic", "thickness_mm": 10}, "cavity_mm": 16,
              "inner": {"type": "laminated", "plies_mm": [6, 6], "interlayer_mm": 1.52}, "edge_seal_mm": 14}
@@ -61,7 +64,7 @@ def test_one_row_per_position_with_every_field(tmp_path):
     per_rack = {}
     for x in labels:
         per_rack.setdefault(x["rack"], []).append(float(x["weight_kg"]))
-    assert all(len(w) <= 20 and (sum(w) <= 2000.0 or len(w) == 1) for w in per_rack.values())
+    assert all(len(w) <= RACK_UNITS and (sum(w) <= RACK_KG or len(w) == 1) for w in per_rack.values())
     assert check_glass_order(parts, tmp_path)["pass"]
 
 
@@ -132,3 +135,68 @@ def test_the_check_finds_a_unit_twice_a_moved_corner_and_a_short_blank(tmp_path)
     assert not result["pass"]
     assert "unit P0001 in positions G001 and G002" in text
     assert "from the drawing of position G001" in text and "ply 2: blank" in text
+
+
+def _run_folder(parts, folder):
+    """A run folder as the library writes it: the BOM, the flat data, the 3MF and the glass order."""
+    from fabricate.export import write_3mf, write_bom, write_flat, write_glass_order
+
+    folder.mkdir(parents=True, exist_ok=True)
+    write_bom(parts, folder / "bom.csv")
+    write_flat(parts, folder / "flat.json")
+    write_3mf(parts, folder / "model.3mf")
+    write_glass_order(parts, folder / "glass_order.csv")
+    return folder
+
+
+def _rewrite(path, rows):
+    with open(path, "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
+@pytest.mark.parametrize("parts", [dome_igu, leaning_row, lambda: leaning_row({"type": "laminated",
+                                                                              "plies_mm": [8, 8]})])
+def test_the_flat_data_gives_the_units_the_parts_give(tmp_path, parts):
+    """The standalone check's reference, read from flat.json alone, is the in-run check's (the parts')."""
+    from fabricate.export import write_flat
+    from fabricate.export.check_glass_order import flat_reference, unit_reference
+
+    p = parts()
+    write_flat(p, tmp_path / "flat.json")
+    a, b = unit_reference(p), flat_reference(tmp_path / "flat.json")
+    assert a["ids"] == b["ids"] and len(a["ids"]) == len(p.panels) // len(p.spec.glass.solids())
+    for u in a["ids"]:
+        np.testing.assert_allclose(b["rings"][u], a["rings"][u], atol=1e-6)
+        np.testing.assert_array_equal(b["blanks"][u], a["blanks"][u])
+
+
+def test_fabricate_check_holds_the_order_to_the_files(tmp_path, capsys):
+    """#36 item 5: `fabricate check` reads glass_order.csv back against flat.json: a unit moved to a
+    position of another shape, or deleted, fails it (exit 4) naming the unit and the position."""
+    from fabricate.app.cli import main
+
+    out = _run_folder(dome_igu(), tmp_path / "run")
+    assert main(["check", str(out)]) == 0
+    assert "glass_order" in capsys.readouterr().out
+    rows = _rows(out / "glass_order.csv")
+    moved = rows[0]["units"].split()[0]
+    rows[0]["units"] = " ".join(rows[0]["units"].split()[1:])
+    rows[0]["quantity"] = str(int(rows[0]["quantity"]) - 1)
+    rows[1]["units"] += f" {moved}"
+    rows[1]["quantity"] = str(int(rows[1]["quantity"]) + 1)
+    _rewrite(out / "glass_order.csv", rows)
+    assert main(["check", str(out)]) == 4
+    text = capsys.readouterr().out
+    assert f"unit {moved} is " in text and f"from the drawing of position {rows[1]['position']}" in text
+    assert "FAIL glass_order" in text and "FAILED: glass_order" in text
+    deleted = rows[1]["units"].split()[0]                                       # and one unit deleted
+    rows[1]["units"] = " ".join(u for u in rows[1]["units"].split() if u not in (deleted, moved))
+    rows[1]["quantity"] = str(len(rows[1]["units"].split()))
+    _rewrite(out / "glass_order.csv", rows)
+    assert main(["check", str(out), "--json"]) == 4
+    result = json.loads(capsys.readouterr().out)["checks"]["glass_order"]
+    assert result["pass"] is False and result["against"] == "flat.json"
+    assert any("in no position" in p and deleted in p and moved in p for p in result["problems"])
+    assert not any("from the drawing" in p for p in result["problems"])

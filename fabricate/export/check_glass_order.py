@@ -1,16 +1,23 @@
 """Hold the written glass order to the solids: ``glass_order.csv`` and its DXF drawings read back.
 
-:func:`check_glass_order` finds, from the files alone and the parts' flat data:
+:func:`check_order` finds, from the files and the units' flat data:
 
 - every glass unit in exactly one position (none missing, none twice, no unknown id);
 - every position's drawing (``glass_order/<position>.dxf``: the cut outline of each ply on
   ``OUTLINE`` / ``PLY<k>``, the bearing lines on ``BEARING``) within the position's tolerance of
   each unit it covers, by a rigid motion without reflection (a mirror image is another position);
-- every ply blank (``ply<k>_blank_w_mm`` x ``_h_mm``) and the unit blank holding that ply of every
-  unit of the position (``PartGroup.rect``, either way round).
+- every ply blank (``ply<k>_blank_w_mm`` x ``_h_mm``) holding that ply of every unit of the
+  position, and the unit blank (``blank_w_mm`` x ``_h_mm``) every ply (``PartGroup.rect``, either way
+  round); the row's ``plies`` the units' count.
 
 The result is one dict in the form of the other file checks: ``{"pass", "positions", "units",
-"problems": [...], "largest_deviation_mm"}``; a problem names the file, the position and the unit.
+"problems": [...], "largest_deviation_mm", "against"}`` (and ``why``, the first problems, when it
+fails); a problem names the file, the position and the unit.
+
+The units and their plies come from the parts in memory (:func:`check_glass_order`, the check
+inside a run) or from the run's ``flat.json`` alone (:func:`check_glass_order_files`, the row
+``glass_order`` of ``fabricate check``: the flat data the ``flat`` check holds to the STEP or 3MF
+solids); one check, :func:`check_order`, takes either reference.
 """
 from __future__ import annotations
 
@@ -50,29 +57,102 @@ def _read_dxf_rings(path: Path) -> np.ndarray:
     return np.stack(rings)
 
 
-def check_glass_order(parts, folder) -> dict:
-    """Check ``folder/glass_order.csv`` and ``folder/glass_order/*.dxf`` against ``parts`` (see the
-    module text).  Never raises for a bad file: a file that cannot be read is a problem named in the
-    result (``pass`` False)."""
-    from fabricate.cad.congruence import glass_unit_rings, ring_deviation
-    from fabricate.export.glass_order import FOLDER, _ply_blanks
+def unit_reference(parts) -> dict:
+    """The reference the order is held to, from the parts in memory: ``ids`` (u,) unit ids, ``rings``
+    ``{id: (2 n, k, 2)}`` per glass ply outside in its cut outline and bearing line in the frame of the
+    ply on the beams (:func:`fabricate.cad.congruence.glass_unit_rings`), ``blanks`` ``{id: (n, 2)}``
+    each ply's ``PartGroup.rect``, ``against`` what they were read from."""
+    from fabricate.cad.congruence import glass_unit_rings
+    from fabricate.export.glass_order import _ply_blanks
 
-    folder = Path(folder)
-    path = folder / "glass_order.csv"
-    problems: list[str] = []
     ids, element, subsets = glass_unit_rings(parts)
     rings = {}
     for index, X in subsets:  # a few corner counts
         for j, i in enumerate(index.tolist()):
             rings[ids[i]] = X[j]
-    blanks = dict(zip(ids, _ply_blanks(parts, element)))
+    return {"ids": list(ids), "rings": rings, "blanks": dict(zip(ids, _ply_blanks(parts, element))),
+            "against": "the parts", "problems": []}
+
+
+def flat_reference(path) -> dict:
+    """:func:`unit_reference` from a run's ``flat.json`` alone (what the ``flat`` check holds to the
+    STEP or 3MF solids): every glass ply (``material`` glass, kind panel) of a unit, outside in by the
+    number after its id's dot (``P0001.1`` the outer ply; a one-solid unit is its own ply), its
+    ``outline`` and ``bevel_reference`` moved by its ``transform`` into the model and by the inverse
+    of the bearing ply's (the unit's last glass ply) into that ply's frame; ``rect_mm`` its blank.
+    A unit whose plies differ in corner count is a problem named in ``problems``.  Raises
+    :class:`ExportError` for a flat.json that does not read."""
+    from fabricate.cad.parts import unit_id
+    from fabricate.export.flatdata import read_flat
+
+    plies: dict[str, list[tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]] = {}
+    for g in read_flat(path):  # a few groups
+        if g["kind"] != "panel" or g["material"] != "glass":
+            continue
+        for j, pid in enumerate(g["ids"]):  # bookkeeping per ply
+            tail = pid.split(".", 1)[1] if "." in pid else "0"
+            rank = int(tail) if tail.isdigit() else 0
+            plies.setdefault(unit_id(pid), []).append((rank, g["outline"][j], g["bevel_reference"][j],
+                                                       g["transform"][j], g["rect_mm"][j]))
+    rings, blanks, problems = {}, {}, []
+    for uid, own in plies.items():  # one unit each (a few plies)
+        own.sort(key=lambda t: t[0])
+        if len({len(t[1]) for t in own}) != 1:
+            problems.append(f"{path}: unit {uid}: its plies have {[len(t[1]) for t in own]} corners in flat.json")
+            continue
+        to_bearing = np.linalg.inv(own[-1][3])
+        out = []
+        for _, outline, bearing, T, _ in own:  # a few plies
+            for P in (outline, bearing):
+                H = np.concatenate([P, np.zeros((len(P), 1)), np.ones((len(P), 1))], axis=1)
+                out.append((H @ (to_bearing @ T).T)[:, :2])
+        rings[uid] = np.stack(out)
+        blanks[uid] = np.stack([t[4] for t in own])
+    return {"ids": sorted(plies), "rings": rings, "blanks": blanks, "against": Path(path).name,
+            "problems": problems}
+
+
+def check_glass_order(parts, folder) -> dict:
+    """Check ``folder/glass_order.csv`` and ``folder/glass_order/*.dxf`` against ``parts`` (see the
+    module text).  Never raises for a bad file: a file that cannot be read is a problem named in the
+    result (``pass`` False)."""
+    return check_order(folder, unit_reference(parts))
+
+
+def check_glass_order_files(folder, flat=None) -> dict:
+    """The same check from a run folder's files alone: the reference from ``flat`` (default
+    ``folder/flat.json``, :func:`flat_reference`); ``pass`` None (skipped) without it."""
+    from optimize.errors import ExportError
+
+    flat = Path(folder) / "flat.json" if flat is None else Path(flat)
+    if not flat.is_file():
+        return {"pass": None, "skipped": f"needs {flat.name}: the units' flat data the order is held to"}
+    try:
+        ref = flat_reference(flat)
+    except ExportError as exc:
+        return {"pass": False, "error": str(exc), "problems": [str(exc)], "why": [str(exc)]}
+    return check_order(folder, ref)
+
+
+def check_order(folder, ref: dict) -> dict:
+    """Check ``folder/glass_order.csv`` and its drawings against ``ref`` (:func:`unit_reference` or
+    :func:`flat_reference`); the result as in the module text, with ``against`` and, when it fails,
+    ``why`` (the first problems)."""
+    from fabricate.cad.congruence import ring_deviation
+    from fabricate.export.glass_order import FOLDER
+
+    folder = Path(folder)
+    path = folder / "glass_order.csv"
+    problems: list[str] = list(ref["problems"])
+    ids, rings, blanks = ref["ids"], ref["rings"], ref["blanks"]
     try:
         with open(path, newline="", encoding="utf-8") as fh:
             rows = list(csv.DictReader(fh))
     except (OSError, UnicodeDecodeError, csv.Error) as exc:
-        return {"pass": False, "positions": 0, "units": len(ids), "problems": [f"{path}: cannot read ({exc})"],
-                "largest_deviation_mm": None}
+        problems.append(f"{path}: cannot read ({exc})")
+        return _result(problems, 0, len(ids), None, ref)
     seen: dict[str, str] = {}
+    valid = set(ids)
     worst = 0.0
     for line, row in enumerate(rows, start=2):  # one row per position
         name = row.get("position", "")
@@ -88,7 +168,7 @@ def check_glass_order(parts, folder) -> dict:
         for u in units:
             if u in seen:
                 problems.append(f"{path}:{line}: unit {u} in positions {seen[u]} and {name}")
-            elif u not in rings:
+            elif u not in valid:
                 problems.append(f"{path}:{line}: unit {u} of position {name} is no glass unit of the model")
             seen.setdefault(u, name)
         known = [u for u in units if u in rings]
@@ -111,22 +191,33 @@ def check_glass_order(parts, folder) -> dict:
             if d > tol + 1e-6:
                 problems.append(f"{drawing}: unit {u} is {d:.2f} mm from the drawing of position {name} "
                                 f"(tolerance {tol:g} mm)")
-        n_plies = int(row.get("plies") or 0)
-        for k in range(1, n_plies + 1):  # a few plies
+        n_plies = len(blanks[known[0]])
+        if (row.get("plies") or "").strip() != str(n_plies):
+            problems.append(f"{path}:{line}: position {name}: plies {row.get('plies')!r}, its units have {n_plies}")
+        for k in range(n_plies + 1):  # a few plies, then the unit's blank (k = 0) that holds every ply
+            key = f"ply{k}_blank" if k else "blank"
             try:
-                bw, bh = float(row[f"ply{k}_blank_w_mm"]), float(row[f"ply{k}_blank_h_mm"])
+                bw, bh = float(row[f"{key}_w_mm"]), float(row[f"{key}_h_mm"])
             except (KeyError, TypeError, ValueError):
-                problems.append(f"{path}:{line}: position {name}: no blank for ply {k}")
+                problems.append(f"{path}:{line}: position {name}: no {key}_w_mm / _h_mm")
                 continue
             for u in known:
-                w, h = blanks[u][k - 1]
-                fits = (w <= bw + ROUND_MM and h <= bh + ROUND_MM) or (w <= bh + ROUND_MM and h <= bw + ROUND_MM)
-                if not fits:
-                    problems.append(f"{path}:{line}: position {name} ply {k}: blank {bw:.1f} x {bh:.1f} mm does "
-                                    f"not hold unit {u}'s ply ({w:.1f} x {h:.1f} mm)")
+                for j in ([k - 1] if k else range(n_plies)):  # the ply, or every ply for the unit's blank
+                    w, h = blanks[u][j]
+                    if not ((w <= bw + ROUND_MM and h <= bh + ROUND_MM) or (w <= bh + ROUND_MM and h <= bw + ROUND_MM)):
+                        what = f"ply {k}: blank" if k else "unit blank"
+                        problems.append(f"{path}:{line}: position {name} {what} {bw:.1f} x {bh:.1f} mm does not "
+                                        f"hold unit {u}'s ply {j + 1} ({w:.1f} x {h:.1f} mm)")
     missing = [u for u in ids if u not in seen]
     if missing:
         problems.append(f"{path}: {len(missing)} glass unit(s) in no position: {' '.join(missing[:12])}"
                         + (" ..." if len(missing) > 12 else ""))
-    return {"pass": not problems, "positions": len(rows), "units": len(ids), "problems": problems,
-            "largest_deviation_mm": worst}
+    return _result(problems, len(rows), len(ids), worst, ref)
+
+
+def _result(problems: list[str], positions: int, units: int, worst, ref: dict) -> dict:
+    out = {"pass": not problems, "positions": positions, "units": units, "problems": problems,
+           "largest_deviation_mm": worst, "against": ref["against"]}
+    if problems:
+        out["why"] = problems[:8] + ([f"... {len(problems) - 8} more problems"] if len(problems) > 8 else [])
+    return out

@@ -22,9 +22,12 @@ the position and its quantity.  ``glass_order/<position>.svg`` is the same
 sheet to check by eye.  ``glass_order/labels.csv`` has a row per unit: its
 position, how it lies on the drawing (which of its corners is the drawing's
 corner 1), the label text and place, the orientation mark, the setting blocks,
-and the delivery: units in install order along the roof's long plan axis,
-zones of consecutive rows that fill one rack (:data:`RACK_UNITS`,
-:data:`RACK_KG`), each rack loaded so the first unit to go in is in front.
+and the delivery (:mod:`fabricate.export.glass_delivery`): install order along
+the roof's long plan axis, the zone, the rack and the slot on it.
+``glass_order/racks.csv`` lists the racks by zone in install order (units, their
+ids front first, weight within the rack limit); ``glass_order/labels_<rack>.svg``
+is the rack's A4 sheet of labels, one per unit with a QR code of its id
+(:mod:`fabricate.export.glass_labels`).
 
 Hand ``A`` is drawn as the position's first unit; hand ``B`` as its exact
 mirror image, so every unit of a position is within the tolerance of its
@@ -44,12 +47,9 @@ from optimize.atomic import atomic_open
 from optimize.errors import ExportError, write_error
 
 from fabricate.cad.congruence import HANDS, TOLERANCE_MM, mirror_rings
+from fabricate.export.glass_delivery import RACK_COLUMNS, RACK_KG, RACK_UNITS, ZONE_MM, rack_name, rack_rows, sequence
 
 FOLDER = "glass_order"
-RACK_UNITS = 20
-"""Most units on one delivery rack (an A-frame or L-rack for jumbo units)."""
-RACK_KG = 2000.0
-"""Most glass on one delivery rack (kg)."""
 BLOCK_MM = 100.0
 """Setting block length along the edge (DIN 18545 / ift guideline: 80 to 100 mm)."""
 LABEL_INSET_MM = 30.0
@@ -71,7 +71,7 @@ def order_columns(n_plies: int) -> tuple[str, ...]:
 
 
 LABEL_COLUMNS = ("id", "position", "shape", "hand", "face", "drawing_corner_1", "install_seq", "zone", "rack",
-                 "rack_slot", "label_text", "label_position", "orientation_mark", "setting_block_edge",
+                 "rack_slot", "label_text", "label_position", "orientation_mark", "label_sheet", "setting_block_edge",
                  "setting_blocks_mm", "weight_kg", "x_mm", "y_mm", "z_mm")
 
 
@@ -155,32 +155,19 @@ def _setting_blocks(parts, pos: dict) -> tuple[np.ndarray, np.ndarray]:
     return low_edge, np.stack([at, np.maximum(length - at, at)], axis=1)
 
 
-def _sequence(parts, pos: dict, weight: np.ndarray) -> dict:
-    """Install order, zones and racks: rows across the roof's long plan axis, in order along it, each row
-    snaking; a zone is the rows that fill one rack."""
+def _sequence(parts, pos: dict, weight: np.ndarray, rack_kg: float, rack_units: int, zone_mm: float) -> dict:
+    """:func:`fabricate.export.glass_delivery.sequence` of the units of ``pos`` (their mesh faces'
+    centres, the median face's side as the row width), with ``centre (u, 3)``."""
     mesh = parts.mesh
     n = len(pos["ids"])
-    if mesh is None or n == 0:
-        return {"seq": np.arange(n), "zone": np.ones(n, int), "slot": np.ones(n, int), "centre": np.zeros((n, 3))}
-    C = _centres(mesh, pos["element"])
-    xy = C[:, :2] - C[:, :2].mean(axis=0)
-    _, _, vt = np.linalg.svd(xy, full_matrices=False) if n > 1 else (None, None, np.eye(2))
-    u, v = xy @ vt[0], xy @ vt[1]
-    size = np.sqrt(np.maximum(np.median(mesh_face_area(mesh, pos["element"])), 1.0))
-    band = np.floor((u - u.min()) / size).astype(np.int64)
-    order = np.lexsort((np.where(band % 2 == 0, v, -v), band))          # snake along each row
-    seq = np.empty(n, dtype=np.int64)
-    seq[order] = np.arange(1, n + 1)
-    zone = np.zeros(n, dtype=np.int64)
-    slot = np.zeros(n, dtype=np.int64)
-    z, count, kg = 1, 0, 0.0
-    for i in order.tolist():  # racks filled in install order (bookkeeping per unit)
-        if count and (count >= RACK_UNITS or kg + weight[i] > RACK_KG):
-            z, count, kg = z + 1, 0, 0.0
-        count += 1
-        kg += weight[i]
-        zone[i], slot[i] = z, count
-    return {"seq": seq, "zone": zone, "slot": slot, "centre": C}
+    if mesh is None:  # no plan: one row, in id order
+        C = np.zeros((n, 3))
+        C[:, 0] = np.arange(n)
+        size = 1.0
+    else:
+        C = _centres(mesh, pos["element"])
+        size = float(np.sqrt(np.maximum(np.median(mesh_face_area(mesh, pos["element"])), 1.0)))
+    return dict(sequence(C, weight, size, rack_kg, rack_units, zone_mm), centre=C)
 
 
 def _centres(mesh, faces: np.ndarray) -> np.ndarray:
@@ -196,10 +183,15 @@ def mesh_face_area(mesh, faces: np.ndarray) -> np.ndarray:
     return measures.face_areas(mesh)[faces]
 
 
-def write_glass_order(parts, path, tol: float = TOLERANCE_MM) -> dict:
+def write_glass_order(parts, path, tol: float = TOLERANCE_MM, *, rack_kg: float = RACK_KG,
+                      rack_units: int = RACK_UNITS, zone_mm: float = ZONE_MM) -> dict:
     """Write ``glass_order.csv`` at ``path`` and ``glass_order/`` beside it (one DXF and SVG per position,
-    ``labels.csv``), each file atomic.  Returns facts: ``file, bytes, rows, positions, shapes, units,
-    racks, folder, files, seconds``."""
+    ``labels.csv``, ``racks.csv``, a label sheet per rack), each file atomic.  ``rack_kg``,
+    ``rack_units``, ``zone_mm``: the delivery's limits (:mod:`fabricate.export.glass_delivery`).
+    Returns facts: ``file, bytes, rows, positions, shapes, units, racks, zones, heaviest_rack_kg, folder,
+    files, seconds``."""
+    from fabricate.export.glass_labels import write_label_sheets
+
     from fabricate.cad.glass import EDGES, TREATMENTS, unit_blank, unit_sums
     from fabricate.cad.limits import corner_angles_deg, edge_lengths
 
@@ -218,7 +210,7 @@ def write_glass_order(parts, path, tol: float = TOLERANCE_MM) -> dict:
     blank_all = unit_blank(parts)[element]
     ply_blank = _ply_blanks(parts, element)
     low_edge, blocks = _setting_blocks(parts, pos)
-    seq = _sequence(parts, pos, weight)
+    seq = _sequence(parts, pos, weight, rack_kg, rack_units, zone_mm)
     last = plies[-1].surfaces[1]
     label_place = (f"surface #{last} (inside face), at the drawing's corner 1, {LABEL_INSET_MM:g} mm in from both "
                    "edges")
@@ -273,21 +265,30 @@ def write_glass_order(parts, path, tol: float = TOLERANCE_MM) -> dict:
         _write_svg(folder / f"{name}.svg", R, facts)
         files += [f"{name}.dxf", f"{name}.svg"]
     _write_csv(path, order_columns(len(plies)), rows)
+    order = np.argsort(seq["seq"]).tolist()
+    sheets = write_label_sheets(folder, [
+        {"id": pos["ids"][u], "position": pos["name"][u], "rack": rack_name(seq["rack"][u]),
+         "slot": int(seq["slot"][u]), "seq": int(seq["seq"][u]), "zone": int(seq["zone"][u]),
+         "build_up": glass.short(), "weight_kg": float(weight[u])} for u in order])
     labels = []
-    for u in np.argsort(seq["seq"]).tolist():  # in install order
+    for u in order:  # in install order
         uid, name = pos["ids"][u], pos["name"][u]
         c = seq["centre"][u]
+        rack = rack_name(seq["rack"][u])
         labels.append((uid, name, f"G{name[1:].rstrip('AB')}", HANDS[int(pos["hand"][u])] if name[-1] in HANDS else "",
                        int(element[u]), int(pos["corner1"][u]) + 1, int(seq["seq"][u]), int(seq["zone"][u]),
-                       f"R{int(seq['zone'][u]):03d}", int(seq["slot"][u]),
-                       f"{uid} | {name} | {glass.short()} | #1 OUTSIDE", label_place, mark,
-                       f"E{int(low_edge[u]) + 1}", _num(blocks[u]), f"{weight[u]:.1f}", f"{c[0]:.1f}", f"{c[1]:.1f}",
-                       f"{c[2]:.1f}"))
+                       rack, int(seq["slot"][u]), f"{uid} | {name} | {glass.short()} | #1 OUTSIDE", label_place, mark,
+                       " ".join(sheets[rack]), f"E{int(low_edge[u]) + 1}", _num(blocks[u]), f"{weight[u]:.1f}",
+                       f"{c[0]:.1f}", f"{c[1]:.1f}", f"{c[2]:.1f}"))
     _write_csv(folder / "labels.csv", LABEL_COLUMNS, labels)
-    files.append("labels.csv")
+    racks = rack_rows(seq, pos["ids"], pos["name"], weight, blank_all,
+                      {int(r[1:]): " ".join(v) for r, v in sheets.items()})
+    _write_csv(folder / "racks.csv", RACK_COLUMNS, racks)
+    files += ["labels.csv", "racks.csv"] + [f for v in sheets.values() for f in v]
     c = pos["classes"]
     return {"file": path.name, "bytes": path.stat().st_size, "rows": len(rows), "positions": len(rows),
-            "shapes": c.count, "units": len(pos["ids"]), "racks": int(seq["zone"].max()),
+            "shapes": c.count, "units": len(pos["ids"]), "racks": len(racks), "zones": int(seq["zone"].max()),
+            "heaviest_rack_kg": max(float(r[7]) for r in racks), "rack_kg": float(rack_kg),
             "tolerance_mm": tol, "largest_deviation_mm": float(pos["deviation"].max()), "folder": FOLDER,
             "files": len(files), "seconds": time.perf_counter() - t0}
 
