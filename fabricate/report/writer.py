@@ -59,6 +59,10 @@ def write_pictures(run) -> dict[str, str]:
     parts = run.parts.parts
     if parts is not None and any(g.kind in ("panel", "beam") and len(g) for g in parts.groups):
         pics.update(shop_pictures(run, parts))
+    if parts is not None and parts.of_kind("panel"):  # the glass shapes on the roof (#37 item 3)
+        from .classes import classes_picture
+
+        pics.update(classes_picture(run, parts))
     return pics
 
 
