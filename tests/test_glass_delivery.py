@@ -133,3 +133,32 @@ def test_the_sequence_snakes_row_by_row_and_zones_follow_the_long_axis():
         assert np.sum(rack == r) <= 4 and len(set(zone[rack == r])) == 1
     with pytest.raises(ValueError, match="rack_kg"):
         sequence(C, np.ones(30), 1000.0, rack_kg=0.0)
+
+
+def test_the_check_finds_a_unit_off_its_rack_an_overloaded_rack_and_a_lost_label(tmp_path):
+    import re
+
+    from fabricate.export import write_glass_order
+    from fabricate.export.check_glass_order import check_glass_order
+
+    parts = dome_igu()
+    write_glass_order(parts, tmp_path / "glass_order.csv")
+    assert check_glass_order(parts, tmp_path)["pass"]
+    folder = tmp_path / "glass_order"
+    racks = _rows(folder / "racks.csv")
+    dropped = racks[0]["unit_ids"].split()[-1]
+    racks[0]["unit_ids"] = " ".join(racks[0]["unit_ids"].split()[:-1])            # a unit on no rack
+    racks[1]["weight_kg"] = f"{float(racks[1]['max_weight_kg']) + 10:.1f}"          # over the limit
+    with open(folder / "racks.csv", "w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(racks[0]))
+        w.writeheader()
+        w.writerows(racks)
+    sheet = folder / racks[2]["label_sheet"]
+    svg = sheet.read_text(encoding="utf-8")
+    lost = re.search(r'<g class="label" data-unit="([^"]*)"', svg).group(1)
+    sheet.write_text(re.sub(r'<g class="label" data-unit="' + lost + r'".*?</g></g>', "", svg, flags=re.S),
+                     encoding="utf-8")
+    problems = "\n".join(check_glass_order(parts, tmp_path)["problems"])
+    assert f"1 unit(s) with no row: {dropped}" in problems
+    assert f"rack {racks[1]['rack']}: {float(racks[1]['weight_kg']):.1f} kg over its limit" in problems
+    assert f"1 unit(s) with no label on the label sheets: {lost}" in problems

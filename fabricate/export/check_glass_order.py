@@ -8,7 +8,9 @@
   each unit it covers, by a rigid motion without reflection (a mirror image is another position);
 - every ply blank (``ply<k>_blank_w_mm`` x ``_h_mm``) holding that ply of every unit of the
   position, and the unit blank (``blank_w_mm`` x ``_h_mm``) every ply (``PartGroup.rect``, either way
-  round); the row's ``plies`` the units' count.
+  round); the row's ``plies`` the units' count;
+- the delivery (:func:`check_delivery`): every unit once in ``labels.csv``, ``racks.csv`` and the
+  label sheets, every rack within its weight limit.
 
 The result is one dict in the form of the other file checks: ``{"pass", "positions", "units",
 "problems": [...], "largest_deviation_mm", "against"}`` (and ``why``, the first problems, when it
@@ -212,7 +214,72 @@ def check_order(folder, ref: dict) -> dict:
     if missing:
         problems.append(f"{path}: {len(missing)} glass unit(s) in no position: {' '.join(missing[:12])}"
                         + (" ..." if len(missing) > 12 else ""))
+    problems += check_delivery(folder / FOLDER, ids)
     return _result(problems, len(rows), len(ids), worst, ref)
+
+
+def check_delivery(folder: Path, ids: list[str]) -> list[str]:
+    """The problems of the delivery files in ``folder`` (``glass_order/``) for the units ``ids``: each
+    unit once in ``labels.csv``, once in ``racks.csv`` (on the rack its label names), and its label once
+    in its rack's label sheets; every rack's weight the sum of its units' and within its
+    ``max_weight_kg`` (but a single unit over the limit, marked ``over_limit``)."""
+    import re
+    from collections import Counter
+
+    problems: list[str] = []
+    tables = {}
+    for name in ("labels.csv", "racks.csv"):  # two tables
+        try:
+            with open(folder / name, newline="", encoding="utf-8") as fh:
+                tables[name] = list(csv.DictReader(fh))
+        except (OSError, UnicodeDecodeError, csv.Error) as exc:
+            problems.append(f"{folder / name}: cannot read ({exc})")
+    if problems:
+        return problems
+    labels, racks = tables["labels.csv"], tables["racks.csv"]
+    want = Counter(ids)
+    on_rack = {u: r.get("rack", "") for r in racks for u in (r.get("unit_ids") or "").split()}
+    for name, got in (("labels.csv", Counter(r.get("id", "") for r in labels)),
+                      ("racks.csv", Counter(u for r in racks for u in (r.get("unit_ids") or "").split()))):
+        for what, units in (("no row", want - got), ("more than one row", got - want)):
+            if units:
+                shown = " ".join(sorted(units)[:12])
+                problems.append(f"{folder / name}: {sum(units.values())} unit(s) with {what}: {shown}")
+    kg = {}
+    for r in labels:  # per unit
+        if on_rack.get(r.get("id")) not in (None, r.get("rack")):
+            problems.append(f"{folder / 'labels.csv'}: unit {r.get('id')} on rack {r.get('rack')}, racks.csv puts it "
+                            f"on {on_rack[r.get('id')]}")
+        try:
+            kg[r.get("id")] = float(r["weight_kg"])
+        except (KeyError, TypeError, ValueError):
+            problems.append(f"{folder / 'labels.csv'}: unit {r.get('id')}: unreadable weight_kg")
+    drawn: Counter = Counter()
+    for r in racks:  # a few racks
+        units = (r.get("unit_ids") or "").split()
+        try:
+            w, limit = float(r["weight_kg"]), float(r["max_weight_kg"])
+        except (KeyError, TypeError, ValueError):
+            problems.append(f"{folder / 'racks.csv'}: rack {r.get('rack')}: unreadable weight_kg or max_weight_kg")
+            continue
+        total = sum(kg.get(u, 0.0) for u in units)
+        if abs(total - w) > 0.05 * (len(units) + 1):
+            problems.append(f"{folder / 'racks.csv'}: rack {r.get('rack')}: weight {w:.1f} kg, its units weigh "
+                            f"{total:.1f} kg")
+        if w > limit and not (len(units) == 1 and r.get("over_limit") == "yes"):
+            problems.append(f"{folder / 'racks.csv'}: rack {r.get('rack')}: {w:.1f} kg over its limit {limit:g} kg")
+        for sheet in (r.get("label_sheet") or "").split():  # one or a few sheets
+            try:
+                text = (folder / sheet).read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError) as exc:
+                problems.append(f"{folder / sheet}: cannot read the labels of rack {r.get('rack')} ({exc})")
+                continue
+            drawn.update(re.findall(r'<g class="label" data-unit="([^"]*)"', text))
+    for what, units in (("no label", want - drawn), ("more than one label", drawn - want)):
+        if units:
+            problems.append(f"{folder}: {sum(units.values())} unit(s) with {what} on the label sheets: "
+                            f"{' '.join(sorted(units)[:12])}")
+    return problems
 
 
 def _result(problems: list[str], positions: int, units: int, worst, ref: dict) -> dict:

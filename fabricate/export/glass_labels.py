@@ -87,7 +87,7 @@ def label_svg(unit: dict, x0: float, y0: float) -> str:
         _line(f"Pos {unit['position']}", tx, y0 + 13.5, 3.6, tw, bold=True),
         _line(f"Rack {unit['rack']}/{unit['slot']}  Z{unit['zone']}", tx, y0 + 17.8, 3.0, tw),
         _line(f"Seq {unit['seq']}  {unit['weight_kg']:.0f} kg", tx, y0 + 21.8, 3.0, tw),
-        _line(unit["build_up"], tx, y0 + 25.8, 3.0, tw),
+        _line(f"Build-up {unit['build_up']}", tx, y0 + 25.8, 3.0, tw),
         _line("#1 OUTSIDE", tx, y0 + 29.6, 2.8, tw, bold=True),
     ]
     cx, cy = tx + 1.8, y0 + h - MARGIN_MM - 1.8                           # corner 1, the arrow along E1
