@@ -39,6 +39,7 @@ from optimize.errors import ConfigError, ConicalFabError, writing
 from .config import RunConfig, load_config, override_values
 from .options import COMMAND
 from .pipeline import EXIT_CODES, RunSummary, run_pipeline, worst
+from .sweep import job_facts
 
 log = logging.getLogger(__name__)
 
@@ -159,7 +160,9 @@ def run_job(job: Job, out_root: str, force: bool = False) -> RunSummary:
         return RunSummary(job.name, "bad_input", EXIT_CODES["bad_input"], config_file=job.config_file,
                           message=job.error or "invalid config")
     try:
-        return run_pipeline(job.config, out_root, force=force)
+        summary = run_pipeline(job.config, out_root, force=force)
+        summary.facts = job_facts(summary.out_dir)  # the sweep's figures, read where the job ran
+        return summary
     except ConicalFabError as exc:
         status = {2: "bad_input", 3: "tolerance_not_reached", 4: "export_failed"}.get(exc.exit_code, "error")
         return RunSummary(job.name, status, exc.exit_code, config_file=job.config_file,

@@ -48,6 +48,7 @@ class RunSummary:
     status : ``ok`` | ``tolerance_not_reached`` | ``export_failed`` | ``bad_input`` | ``error`` |
         ``lost`` (a batch job whose worker process died twice).
     planarity, conical : max defects of the result (relative, radians), None if not reached.
+    facts : a batch job's figures from its report.json (:func:`fabricate.app.sweep.job_facts`).
     """
 
     name: str
@@ -66,6 +67,7 @@ class RunSummary:
     failed: list[str] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
     decision: str = ""
+    facts: dict[str, Any] = field(default_factory=dict)
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)

@@ -12,7 +12,9 @@ def register(sub) -> None:
         description="One job per config and combination of --set values (e.g. "
                     "--set parts.glass_thickness=8,10,12 makes three jobs per config), run in parallel "
                     "worker processes or on a Dask cluster (--scheduler). One failure does not stop the "
-                    "others. Prints a summary table and writes it as CSV.",
+                    "others. Prints a summary table and writes it as CSV; "
+                    "beside it sweep.csv (in:/out:/img: columns, as Design Explorer reads them), "
+                    "pareto.png and pareto.csv (distinct glass shapes against distance moved).",
         epilog="Exit code: 0 when every job is ok, else the code of the worst job, in this order: "
                "1 a job lost (its worker died twice) or crashed (internal error), 2 bad input, "
                "4 export failed, 3 tolerance not reached. A job whose worker process dies is run once "
@@ -61,4 +63,9 @@ def run(args) -> int:
     print_table(summaries)
     path = write_csv(summaries, csv_path)
     print(f"summary: {path}")
+    from fabricate.app.sweep import print_sweep, write_sweep
+
+    rows, files = write_sweep(jobs, summaries, csv_path.parent)  # Design Explorer's CSV, the Pareto front
+    print_sweep(rows)
+    print("sweep: " + ", ".join(str(f) for f in files.values()))
     return exit_code(summaries)
