@@ -73,7 +73,8 @@ class Stability:
     its name; second_order : {combination: how it was analysed: "P-Delta" or "amplified 1/(1 - 1/alpha_cr)"};
     imperfection_mm : the amplitude of the first-mode imperfection; first_order_utilization : max
     utilization before the second-order results replaced the first-order ones; lower_bounds : the
-    combinations whose alpha_cr is the compression-only lower bound (:meth:`Assembly.buckling`).
+    combinations whose alpha_cr is the compression-only lower bound (:meth:`Assembly.buckling`); geometry :
+    {combination: (n, 3) float} the imperfect node positions of those solved P-Delta (the model export).
     """
 
     alphas: dict
@@ -84,6 +85,7 @@ class Stability:
     first_order_utilization: float
     seconds: float = 0.0
     lower_bounds: tuple = ()
+    geometry: dict = field(default_factory=dict)
 
     @property
     def alpha_cr(self) -> float:
@@ -188,7 +190,7 @@ def second_order(frame, cases, solution, combos, options, span: float, u_first: 
     amp = span / options.imperfection
     ends, disp, reac, line = (dict(d) for d in (solution.end_forces, solution.displacements, solution.reactions,
                                                  solution.line_local))
-    out, done = [], {}
+    out, done, geometry = [], {}, {}
     for name, kind, factors in combos:
         a = alphas.get(name, float("inf"))
         wanted = kind == "uls" and (options.stability == "always" or a < ALPHA_CR_LIMIT) and len(modes[name].alphas)
@@ -207,9 +209,11 @@ def second_order(frame, cases, solution, combos, options, span: float, u_first: 
         else:
             ends[key], disp[key], reac[key], line[key] = got
             done[name] = "P-Delta"
+            geometry[name] = X
         out.append((name, kind, {key: 1.0}))
     sol = dataclasses.replace(solution, end_forces=ends, displacements=disp, reactions=reac, line_local=line)
-    stab = Stability(alphas, worst, worst_name, done, amp, u_first, round(time.perf_counter() - t0, 4), tuple(bounds))
+    stab = Stability(alphas, worst, worst_name, done, amp, u_first, round(time.perf_counter() - t0, 4), tuple(bounds),
+                     geometry)
     return stab, sol, out
 
 
