@@ -44,6 +44,9 @@ with it:
 - ``welds``: ``weld_schedule.csv`` against the BOM (:func:`fabricate.export.welds.check_weld_schedule`:
   every part it names exists, a joint joins parts of its assembly, every welded beam's plates are
   joined, the totals add up).
+- ``bars``: ``bar_cutting.csv`` against ``steel_cut_list.csv`` (:func:`fabricate.export.bars.check_bar_plan`:
+  every beam and hub tube on exactly one bar, with its length, section and grade and the cut list's
+  ``bar``; every bar's pieces, kerfs and end trims within its stock length).
 - ``ifc``, ``3dm``, ``nc1``: the exchange files (:mod:`fabricate.export.exchange_check`): one
   element / object / file per BOM row with the same id; IFC schema-valid with the volume of
   every element's face set, as ifcopenshell reads it, equal to the BOM's (with ``--occ``: from
@@ -88,7 +91,8 @@ from .export.verify import not_regular
 log = logging.getLogger(__name__)
 FILES = {"bom": "bom.csv", "step": "model.step", "stl": "model.stl", "3mf": "model.3mf",
          "dxf": "outlines.dxf", "svg": "outlines.svg", "flat": "flat.json", "ifc": "model.ifc", "3dm": "model.3dm",
-         "nc1": "nc1", "welds": "weld_schedule.csv", "glass_order": "glass_order.csv"}
+         "nc1": "nc1", "welds": "weld_schedule.csv", "glass_order": "glass_order.csv",
+         "bars": "bar_cutting.csv"}
 REPORT = "report.json"
 
 
@@ -121,6 +125,7 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
     from .export import exchange_check
     from .export.bom import read_bom
     from .export.check_glass_order import check_glass_order_files
+    from .export.bars import check_bar_plan
     from .export.welds import check_weld_schedule
 
     t0 = time.perf_counter()
@@ -158,7 +163,8 @@ def _check_outputs(outdir, tol: Tolerances = DEFAULT, *, skip: frozenset[str] = 
         ("3dm", "3dm", None, lambda: (exchange_check.check_3dm(paths["3dm"], bom), None)),
         ("nc1", "nc1", None, lambda: (exchange_check.check_nc1(paths["nc1"], bom), None)),
         ("welds", "welds", None, lambda: (check_weld_schedule(paths["welds"], bom), None)),
-        ("glass_order", "glass_order", None, lambda: (check_glass_order_files(out, _readable(paths["flat"])), None)))
+        ("glass_order", "glass_order", None, lambda: (check_glass_order_files(out, _readable(paths["flat"])), None)),
+        ("bars", "bars", None, lambda: (check_bar_plan(out), None)))
 
     def run_checks(names) -> None:
         for name, key, needs, run in table:

@@ -47,7 +47,8 @@ from optimize.tolerances import Tolerances
 
 from .config_design import MAX_FACES, DesignParamError, check_design, subdivided_faces
 from .config_errors import format_errors
-from .config_parts import LimitsSection, NestingSection, PartsSection, SheetSection  # noqa: F401 - re-exported
+from .config_parts import (BarsSection, GasketSection, LimitsSection, NestingSection,  # noqa: F401 - re-exported
+                           PartsSection, SheetSection)
 from .config_section import MAX_MM, Section, section_base, tuples  # noqa: F401 - MAX_MM re-exported
 from . import config_set
 from .config_set import set_key  # noqa: F401 - the --set API, re-exported
@@ -238,8 +239,11 @@ class OffsetSection(section_base(OffsetOptions)):
 _OUTPUT_KEYS = [f.name for f in dataclasses.fields(OutputsOptions)]
 
 
-class OutputsSection(section_base(OutputsOptions, extra={"nesting": (NestingSection, Field(
-        default_factory=NestingSection))}, order=_OUTPUT_KEYS[:_OUTPUT_KEYS.index("layout_plan") + 1] + ["nesting"]
+class OutputsSection(section_base(OutputsOptions, extra={
+        "nesting": (NestingSection, Field(default_factory=NestingSection)),
+        "bars": (BarsSection, Field(default_factory=BarsSection)),
+        "gasket": (GasketSection, Field(default_factory=GasketSection))},
+        order=_OUTPUT_KEYS[:_OUTPUT_KEYS.index("layout_plan") + 1] + ["nesting", "bars", "gasket"]
         + _OUTPUT_KEYS[_OUTPUT_KEYS.index("layout_plan") + 1:])):
     """Which files to write (``true``/``false``); report.json is always written (defaults and
     what each key means: :class:`fabricate.app.options.OutputsOptions`).

@@ -1,4 +1,5 @@
-"""Config sections of the parts: dimensions, shop limits, stock sheets for the nested cut files."""
+"""Config sections of the parts: dimensions, shop limits, stock sheets for the nested cut files, stock
+bars for the cutting plan, the glazing gasket."""
 from __future__ import annotations
 
 from typing import Annotated, Literal
@@ -165,3 +166,36 @@ class NestingSection(Section):
         if isinstance(value, dict):
             return {**SHEETS[info.field_name], **{k: v for k, v in value.items() if v is not None}}
         return value
+
+
+_Bar = Annotated[float, Field(gt=0, le=MAX_SHEET_MM)]
+
+
+class BarsSection(Section):
+    """Stock bars the beams and hub tubes are sawn from (mm; :mod:`fabricate.export.bars`: bar_order.csv,
+    bar_cutting.csv, the cut list's ``bar``): the lengths a mill sells (EN 10219 / EN 10210 hollow
+    sections: 6 and 12 m), the saw's kerf, what is squared off each mill end."""
+
+    stock_lengths_mm: tuple[_Bar, ...] = Field(default=(6000.0, 12000.0), min_length=1, max_length=20,
+                                               json_schema_extra=_MM)
+    kerf_mm: float = Field(default=3.0, ge=0, le=50.0, json_schema_extra=_MM)
+    end_trim_mm: float = Field(default=10.0, ge=0, le=1000.0, json_schema_extra=_MM)
+
+    _lengths = tuples("stock_lengths_mm")
+
+    @model_validator(mode="after")
+    def _trims_fit(self) -> "BarsSection":
+        if 2 * self.end_trim_mm >= max(self.stock_lengths_mm):
+            raise PydanticCustomError("bars", "end_trim_mm = {t}: two trims must be shorter than the longest stock "
+                                      "bar ({s} mm)", {"t": f"{self.end_trim_mm:g}",
+                                                       "s": f"{max(self.stock_lengths_mm):g}"})
+        return self
+
+
+class GasketSection(Section):
+    """The glazing gasket on a beam's flat top (:mod:`fabricate.export.gasket`: gasket.csv): the width the
+    panel edge bears on (mm) and the fold between two panels (deg, 0 flat) beyond which a beam is
+    a warning of the run."""
+
+    bite_mm: float = Field(default=20.0, gt=0, le=500.0, json_schema_extra=_MM)
+    max_fold_deg: float = Field(default=2.0, ge=0, le=90.0, json_schema_extra={"unit": "deg"})

@@ -161,6 +161,12 @@ def run_stages(config: RunConfig, workdir: Path, progress=None, t_start: float |
     tol = config.tolerances
     measures = collect_measures(config, inp, opt, off)
     measures.update({k: dict(v) for k, v in statics.measures.items()})
+    if built.parts is not None:  # the shop's warnings: a beam longer than a stock bar, a fold beyond the gasket's
+        from fabricate.export.bars import bar_measures
+        from fabricate.export.gasket import gasket_measures
+
+        measures.update(bar_measures(built.parts, config.outputs.bars.model_dump()))
+        measures.update(gasket_measures(built.parts, config.outputs.gasket.model_dump()))
     measures = apply_requirements(measures, off.structure, tol.requirements, opt.target or inp.target,
                                   tol.beam_twist_mm,
                                   tol.closeness_mm)

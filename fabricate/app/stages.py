@@ -363,6 +363,8 @@ EXPORTS = (("step", "model.step", "write_step"), ("stl", "model.stl", "write_stl
            ("schedules", "steel_cut_list.csv", "write_steel_cut_list"),
            ("schedules", "node_schedule.csv", "write_node_schedule"),
            ("schedules", "weld_schedule.csv", "write_weld_schedule"),
+           ("schedules", "bar_order.csv", "write_bar_order"), ("schedules", "bar_cutting.csv", "write_bar_cutting"),
+           ("schedules", "gasket.csv", "write_gasket_schedule"),
            ("glass_order", "glass_order.csv", "write_glass_order"),
            ("layout_plan", "layout_plan.dxf", "write_layout_plan"), ("bom", "bom.csv", "write_bom"),
            ("ifc", "model.ifc", "write_ifc"), ("rhino", "model.3dm", "write_3dm"), ("nc1", "nc1", "write_nc1"),
@@ -414,6 +416,10 @@ def stage_exports(cfg, workdir: Path, opt: OptimizeRecord, off: OffsetRecord, pa
         try:
             extra = {"rhino": {"structure": structure}, "nc1": {"order": cfg.name or "roof"},
                      "step": {"schema": cfg.outputs.step_schema}}.get(key, {})
+            if fn in ("write_steel_cut_list", "write_bar_order", "write_bar_cutting"):  # one cutting plan
+                extra = {"bars": cfg.outputs.bars.model_dump()}
+            elif fn == "write_gasket_schedule":
+                extra = {"gasket": cfg.outputs.gasket.model_dump()}
             facts = getattr(export, fn)(built, out / fname, **extra)
         except Exception as exc:  # an exporter bug or an OCC failure: exit 4, with the file named
             if _write_failed(exc):

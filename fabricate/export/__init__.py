@@ -21,6 +21,8 @@ _EXPORTS = {
     "write_svg": ".svg",
     "write_3mf": ".threemf",
     "write_weld_schedule": ".welds",
+    "write_bar_order": ".bars", "write_bar_cutting": ".bars",
+    "write_gasket_schedule": ".gasket",
 }
 
 def write_ifc(parts, path, **kwargs) -> dict:

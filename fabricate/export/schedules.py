@@ -27,7 +27,9 @@
   (``N0001``, member ``hub``: ``tube hub CHS 160 x 8 + 2 caps PL12 24-gon D160``,
   length = hub height, weight of its pieces) and, for a tube hub, its tube
   (``N0001.1``: ``CHS 160 x 8``, length = the tube cut between the caps) and its
-  two caps (``PL12``, their blank): :func:`hub_rows`.
+  two caps (``PL12``, their blank): :func:`hub_rows`.  ``bar``: on a beam's row and a hub tube's, the
+  stock bar it is sawn from (``bar_cutting.csv``, :mod:`fabricate.export.bars`; ``splice needed``:
+  longer than the longest stock bar).
 - every schedule's ``type`` column names the part's type, the same for parts
   that are congruent within 1 mm (:mod:`fabricate.cad.congruence`): ``G007``
   a glass shape (``G007A`` / ``G007B`` its two mirror hands where both are
@@ -60,7 +62,7 @@ GLASS_COLUMNS = ("id", "face", "type", "build_up", "thickness_mm", "solids", "sp
 STEEL_COLUMNS = ("id", "edge", "type", "assembly", "section", "member", "plates", "grade", "length_mm",
                  "system_length_mm", "blank_w_mm", "blank_h_mm",
                  "end_a_mitre_deg", "end_a_bevel_deg", "end_b_mitre_deg", "end_b_bevel_deg", "top_bevel_deg",
-                 "dihedral_deg", "weight_kg", "panels", "nodes", "flags")
+                 "dihedral_deg", "weight_kg", "panels", "nodes", "flags", "bar")
 NODE_COLUMNS = ("id", "vertex", "type", "assembly", "x_mm", "y_mm", "z_mm", "axis_x", "axis_y", "axis_z", "valence", "beams",
                 "azimuth_deg", "elevation_deg", "hub", "hub_diameter_mm", "hub_wall_mm", "hub_height_mm")
 
@@ -289,12 +291,58 @@ def beam_lengths(parts) -> tuple[dict[str, float], dict[str, float]]:
     return plate, {u: hi[u] - lo[u] for u in lo}
 
 
-def write_steel_cut_list(parts, path) -> dict:
+def _depth(parts) -> float:
+    """The beams' depth (mm): the span of the layers."""
+    return float(abs(np.diff(parts.report.get("layers_mm", [0.0, parts.spec.beam_depth]))[0]))
+
+
+def bar_pieces(parts) -> list:
+    """Every piece a shop saws from a stock bar, as :class:`fabricate.export.bars.Piece` sorted by id:
+    each beam (its cut list section and grade, its one length :func:`beam_lengths`, to 0.1 mm as the cut
+    list writes it) and each hub tube (``CHS D x t``, its cut between the caps), with the nominal kg/m of
+    its section (the plates' rectangles, :func:`fabricate.cad.sections.section_rectangles`; a CHS:
+    ``pi (D - t) t``)."""
+    from fabricate.cad.parts import unit_id
+    from fabricate.cad.sections import section_rectangles, section_text
+
+    from .bar_plan import Piece
+
+    spec = parts.spec
+    grade = spec.steel_grade
+    rho = spec.density("beam") * 1e-6                       # kg/m per mm2 of section
+    out = []
+    if parts.of_kind("beam"):
+        depth = _depth(parts)
+        _, length = beam_lengths(parts)
+        text = section_text(spec, depth)
+        kg = sum((y1 - y0) * (z1 - z0) for y0, y1, z0, z1 in section_rectangles(spec, depth)) * rho
+        plate = spec.beam.section == "plate"
+        for g in beam_units(parts):
+            for i, pid in enumerate(g.ids):  # one piece per beam
+                u = unit_id(pid)
+                h = float(f"{g.rect[i, 1]:.0f}")
+                sec, kgm = (f"plate {spec.beam_width:g} x {h:.0f}", spec.beam_width * h * rho) if plate else (text, kg)
+                out.append(Piece(u, sec, grade, float(f"{length[u]:.1f}"), kgm))
+    tubes = [g for g in parts.of_kind("node") if g.member == "tube"]
+    if tubes:
+        piece = hub_section(spec)[1]
+        d, t = 2 * spec.hub_radius, spec.node.wall_mm
+        for g in tubes:
+            out += [Piece(pid, piece, grade, float(f"{L:.1f}"), np.pi * (d - t) * t * rho)
+                    for pid, L in zip(g.ids, g.length_mm.tolist())]
+    return sorted(out, key=lambda p: p.id)
+
+
+def write_steel_cut_list(parts, path, bars: dict | None = None) -> dict:
     """Write ``steel_cut_list.csv`` (atomic): one row per beam (its section, its weight) and, for a
     section welded from several plates, one row per plate below it (``<beam>.<k>``, ``member`` naming
-    it, ``PL<t>``, its own blank, end cuts and weight).  Returns facts: ``file, bytes, rows, seconds``."""
+    it, ``PL<t>``, its own blank, end cuts and weight); ``bar``: the stock bar of each beam and hub tube
+    in the cutting plan on ``bars`` (``outputs.bars``; None: the defaults,
+    :func:`fabricate.export.bars.cutting_plan`).  Returns facts: ``file, bytes, rows, seconds``."""
     from fabricate.cad.parts import part_ids, unit_id
     from fabricate.cad.sections import section_text
+
+    from .bar_plan import cutting_plan
 
     t0 = time.perf_counter()
     path = Path(path)
@@ -302,7 +350,8 @@ def write_steel_cut_list(parts, path) -> dict:
     spec = parts.spec
     topo = parts.mesh.topology if parts.mesh is not None else None
     plate = spec.beam.section == "plate"
-    depth = abs(np.diff(parts.report.get("layers_mm", [0.0, spec.beam_depth]))[0])
+    depth = _depth(parts)
+    bar_of = cutting_plan(bar_pieces(parts), bars).bar_of()
     uf = unit_facts(parts) if parts.of_kind("beam") else None
     ids, names, _ = beam_types(parts)
     types = dict(zip(ids, names))
@@ -352,8 +401,9 @@ def write_steel_cut_list(parts, path) -> dict:
     hubs, hub_weight = hub_rows(parts, flags, dict(zip(*node_types(parts)[:2])))
 
     def every_row():
-        yield from rows()
-        yield from hubs
+        for part in (rows(), hubs):  # the bar each beam and hub tube is sawn from, last
+            for row in part:
+                yield (*row, bar_of.get(row[0], ""))
     n = _write(path, STEEL_COLUMNS, every_row())
     beam_weight = float(uf["weight_kg"].sum()) if uf is not None else 0.0
     return {"file": path.name, "bytes": path.stat().st_size, "rows": n, "beams": len(by_edge),
