@@ -55,7 +55,8 @@ def options(gasket: dict | None) -> tuple[float, float]:
 def gasket_table(parts, gasket: dict | None = None) -> dict:
     """Per beam (sorted by edge): ``ids`` (b,) beam ids, ``edge (b,)``, ``panels`` [(pa, pb)] panel ids
     (``-`` where none), ``fold (b,)`` deg (NaN with one panel), ``tilt (b, 2)`` deg (NaN where no panel),
-    ``step (b, 2)`` mm, ``flagged (b,)`` bool, ``bite``, ``limit`` (see the module text)."""
+    ``step (b, 2)`` mm, ``judged (b,)`` deg (the fold, or twice the one panel's tilt), ``flagged (b,)``
+    bool (``judged > limit``), ``bite``, ``limit`` (see the module text)."""
     from optimize.mesh.measures import face_normals
 
     from fabricate.cad.parts import part_ids, unit_id
@@ -68,7 +69,7 @@ def gasket_table(parts, gasket: dict | None = None) -> dict:
     if not gs:
         z = np.zeros(0)
         return {"ids": [], "edge": z.astype(int), "panels": [], "fold": z, "tilt": z.reshape(0, 2),
-                "step": z.reshape(0, 2), "flagged": z.astype(bool), "bite": bite, "limit": limit}
+                "step": z.reshape(0, 2), "judged": z, "flagged": z.astype(bool), "bite": bite, "limit": limit}
     C = np.concatenate([g.centre_line if g.centre_line is not None else g.vertices[:, :4] for g in gs])
     edge = np.concatenate([g.element for g in gs])
     ids = [unit_id(i) for g in gs for i in g.ids]
@@ -106,7 +107,9 @@ def write_gasket_schedule(parts, path, gasket: dict | None = None) -> dict:
 
     def rows():
         for k, bid in enumerate(g["ids"]):  # one row per beam
-            flag = f"fold beyond {g['limit']:g} deg (outputs.gasket.max_fold_deg)" if g["flagged"][k] else ""
+            what = "fold" if np.isfinite(g["fold"][k]) else "one panel: twice its tilt"
+            flag = (f"{what} {g['judged'][k]:.2f} deg beyond {g['limit']:g} deg (outputs.gasket.max_fold_deg)"
+                    if g["flagged"][k] else "")
             yield (bid, int(g["edge"][k]), " ".join(g["panels"][k]), _num(g["fold"][k]), _num(g["tilt"][k, 0]),
                    _num(g["tilt"][k, 1]), f"{g['bite']:g}", _num(g["step"][k, 0]), _num(g["step"][k, 1]), flag)
     n = _write(path, COLUMNS, rows())
