@@ -173,9 +173,14 @@ def picture_pareto(rows: list[dict[str, str]], path: str | Path, *, title: str) 
     if len(idx):
         idx = idx[np.lexsort((y[idx], x[idx]))]
         ax.plot(x[idx], y[idx], "-o", color="#d62728", ms=6, lw=1.5, label="Pareto front")
-    for i in np.flatnonzero(drawn).tolist():  # the front's labels black, the others' grey
-        ax.annotate(_label(rows[i]), (x[i], y[i]), textcoords="offset points", xytext=(6, 5), fontsize=7,
-                    color="k" if on[i] else "0.5")
+    groups: dict[tuple[float, float], list[int]] = {}
+    for i in np.flatnonzero(drawn).tolist():  # jobs at the same point share one label
+        groups.setdefault((float(x[i]), float(y[i])), []).append(i)
+    for (px, py), members in groups.items():  # the front's labels black above, the others' grey below
+        front = any(on[i] for i in members)
+        text = _label(rows[members[0]]) + (f" (and {len(members) - 1} more)" if len(members) > 1 else "")
+        ax.annotate(text, (px, py), textcoords="offset points", xytext=(6, 5 if front else -11), fontsize=7,
+                    color="k" if front else "0.45")
     if not drawn.any():
         ax.text(0.5, 0.5, "no job with both figures", ha="center", va="center", transform=ax.transAxes)
     else:
@@ -211,30 +216,33 @@ def write_sweep(jobs, summaries, folder: str | Path) -> tuple[list[dict[str, str
 
 
 def print_sweep(rows: list[dict[str, str]], console=None) -> None:
-    """The sweep table on the terminal: the swept values and the figures, the front marked ``*``."""
+    """The sweep table on the terminal (fits 80 columns with two swept keys): the swept values and the
+    figures, ``*`` after the status of a job on the front."""
+    from rich import box
     from rich.console import Console
     from rich.table import Table
 
     if not rows:
         return
     table = Table(title=f"sweep: {sum(r[OUT + 'pareto'] == '1' for r in rows)} of {len(rows)} jobs on the "
-                        "Pareto front (*: no other job has as few glass shapes for as little movement)")
+                        "Pareto front (*: no other job has as few glass shapes for as little movement)",
+                  box=box.SIMPLE_HEAD, padding=(0, 1), pad_edge=False, collapse_padding=True)
     keys = [k for k in rows[0] if k.startswith(IN)]
-    outs = [OUT + c for c, _ in OUTPUTS] + [OUT + "status"]
+    outs = [OUT + c for c, _ in OUTPUTS]
     for k in keys:
-        table.add_column(k[len(IN):].split(".")[-1], justify="right", no_wrap=True)
+        table.add_column(k[len(IN):].split(".")[-1], justify="right", overflow="fold")
     for k in outs:
-        table.add_column(HEADS.get(k[len(OUT):], k[len(OUT):]), justify="left" if k == OUT + "status" else "right",
-                         no_wrap=k != OUT + "status", min_width=6 if k == OUT + "status" else None)
-    table.add_column("", justify="center", no_wrap=True)  # * on the front
+        table.add_column(HEADS.get(k[len(OUT):], k[len(OUT):]), justify="right", no_wrap=True)
+    table.add_column("status", justify="left", min_width=6)
     for r in rows:
-        cells = [r[k] for k in keys] + [_short(k, r[k]) for k in outs]
-        table.add_row(*cells, "*" if r[OUT + "pareto"] == "1" else "")
+        status = r[OUT + "status"].replace("tolerance_not_reached", "tolerance not met").replace("_", " ")
+        table.add_row(*[r[k] for k in keys], *[_short(k, r[k]) for k in outs],
+                      status + (" *" if r[OUT + "pareto"] == "1" else ""))
     (console or Console()).print(table)
 
 
 def _short(col: str, text: str) -> str:
-    if not text or col in (OUT + "status",) or col.endswith("types") or col.endswith("shapes"):
-        return text.replace("_", " ")
+    if not text or col.endswith(("types", "shapes")):
+        return text
     v = float(text)
-    return f"{v:,.1f}" if col.endswith("mm") else f"{v:.3g}"
+    return f"{v:,.1f}" if col.endswith("mm") else f"{v:.2f}" if col.endswith("%") else f"{v:.3g}"
