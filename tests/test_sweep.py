@@ -48,6 +48,18 @@ def test_pareto_front_is_the_definition_on_random_points():
     assert front.any()
 
 
+def test_jobs_apart_by_rounding_noise_are_all_on_the_front():
+    """The front is taken on the figures as the CSV writes them: a distance apart by 1e-11 mm is the same."""
+    from types import SimpleNamespace
+
+    from fabricate.app.sweep import sweep_rows
+
+    jobs = [SimpleNamespace(overrides={"optimize.rationalize": v}, config_file="a.yaml") for v in (None, 20, 50)]
+    runs = [SimpleNamespace(status="ok", out_dir=None, facts={"moved_mm": 72.05895651977599 + d, "glass_shapes": 320})
+            for d in (0.0, -6e-12, -6e-12)]
+    assert [r["out:pareto"] for r in sweep_rows(jobs, runs, ".")] == ["1", "1", "1"]
+
+
 @pytest.fixture(scope="module")
 def tiny_sweep(tmp_path_factory):
     """Two jobs of a 12-panel dome, rationalize off and a 100 mm pull, run one after the other in this

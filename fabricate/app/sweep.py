@@ -108,10 +108,12 @@ def inputs(jobs) -> list[str]:
 def sweep_rows(jobs, summaries, folder: str | Path) -> list[dict[str, str]]:
     """One row per job of ``sweep.csv`` (columns :func:`columns`), ``img:`` relative to ``folder``."""
     keys = inputs(jobs)
-    ok = [s.status == "ok" for s in summaries]
-    x = [s.facts.get("moved_mm") if good else None for s, good in zip(summaries, ok)]
-    y = [s.facts.get("glass_shapes") if good else None for s, good in zip(summaries, ok)]
-    front = pareto_front([np.nan if v is None else v for v in x], [np.nan if v is None else v for v in y])
+
+    def figure(s, key):  # as the CSV writes it (6 digits): jobs that differ by rounding noise are equal
+        v = s.facts.get(key) if s.status == "ok" else None
+        return np.nan if v is None else float(f"{v:.6g}")
+
+    front = pareto_front([figure(s, "moved_mm") for s in summaries], [figure(s, "glass_shapes") for s in summaries])
     rows = []
     for job, s, on in zip(jobs, summaries, front.tolist()):
         row = {IN + k: (Path(job.config_file).stem if k == "config" else _text(job.overrides.get(k))) for k in keys}
