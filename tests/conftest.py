@@ -13,6 +13,10 @@
   and two 20-gon caps, exactly planar and conical).
 - ``rotation``: ``rotation(seed)`` gives a seeded (3, 3) rotation matrix.
 
+Under pytest-xdist (``--dist loadgroup``, pyproject.toml) the tests of one file run in one worker, in
+file order, so a module-scoped fixture is made once (:func:`pytest_collection_modifyitems`); the tests
+that read the quickstart run (``finished_run``, made once per worker) share a worker too.
+
 Every test, whatever ran before it in the process: ifcopenshell's process-wide feature switch is
 as a test found it when it ends (:func:`_ifcopenshell_as_found`), or that test fails.
 
@@ -20,6 +24,7 @@ Nothing here reads outside the repository.
 """
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -107,3 +112,35 @@ def _ifcopenshell_as_found():
         sys.modules["ifcopenshell"].ifcopenshell_wrapper.set_feature(IFC_DERIVED, bool(before))
         pytest.fail(f"ifcopenshell's {IFC_DERIVED} was {bool(before)} before this test and {after} after it; "
                     "use fabricate.export.ifc.ifcopenshell_alone around ifcopenshell work", pytrace=False)
+
+
+def pytest_addoption(parser, pluginmanager):
+    """pyproject.toml's ``addopts`` name xdist's ``-n`` and ``--dist``; where xdist is not installed (the
+    cadquery extra's environment) or is switched off (``-p no:xdist``) they are accepted and the tests run
+    in this process."""
+    if pluginmanager.hasplugin("xdist"):
+        return
+    group = parser.getgroup("xdist", "distributed testing (pytest-xdist is not loaded: ignored)")
+    group._addoption("-n", "--numprocesses", dest="numprocesses", action="store", default=None,
+                     help="ignored: pytest-xdist is not loaded")
+    group.addoption("--dist", dest="dist", action="store", default="no", help="ignored: pytest-xdist is not loaded")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_auto_num_workers(config):
+    """``-n auto``: one worker per core this process may run on (xdist's own count is psutil's physical
+    cores, one on a machine with two hyperthreads)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Each test without an ``xdist_group`` mark goes in its file's group (xdist's ``loadgroup`` then keeps a
+    file in one worker, as ``loadfile`` would); the tests of the session-wide quickstart run in one group of
+    their own, so it runs once, not once per worker."""
+    if not config.pluginmanager.hasplugin("xdist"):
+        return
+    for item in items:
+        if item.get_closest_marker("xdist_group") is None:
+            shared = "finished_run" in getattr(item, "fixturenames", ())
+            item.add_marker(pytest.mark.xdist_group("quickstart" if shared else item.path.stem))
