@@ -124,6 +124,8 @@ def pytest_addoption(parser, pluginmanager):
     group._addoption("-n", "--numprocesses", dest="numprocesses", action="store", default=None,
                      help="ignored: pytest-xdist is not loaded")
     group.addoption("--dist", dest="dist", action="store", default="no", help="ignored: pytest-xdist is not loaded")
+    group.addoption("--no-loadscope-reorder", dest="loadscopereorder", action="store_false",
+                    help="ignored: pytest-xdist is not loaded")
 
 
 @pytest.hookimpl(optionalhook=True)
