@@ -36,6 +36,10 @@ def _read_dxf_rings(path: Path) -> np.ndarray:
     """(2 n, k, 2) the rings of a position drawing: per ply its cut outline, then its bearing line."""
     import ezdxf
 
+    from .verify import not_regular
+
+    if (what := not_regular(path)) is not None:  # a pipe would block the open: refused unopened
+        raise OSError(f"{path}: {what}, not a file")
     doc = ezdxf.readfile(str(path))
     outlines: dict[int, np.ndarray] = {}
     bearing = []
