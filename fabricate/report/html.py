@@ -80,7 +80,7 @@ def _fmt(v: Any) -> str:
     if isinstance(v, bool):
         return "yes" if v else "no"
     if isinstance(v, float):
-        return f"{v:.3g}"
+        return f"{v:,.0f}" if 1000 <= abs(v) < 1e15 else f"{v:.3g}"  # a mass or length in full, never 2.92e+03
     return escape(str(v))
 
 
@@ -110,7 +110,7 @@ def _passfail(m: dict) -> str:
 def _measure_rows(measures: dict[str, dict]) -> list[list[Any]]:
     rows = []
     for name, m in measures.items():
-        alt_txt = next((f"{m[k]:.3g} {unit}" for k, unit in (("max_mm", "mm"), ("max_deg", "deg"),
+        alt_txt = next((f"{_fmt(float(m[k]))} {unit}" for k, unit in (("max_mm", "mm"), ("max_deg", "deg"),
                                                               ("max_twist_mm", "mm twist"))
                         if m.get(k) is not None), "")
         elem = next((k for k in ("face", "vertex", "beam") if m.get("worst") and k in m["worst"][0]), None)
