@@ -171,14 +171,11 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
         keep = Convex(corners, floor, norm.V)
     t_setup = time.perf_counter() - t0
     group = _group(norm, fixed_idx)
-    closer = None
     run = solve(form, x0, ref=ref, glide=glide, tol=tol, max_iter=int(max_iter), callback=callback,
                 backend=linear_solver, convex=keep, far=guided.FAR)
     if _refines(opts.refine, run, ref, form, tol):  # exact, fair and close: the constrained fairing phase
         run = fairing.refine(form, run, x0, ref=ref, glide=glide, convex=keep, tol=tol, fairness=fairness,
                              closeness=closeness, callback=callback)
-        run, closer = fairing.closer(form, run, x0, ref=ref, glide=glide, convex=keep, tol=tol, fairness=fairness,
-                                     closeness=closeness, callback=callback)  # still far: closer, as fair as allowed
     sym = rat = None
     if not group.trivial:
         run, sym = _keep_symmetry(form, run, group, glide, keep, tol, linear_solver, callback)
@@ -218,8 +215,6 @@ def run(mesh: Mesh, opts: OptimizeOptions = DEFAULTS, *, reference: Mesh | None 
         res.defects["symmetry"] = sym
     if rat is not None:
         res.defects["rationalize"] = rat
-    if closer is not None and closer["rounds"]:
-        res.defects["closer"] = closer
     record_net(res, mesh, target)
     if keep is not None:
         _held(res, norm, Xn, keep, tol)

@@ -49,7 +49,7 @@ from ..proximity.footpoints import Footpoints
 from ..terms import convexity, edgefloor
 from ..terms import glide as glide_mod
 from ..terms.closeness import closeness_terms
-from ..terms.fairness import fairness_matrix, roughness
+from ..terms.fairness import fairness_matrix
 from ..terms.formulation import Formulation
 from ..tolerances import Tolerances
 from . import guided
@@ -64,15 +64,6 @@ STOP = 1e-4  # relative decrease of E below which the phase ends
 MU_START, MU_MIN, MU_MAX = 1e-4, 1e-10, 1e4
 ANCHOR = 0.01  # weight of the displacement |v - v_in|^2 beside the tangent-plane closeness (relative)
 HINGE = 10.0  # weight of the one-sided convexity / edge-floor rows in E
-CLOSER = 2.0
-"""Each round of :func:`closer` divides the fairness share of the balance by this."""
-CLOSER_ROUNDS = 4
-"""Most rounds of :func:`closer` (the fairness share falls to ``CLOSER ** -CLOSER_ROUNDS`` of the run's)."""
-SHORTEST = 0.2
-"""In :func:`closer`, no edge may end shorter than this fraction of its input length (or than it was
-when the continuation began, if shorter): a hinge row in the energy (weight ``HINGE``, so soft), and a
-round that leaves an edge below 0.9 of it is dropped.  Without it the roof pulled a boundary vertex
-onto its neighbour (an edge of 36 mm of 560 mm, too short for a mitred beam end)."""
 
 
 def _degenerate_faces(form: Formulation, x: np.ndarray, x_in: np.ndarray) -> int:
@@ -258,63 +249,3 @@ def refine(form: Formulation, run: guided.RunState, x_in: np.ndarray, *, ref, gl
     return guided.RunState(x=x, status="converged", message=message, nit=run.nit + nit,
                            history=run.history + history, timings=timings,
                            defects={k: float(d.max(initial=0.0)) for k, d in defects.items()})
-
-
-def distance(form: Formulation, x: np.ndarray, ref) -> float:
-    """Max distance of the iterate's vertices to ``ref`` over its bounding-box diagonal."""
-    return float(ref.distance(form.layout.view(x, "vertices")).max() / ref.bbox_diagonal)
-
-
-def closer(form: Formulation, run: guided.RunState, x_in: np.ndarray, *, ref, glide: guided.Glide | None,
-           convex: guided.Convex | None, tol: Tolerances, fairness: float, closeness: float,
-           callback=None, rounds: int = CLOSER_ROUNDS) -> tuple[guided.RunState, dict]:
-    """A closeness continuation after :func:`refine`: while the iterate lies further from ``ref``
-    than ``tol.closeness`` (of the diagonal), refine again from it with the fairness share of the
-    balance divided by :data:`CLOSER` (the closeness share raised), every constraint kept exact.  A
-    round is kept only when it ends converged, closer, and no rougher than ``tol.roughness`` times
-    the input (roughness along the mesh lines, :func:`optimize.terms.fairness.roughness`); the
-    first round that misses one of these ends the continuation and its iterate is dropped.
-
-    Measured (``configs/meshes/compas_quadmesh.obj``, conical on its own lines, 100 vertices; max
-    distance / diagonal, roughness over the input's): the fairing phase alone 1.92 %, 1.11 x; the
-    rounds at 1/22 and 1/44 of fairness 1.39 %, 1.42 x and 1.00 %, 1.74 x (kept); 1/88 0.83 %,
-    2.01 x (dropped: rougher than 2 x); 0.8 s -> 3.1 s.  Without the edge floor (:data:`SHORTEST`)
-    the rounds shrank a boundary edge to 3 % of its length or dented a corner to 180 degrees.
-    Returns the run (unchanged when no round was kept) and a JSON-ready record
-    (``rounds``: per round its fairness share, distance, roughness ratio and whether it was kept)."""
-    rec = {"rounds": [], "limit_roughness": float(tol.roughness), "start": None, "end": None}
-    if run.status != "converged" or ref is None or closeness <= 0:
-        return run, rec
-    L = form.layout
-    Vin = L.view(x_in, "vertices")
-    r_in = roughness(form.mesh, Vin)
-    d = rec["start"] = rec["end"] = distance(form, run.x, ref)
-    wf, wc = balance(fairness, closeness)
-    E = form.mesh.topology.edges
-    length = lambda x: np.linalg.norm(L.view(x, "vertices")[E[:, 0]] - L.view(x, "vertices")[E[:, 1]], axis=1)  # noqa: E731
-    floor = np.minimum(SHORTEST * length(x_in), length(run.x))
-    weight = np.sqrt(HINGE)
-
-    def keep_edges(x):
-        r, J = edgefloor.terms(x, L, E, floor)
-        return weight * r, weight * J
-    for _ in range(int(rounds)):
-        if d <= tol.closeness or wf <= 0:
-            break
-        wf /= CLOSER
-        trial = refine(form, run, x_in, ref=ref, glide=glide, convex=convex, tol=tol, fairness=wf,
-                       closeness=1.0 - wf, callback=callback, extra=keep_edges, phase="closer")
-        if trial is run or trial.nit == run.nit:  # the round kept no step (refine says why)
-            rec["rounds"].append({"fairness_share": wf, "kept": False, "why": trial.message[len(run.message):].lstrip("; ")})
-            break
-        dt = distance(form, trial.x, ref)
-        ratio = roughness(form.mesh, form.layout.view(trial.x, "vertices")) / r_in if r_in > 0 else 1.0
-        short = float((length(trial.x) / floor).min(initial=np.inf))
-        ok = trial.status == "converged" and dt < d and ratio <= tol.roughness and short >= 0.9
-        rec["rounds"].append({"fairness_share": wf, "distance": dt, "roughness_ratio": ratio,
-                              "shortest_over_floor": short, "kept": bool(ok)})
-        if not ok:
-            break
-        run, d = trial, dt
-        rec["end"] = d
-    return run, rec
